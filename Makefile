@@ -1,0 +1,34 @@
+# The two set-up commands of the README:
+#   make demo   - the main job: the paper's study on the simulated beam
+#   make test   - C tests under sanitizers, then the Python test suite
+# Both create .venv and install pihyst into it on first use.
+PYTHON ?= python3
+VENV = .venv
+BIN = $(VENV)/bin
+
+.PHONY: demo test install ctest pytest bench clean
+$(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*.pyx)
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e ".[test]"
+	touch $@
+
+install: $(BIN)/pihyst
+
+demo: install
+	$(BIN)/pihyst predict examples/paper_table1_multislope.json examples/triangle_0_150V.csv -o out/paper_multislope_loop.csv
+
+ctest:
+	$(MAKE) -C csrc test
+
+pytest: install
+	$(BIN)/python -m pytest
+
+test: ctest pytest
+
+bench: install
+	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done
+
+clean:
+	rm -rf $(VENV) build out src/*.egg-info src/pihyst/_core.c src/pihyst/*.so
+	$(MAKE) -C csrc clean

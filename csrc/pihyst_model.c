@@ -1,0 +1,442 @@
+/* pihyst_model.c - operator banks and PI-type models: init, reset, step, run,
+ * operator matrix, Gram matrix. See pihyst.h for the equations and ownership. */
+#include "pihyst.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Hot loops are compiled for several instruction sets and the best one is picked
+ * at load time (function multiversioning), so a distributed build stays portable
+ * without -march=native. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && \
+    !defined(PIHYST_NO_MULTIVERSION)
+#define PIHYST_HOT __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
+#else
+#define PIHYST_HOT
+#endif
+
+/* Operators are processed in lanes of PIHYST_LANES partial sums, which lets the
+ * compiler vectorize the weighted sum without reassociating it (no fast-math). */
+#define PIHYST_LANES 8
+
+/* Layout of m->coef (4K doubles), by family:
+ *   classical:  coef[k]      = -r_k                       R_k(u) = u + coef[k]
+ *               coef[K + k]  = +r_k                       F_k(u) = u + coef[K + k]
+ *   multislope: coef[k]      = -a r_k                     R_k(u) = max(a u + coef[k],
+ *               coef[K + k]  = -r_k - (b - 1)U                          b u + coef[K + k])
+ *               coef[2K + k] = (1 - a)U - (1 - a h) r_k   F_k(u) = min(b u, a u + coef[2K + k])
+ *   pwl:        unused. */
+
+static double max2(double x, double y) { return x > y ? x : y; }
+static double min2(double x, double y) { return x < y ? x : y; }
+
+/* Polyline through (x[i], y[i]), i < n, continued beyond its ends with the end
+ * segments' slopes; a single point is a constant. */
+static double polyline_eval(const double *x, const double *y, size_t n, double u)
+{
+    size_t lo = 0, hi;
+    if (n == 1) return y[0];
+    if (u <= x[0]) {
+        lo = 0;
+    } else if (u >= x[n - 1]) {
+        lo = n - 2;
+    } else {
+        /* binary search for x[lo] <= u < x[lo + 1] */
+        hi = n - 1;
+        while (hi - lo > 1) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (x[mid] <= u) lo = mid; else hi = mid;
+        }
+    }
+    return y[lo] + (y[lo + 1] - y[lo]) * (u - x[lo]) / (x[lo + 1] - x[lo]);
+}
+
+static double rise_pwl(const pihyst_pwl *p, size_t k, double u)
+{
+    size_t s = p->rise_start[k];
+    return polyline_eval(p->rise_x + s, p->rise_y + s, p->rise_start[k + 1] - s, u);
+}
+
+static double fall_pwl(const pihyst_pwl *p, size_t k, double u)
+{
+    size_t s = p->fall_start[k];
+    return polyline_eval(p->fall_x + s, p->fall_y + s, p->fall_start[k + 1] - s, u);
+}
+
+void pihyst_model_envelopes(const pihyst_model *m, double u, double *rise, double *fall)
+{
+    size_t k, n = m->n_ops;
+    const double *c = m->coef;
+    for (k = 0; k < n; ++k) {
+        switch (m->family) {
+        case PIHYST_CLASSICAL:
+            rise[k] = u + c[k];
+            fall[k] = u + c[n + k];
+            break;
+        case PIHYST_MULTISLOPE:
+            rise[k] = max2(m->shape.a * u + c[k], m->shape.b * u + c[n + k]);
+            fall[k] = min2(m->shape.b * u, m->shape.a * u + c[2 * n + k]);
+            break;
+        default:
+            rise[k] = rise_pwl(&m->pwl, k, u);
+            fall[k] = fall_pwl(&m->pwl, k, u);
+            break;
+        }
+    }
+}
+
+/* ---------------------------------------------------------------- validation */
+
+static int all_finite(const double *x, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; ++i)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
+
+static pihyst_status check_polyline(const double *x, const double *y, size_t n)
+{
+    size_t i;
+    if (n == 0) return PIHYST_ESIZE;
+    if (!all_finite(x, n) || !all_finite(y, n)) return PIHYST_ENONFINITE;
+    for (i = 1; i < n; ++i)
+        if (!(x[i] > x[i - 1]) || y[i] < y[i - 1]) return PIHYST_EPOLYLINE;
+    return PIHYST_OK;
+}
+
+static pihyst_status check_pwl(const pihyst_pwl *p, size_t n_ops)
+{
+    size_t k;
+    pihyst_status s;
+    if (!p || !p->rise_start || !p->rise_x || !p->rise_y || !p->fall_start || !p->fall_x ||
+        !p->fall_y)
+        return PIHYST_ENULL;
+    if (p->rise_start[0] != 0 || p->fall_start[0] != 0) return PIHYST_ESIZE;
+    for (k = 0; k < n_ops; ++k) {
+        size_t rs = p->rise_start[k], re = p->rise_start[k + 1];
+        size_t fs = p->fall_start[k], fe = p->fall_start[k + 1];
+        if (re <= rs || fe <= fs) return PIHYST_ESIZE;
+        s = check_polyline(p->rise_x + rs, p->rise_y + rs, re - rs);
+        if (s != PIHYST_OK) return s;
+        s = check_polyline(p->fall_x + fs, p->fall_y + fs, fe - fs);
+        if (s != PIHYST_OK) return s;
+    }
+    return PIHYST_OK;
+}
+
+/* R_k <= F_k on [u_min, u_max]: both are piecewise linear, so it suffices to check
+ * the ends of the range and every breakpoint of either envelope inside it. */
+static int envelope_ok_at(const pihyst_model *m, size_t k, double u)
+{
+    double r, f;
+    switch (m->family) {
+    case PIHYST_CLASSICAL:
+        r = u + m->coef[k];
+        f = u + m->coef[m->n_ops + k];
+        break;
+    case PIHYST_MULTISLOPE:
+        r = max2(m->shape.a * u + m->coef[k], m->shape.b * u + m->coef[m->n_ops + k]);
+        f = min2(m->shape.b * u, m->shape.a * u + m->coef[2 * m->n_ops + k]);
+        break;
+    default:
+        r = rise_pwl(&m->pwl, k, u);
+        f = fall_pwl(&m->pwl, k, u);
+        break;
+    }
+    /* relative slack for the rounding of the envelope constants */
+    return r <= f + 1e-12 * (1.0 + fabs(f));
+}
+
+static int envelopes_ordered(const pihyst_model *m)
+{
+    size_t k, i;
+    for (k = 0; k < m->n_ops; ++k) {
+        if (!envelope_ok_at(m, k, m->u_min) || !envelope_ok_at(m, k, m->u_max)) return 0;
+        if (m->family == PIHYST_MULTISLOPE) {
+            const pihyst_shape *s = &m->shape;
+            double r = m->thresholds[k];
+            double kink_r = (r + (s->b - 1.0) * s->U - s->a * r) / (s->b - s->a);
+            double kink_f = ((1.0 - s->a) * s->U - (1.0 - s->a * s->h) * r) / (s->b - s->a);
+            if (kink_r > m->u_min && kink_r < m->u_max && !envelope_ok_at(m, k, kink_r)) return 0;
+            if (kink_f > m->u_min && kink_f < m->u_max && !envelope_ok_at(m, k, kink_f)) return 0;
+        } else if (m->family == PIHYST_PWL) {
+            const pihyst_pwl *p = &m->pwl;
+            for (i = p->rise_start[k]; i < p->rise_start[k + 1]; ++i)
+                if (p->rise_x[i] > m->u_min && p->rise_x[i] < m->u_max &&
+                    !envelope_ok_at(m, k, p->rise_x[i]))
+                    return 0;
+            for (i = p->fall_start[k]; i < p->fall_start[k + 1]; ++i)
+                if (p->fall_x[i] > m->u_min && p->fall_x[i] < m->u_max &&
+                    !envelope_ok_at(m, k, p->fall_x[i]))
+                    return 0;
+        }
+    }
+    return 1;
+}
+
+pihyst_status pihyst_model_init(pihyst_model *m, pihyst_family family, size_t n_ops,
+                                const double *thresholds, const double *weights, double offset,
+                                double u_min, double u_max, const pihyst_shape *shape,
+                                const pihyst_pwl *pwl, double *coef, double *state,
+                                const double *initial_state)
+{
+    size_t k;
+    pihyst_status s;
+    if (!m || !weights || !coef || !state) return PIHYST_ENULL;
+    if (n_ops == 0) return PIHYST_ESIZE;
+    if (!all_finite(weights, n_ops) || !isfinite(offset) || !isfinite(u_min) ||
+        !isfinite(u_max))
+        return PIHYST_ENONFINITE;
+    if (!(u_min < u_max)) return PIHYST_ERANGE;
+    if (initial_state && !all_finite(initial_state, n_ops)) return PIHYST_ENONFINITE;
+
+    memset(m, 0, sizeof *m);
+    m->family = family;
+    m->n_ops = n_ops;
+    m->weights = weights;
+    m->offset = offset;
+    m->u_min = u_min;
+    m->u_max = u_max;
+    m->coef = coef;
+    m->state = state;
+
+    if (family == PIHYST_CLASSICAL || family == PIHYST_MULTISLOPE) {
+        if (!thresholds) return PIHYST_ENULL;
+        if (!all_finite(thresholds, n_ops)) return PIHYST_ENONFINITE;
+        for (k = 0; k < n_ops; ++k)
+            if (thresholds[k] < 0.0 || (k > 0 && !(thresholds[k] > thresholds[k - 1])))
+                return PIHYST_ETHRESHOLD;
+        m->thresholds = thresholds;
+    }
+    switch (family) {
+    case PIHYST_CLASSICAL:
+        for (k = 0; k < n_ops; ++k) {
+            coef[k] = -thresholds[k];
+            coef[n_ops + k] = thresholds[k];
+        }
+        break;
+    case PIHYST_MULTISLOPE: {
+        double U, a, b, h;
+        if (!shape) return PIHYST_ENULL;
+        U = shape->U; a = shape->a; b = shape->b; h = shape->h;
+        if (!isfinite(U) || !isfinite(a) || !isfinite(b) || !isfinite(h)) return PIHYST_ENONFINITE;
+        if (!(U > 0.0) || !(a > 0.0) || !(b > a) || !(h >= 0.0) || !(h <= 1.0))
+            return PIHYST_ESHAPE;
+        /* F's kink u = ((1 - a)U - (1 - a h) r) / (b - a) must not fall below 0 */
+        if (thresholds[n_ops - 1] > (1.0 - a) * U / (1.0 - a * h) * (1.0 + 1e-12))
+            return PIHYST_EMULTISLOPE_R;
+        m->shape = *shape;
+        for (k = 0; k < n_ops; ++k) {
+            double r = thresholds[k];
+            coef[k] = -a * r;
+            coef[n_ops + k] = -r - (b - 1.0) * U;
+            coef[2 * n_ops + k] = (1.0 - a) * U - (1.0 - a * h) * r;
+            coef[3 * n_ops + k] = 0.0;
+        }
+        break;
+    }
+    case PIHYST_PWL:
+        s = check_pwl(pwl, n_ops);
+        if (s != PIHYST_OK) return s;
+        m->pwl = *pwl;
+        break;
+    default:
+        return PIHYST_ESHAPE;
+    }
+    if (!envelopes_ordered(m)) return PIHYST_EENVELOPE;
+    pihyst_model_reset(m, initial_state);
+    return PIHYST_OK;
+}
+
+void pihyst_model_reset(pihyst_model *m, const double *initial_state)
+{
+    size_t k;
+    for (k = 0; k < m->n_ops; ++k) m->state[k] = initial_state ? initial_state[k] : 0.0;
+}
+
+/* ---------------------------------------------------------------- hot loops */
+
+/* Each kernel advances the state over n samples. With y != NULL it writes the model
+ * output (2); with phi != NULL the operator matrix; with gram != NULL it accumulates
+ * the normal equations. Time is the outer loop, operators the inner one. */
+
+/* classical: f_k = max(u - r_k, min(u + r_k, f_k)),  y = offset + sum_k w_k f_k */
+PIHYST_HOT
+static void run_classical(size_t K, const double *restrict w, const double *restrict c,
+                          double *restrict f, double offset, const double *restrict u,
+                          double *restrict y, size_t n)
+{
+    size_t t, k, j;
+    const size_t K_lanes = K - K % PIHYST_LANES;
+    for (t = 0; t < n; ++t) {
+        const double ut = u[t];
+        double acc[PIHYST_LANES] = {0.0};
+        double sum = offset;
+        for (k = 0; k < K_lanes; k += PIHYST_LANES) {
+            for (j = 0; j < PIHYST_LANES; ++j) {
+                double v = f[k + j], hi = ut + c[K + k + j], lo = ut + c[k + j];
+                v = v < hi ? v : hi;
+                v = v > lo ? v : lo;
+                f[k + j] = v;
+                acc[j] += w[k + j] * v;
+            }
+        }
+        for (k = K_lanes; k < K; ++k) {
+            double v = f[k], hi = ut + c[K + k], lo = ut + c[k];
+            v = v < hi ? v : hi;
+            v = v > lo ? v : lo;
+            f[k] = v;
+            sum += w[k] * v;
+        }
+        for (j = 0; j < PIHYST_LANES; ++j) sum += acc[j];
+        y[t] = sum;
+    }
+}
+
+/* multislope: f_k = max(max(a u - a r_k, b u - r_k - (b-1)U),
+ *                       min(min(b u, a u + (1-a)U - (1-ah) r_k), f_k)) */
+PIHYST_HOT
+static void run_multislope(size_t K, double a, double b, const double *restrict w,
+                           const double *restrict c, double *restrict f, double offset,
+                           const double *restrict u, double *restrict y, size_t n)
+{
+    size_t t, k, j;
+    const size_t K_lanes = K - K % PIHYST_LANES;
+    for (t = 0; t < n; ++t) {
+        const double au = a * u[t], bu = b * u[t];
+        double acc[PIHYST_LANES] = {0.0};
+        double sum = offset;
+        for (k = 0; k < K_lanes; k += PIHYST_LANES) {
+            for (j = 0; j < PIHYST_LANES; ++j) {
+                double r1 = au + c[k + j], r2 = bu + c[K + k + j], f2 = au + c[2 * K + k + j];
+                double lo = r1 > r2 ? r1 : r2;
+                double hi = bu < f2 ? bu : f2;
+                double v = f[k + j];
+                v = v < hi ? v : hi;
+                v = v > lo ? v : lo;
+                f[k + j] = v;
+                acc[j] += w[k + j] * v;
+            }
+        }
+        for (k = K_lanes; k < K; ++k) {
+            double r1 = au + c[k], r2 = bu + c[K + k], f2 = au + c[2 * K + k];
+            double lo = r1 > r2 ? r1 : r2;
+            double hi = bu < f2 ? bu : f2;
+            double v = f[k];
+            v = v < hi ? v : hi;
+            v = v > lo ? v : lo;
+            f[k] = v;
+            sum += w[k] * v;
+        }
+        for (j = 0; j < PIHYST_LANES; ++j) sum += acc[j];
+        y[t] = sum;
+    }
+}
+
+/* One sample of (1) for every operator, any family (used by the slow paths). */
+static void update_operators(pihyst_model *m, double u)
+{
+    size_t k, K = m->n_ops;
+    const double *c = m->coef;
+    double *f = m->state;
+    switch (m->family) {
+    case PIHYST_CLASSICAL:
+        for (k = 0; k < K; ++k) f[k] = max2(u + c[k], min2(u + c[K + k], f[k]));
+        break;
+    case PIHYST_MULTISLOPE: {
+        double au = m->shape.a * u, bu = m->shape.b * u;
+        for (k = 0; k < K; ++k)
+            f[k] = max2(max2(au + c[k], bu + c[K + k]), min2(min2(bu, au + c[2 * K + k]), f[k]));
+        break;
+    }
+    default:
+        for (k = 0; k < K; ++k)
+            f[k] = max2(rise_pwl(&m->pwl, k, u), min2(fall_pwl(&m->pwl, k, u), f[k]));
+        break;
+    }
+}
+
+static void run_pwl(pihyst_model *m, const double *u, double *y, size_t n)
+{
+    size_t t, k;
+    for (t = 0; t < n; ++t) {
+        double sum = m->offset;
+        update_operators(m, u[t]);
+        for (k = 0; k < m->n_ops; ++k) sum += m->weights[k] * m->state[k];
+        y[t] = sum;
+    }
+}
+
+void pihyst_model_run(pihyst_model *m, const double *u, double *y, size_t n)
+{
+    switch (m->family) {
+    case PIHYST_CLASSICAL:
+        run_classical(m->n_ops, m->weights, m->coef, m->state, m->offset, u, y, n);
+        break;
+    case PIHYST_MULTISLOPE:
+        run_multislope(m->n_ops, m->shape.a, m->shape.b, m->weights, m->coef, m->state,
+                       m->offset, u, y, n);
+        break;
+    default:
+        run_pwl(m, u, y, n);
+        break;
+    }
+}
+
+/* step is run on one sample, so that step-by-step and block give the same bits */
+double pihyst_model_step(pihyst_model *m, double u)
+{
+    double y;
+    pihyst_model_run(m, &u, &y, 1);
+    return y;
+}
+
+void pihyst_model_operators(pihyst_model *m, const double *u, double *phi, size_t n)
+{
+    size_t t, K = m->n_ops;
+    for (t = 0; t < n; ++t) {
+        update_operators(m, u[t]);
+        memcpy(phi + t * K, m->state, K * sizeof *phi);
+    }
+}
+
+/* gram += f f^T, rhs += f d, sums += f, accumulated over t; the upper triangle is
+ * summed and mirrored so the matrix is exactly symmetric. */
+void pihyst_model_gram(pihyst_model *m, const double *u, const double *d, size_t n,
+                       double *gram, double *rhs, double *sums)
+{
+    size_t t, j, k, K = m->n_ops;
+    const double *f = m->state;
+    for (t = 0; t < n; ++t) {
+        update_operators(m, u[t]);
+        for (j = 0; j < K; ++j) {
+            const double fj = f[j];
+            rhs[j] += fj * d[t];
+            if (sums) sums[j] += fj;
+            for (k = j; k < K; ++k) gram[j * K + k] += fj * f[k];
+        }
+    }
+    for (j = 0; j < K; ++j)
+        for (k = 0; k < j; ++k) gram[j * K + k] = gram[k * K + j];
+}
+
+const char *pihyst_status_text(pihyst_status status)
+{
+    switch (status) {
+    case PIHYST_OK: return "ok";
+    case PIHYST_ENULL: return "a required array is missing (NULL)";
+    case PIHYST_ESIZE: return "empty operator bank or empty polyline";
+    case PIHYST_ENONFINITE: return "a parameter or state value is NaN or infinite";
+    case PIHYST_ETHRESHOLD: return "thresholds must be >= 0 and strictly increasing";
+    case PIHYST_ESHAPE: return "multislope shape must have U > 0, 0 < a < b and 0 <= h <= 1";
+    case PIHYST_EMULTISLOPE_R:
+        return "multislope threshold above (1 - a)U / (1 - a h): the falling envelope "
+               "would not return to the origin";
+    case PIHYST_EPOLYLINE:
+        return "polyline breakpoints must be strictly increasing and values non-decreasing";
+    case PIHYST_EENVELOPE: return "rising envelope above falling envelope on the input range";
+    case PIHYST_ERANGE: return "input range must have u_min < u_max";
+    }
+    return "unknown status";
+}

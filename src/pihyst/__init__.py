@@ -1,0 +1,27 @@
+"""pihyst: Prandtl-Ishlinskii hysteresis models, identification and feedforward
+compensation for piezoelectric actuators (Xu, Zhang, Rong and Ni 2020, and beyond)."""
+
+__version__ = "0.1.0"
+
+from pihyst.io import load_model, save_model  # noqa: E402
+from pihyst.model import (  # noqa: E402
+    ClassicalPI,
+    InputRangeError,
+    InvalidModelError,
+    MultislopePI,
+    PiecewiseLinearPI,
+    PIModel,
+    Response,
+)
+
+__all__ = [
+    "ClassicalPI",
+    "InputRangeError",
+    "InvalidModelError",
+    "MultislopePI",
+    "PIModel",
+    "PiecewiseLinearPI",
+    "Response",
+    "load_model",
+    "save_model",
+]

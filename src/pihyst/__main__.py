@@ -1,0 +1,5 @@
+import sys
+
+from pihyst.cli import main
+
+sys.exit(main())

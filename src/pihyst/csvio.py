@@ -1,0 +1,82 @@
+"""CSV files of DESIGN.md section 6: one header row, columns found by name, extra
+columns ignored, lines starting with ``#`` are comments.
+
+Errors are :class:`CSVError` with a one-line message ``FILE:LINE:COLUMN: what is wrong``
+(line and column 1-based; column counts fields).
+"""
+
+import csv
+import io as _io
+import os
+
+import numpy as np
+
+from pihyst.io import write_atomically
+
+
+class CSVError(ValueError):
+    """A CSV file could not be used; the message names file, line and column."""
+
+    def __init__(self, path, line, column, message):
+        self.path, self.line, self.column = path, line, column
+        where = f"{path}:{line}:{column}" if column else f"{path}:{line}"
+        super().__init__(f"{where}: {message}")
+
+
+def read_columns(path, names):
+    """Read the named columns of a CSV file as float arrays, in the order of ``names``.
+
+    Every value must be a finite number; the file must have at least one data row.
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8", newline="") as f:
+            text = f.read()
+    except OSError as err:
+        raise CSVError(path, 0, 0, f"cannot read file: {err.strerror}") from None
+    except UnicodeDecodeError:
+        raise CSVError(path, 1, 0, "not a text file (UTF-8 expected)") from None
+    rows = [(n, row) for n, row in enumerate(csv.reader(_io.StringIO(text)), start=1)
+            if row and not row[0].lstrip().startswith("#") and any(c.strip() for c in row)]
+    if not rows:
+        raise CSVError(path, 1, 0, "empty file: expected a header row naming the columns "
+                       f"{', '.join(names)}")
+    header_line, header = rows[0]
+    header = [h.strip() for h in header]
+    index = {}
+    for name in names:
+        if name not in header:
+            raise CSVError(path, header_line, 0, f"missing column {name!r} in header "
+                           f"({', '.join(header)})")
+        index[name] = header.index(name)
+    if len(rows) == 1:
+        raise CSVError(path, header_line, 0, "no data rows after the header")
+    values = np.empty((len(rows) - 1, len(names)))
+    for i, (line, row) in enumerate(rows[1:]):
+        for j, name in enumerate(names):
+            col = index[name]
+            if col >= len(row) or not row[col].strip():
+                raise CSVError(path, line, col + 1, f"missing value for column {name!r}")
+            try:
+                v = float(row[col])
+            except ValueError:
+                raise CSVError(path, line, col + 1, f"column {name!r}: {row[col].strip()!r} "
+                               "is not a number") from None
+            if not np.isfinite(v):
+                raise CSVError(path, line, col + 1, f"column {name!r}: {row[col].strip()} "
+                               "is not a finite number")
+            values[i, j] = v
+    lines = np.array([line for line, _ in rows[1:]])
+    return [values[:, j].copy() for j in range(len(names))], lines
+
+
+def write_columns(path, columns, comments=()):
+    """Write named columns (dict name -> array) to ``path``, complete or not at all."""
+    names = list(columns)
+    data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
+    out = _io.StringIO()
+    for c in comments:
+        out.write(f"# {c}\n")
+    out.write(",".join(names) + "\n")
+    np.savetxt(out, data, delimiter=",", fmt="%.17g")
+    write_atomically(path, out.getvalue())
