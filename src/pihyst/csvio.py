@@ -23,10 +23,13 @@ class CSVError(ValueError):
         super().__init__(f"{where}: {message}")
 
 
-def read_columns(path, names):
-    """Read the named columns of a CSV file as float arrays, in the order of ``names``.
+def read_columns(path, names, optional=()):
+    """Read named columns of a CSV file as float arrays.
 
-    Every value must be a finite number; the file must have at least one data row.
+    Returns ``(columns, lines)``: a dict name -> array holding every column of ``names``
+    (an error if absent) and those of ``optional`` that the header has, and the 1-based
+    file line of each data row. Every value must be a finite number; the file must
+    have at least one data row.
     """
     path = os.fspath(path)
     try:
@@ -49,6 +52,10 @@ def read_columns(path, names):
             raise CSVError(path, header_line, 0, f"missing column {name!r} in header "
                            f"({', '.join(header)})")
         index[name] = header.index(name)
+    for name in optional:
+        if name in header:
+            index[name] = header.index(name)
+    names = list(index)
     if len(rows) == 1:
         raise CSVError(path, header_line, 0, "no data rows after the header")
     values = np.empty((len(rows) - 1, len(names)))
@@ -67,7 +74,7 @@ def read_columns(path, names):
                                "is not a finite number")
             values[i, j] = v
     lines = np.array([line for line, _ in rows[1:]])
-    return [values[:, j].copy() for j in range(len(names))], lines
+    return {name: values[:, j].copy() for j, name in enumerate(names)}, lines
 
 
 def write_columns(path, columns, comments=()):
@@ -80,3 +87,14 @@ def write_columns(path, columns, comments=()):
     out.write(",".join(names) + "\n")
     np.savetxt(out, data, delimiter=",", fmt="%.17g")
     write_atomically(path, out.getvalue())
+
+
+def column_number(path, name):
+    """1-based position of column ``name`` in the header of ``path``, 0 if absent
+    (for error messages that name a column)."""
+    with open(path, encoding="utf-8", newline="") as f:
+        for row in csv.reader(f):
+            if row and not row[0].lstrip().startswith("#") and any(c.strip() for c in row):
+                fields = [h.strip() for h in row]
+                return fields.index(name) + 1 if name in fields else 0
+    return 0

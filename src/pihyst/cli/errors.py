@@ -1,0 +1,11 @@
+"""Errors a command reports as one line with exit status 2."""
+
+from pihyst.csvio import CSVError
+from pihyst.model import InputRangeError, InvalidModelError
+
+
+class UsageError(ValueError):
+    """Bad input detected by a command; the message is shown as is."""
+
+
+USER_ERRORS = (CSVError, InvalidModelError, InputRangeError, UsageError)
