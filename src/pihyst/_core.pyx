@@ -203,13 +203,18 @@ def _checked_state(value, n):
 
 
 def _concat(polylines, name):
+    # (no negative indexing here: this module is compiled with wraparound=False)
     starts = [0]
     xs, ys = [], []
+    total = 0
     for k, (x, y) in enumerate(polylines):
         x = _vector(x, name=f"{name}[{k}] x")
         y = _vector(y, x.shape[0], f"{name}[{k}] y")
+        if x.shape[0] == 0:
+            raise CoreError(f"{name}[{k}] has no breakpoints")
         xs.append(x)
         ys.append(y)
-        starts.append(starts[-1] + x.shape[0])
+        total += x.shape[0]
+        starts.append(total)
     return (np.asarray(starts, dtype=np.uintp), np.ascontiguousarray(np.concatenate(xs)),
             np.ascontiguousarray(np.concatenate(ys)))
