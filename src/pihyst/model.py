@@ -115,8 +115,9 @@ class PIModel(ABC):
         if u.ndim != 1:
             raise ValueError(f"input must be one-dimensional, got shape {u.shape}")
         lo, hi = self.input_range
-        bad = np.flatnonzero(~((u >= lo) & (u <= hi)))  # also catches NaN
-        if bad.size:
+        # min/max first: two fast passes; NaN makes the comparison fail too
+        if u.size and not (u.min() >= lo and u.max() <= hi):
+            bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
             raise InputRangeError(int(bad[0]), float(u[bad[0]]), self.input_range)
         return u
 
