@@ -23,6 +23,7 @@ ctest:
 
 pytest: install
 	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -q --doctest-modules src/pihyst --ignore=src/pihyst/__main__.py -p no:cacheprovider
 
 test: ctest pytest
 
