@@ -89,3 +89,10 @@ def test_console_script_help_and_exit_status(tmp_path):
 
 def test_version():
     assert pihyst.__version__ == "0.1.0"
+
+
+def test_missing_output_folder_is_a_one_line_error(tmp_path, capsys):
+    out = tmp_path / "no" / "such" / "out.csv"
+    assert run("predict", MODEL, "examples/triangle_0_150V.csv", "-o", str(out)) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "No such file or directory" in err

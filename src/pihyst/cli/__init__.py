@@ -41,6 +41,9 @@ def main(argv=None):
     except USER_ERRORS as err:
         print(f"pihyst: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:  # e.g. the output folder does not exist
+        print(f"pihyst: error: {err.filename or ''}: {err.strerror}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         return 130
     return 0
