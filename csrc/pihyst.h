@@ -43,7 +43,9 @@ typedef enum {
     PIHYST_EMULTISLOPE_R = -6, /* multislope threshold above (1 - a)U / (1 - a h) */
     PIHYST_EPOLYLINE = -7,   /* breakpoints not strictly increasing, or envelope decreasing */
     PIHYST_EENVELOPE = -8,   /* R > F somewhere on the input range */
-    PIHYST_ERANGE = -9       /* input range empty (u_min >= u_max) */
+    PIHYST_ERANGE = -9,      /* input range empty (u_min >= u_max) */
+    PIHYST_ENEGATIVE_WEIGHT = -10, /* compensator: a weight is negative (model not monotone) */
+    PIHYST_ELIMITS = -11     /* compensator: voltage limits, slew limit or voltage invalid */
 } pihyst_status;
 
 typedef enum {
@@ -138,6 +140,96 @@ void pihyst_model_envelopes(const pihyst_model *m, double u, double *rise, doubl
 
 /** Human-readable text of a status code (static storage). */
 const char *pihyst_status_text(pihyst_status status);
+
+/* ======================================================================
+ * Inverse / compensator (DESIGN.md section 4): desired displacement -> voltage.
+ * ======================================================================
+ *
+ * For a fixed operator state f (the state after the last voltage u_p was applied,
+ * so R_k(u_p) <= f_k <= F_k(u_p)), the model output as a function of the next
+ * voltage u is
+ *
+ *     y(u) = offset + sum_k w_k max(R_k(u), min(F_k(u), f_k))                (3)
+ *          = offset + sum_k w_k max(f_k, R_k(u))     for u >= u_p            (3a)
+ *          = offset + sum_k w_k min(f_k, F_k(u))     for u <= u_p            (3b)
+ *
+ * which is continuous, piecewise linear and, when every w_k >= 0, non-decreasing.
+ * Each sample solves y(u) = y_d exactly: the breakpoints of (3a) or (3b) beyond u_p
+ * (where an envelope crosses its f_k, and the envelopes' own kinks) are walked in
+ * order of distance from u_p, accumulating value and slope, and the linear equation
+ * of the segment that brackets y_d is solved. No iteration, no tolerance. Where y is
+ * flat the voltage nearest u_p is chosen (hold, don't jump).
+ *
+ * Limits: every output lies in [u_min, u_max] and, with a slew limit, within
+ * max_step of the previous output (checked in floating point: |u[t] - u[t-1]| <=
+ * max_step exactly). A desired value out of reach saturates at the bound and is
+ * flagged; NaN holds the last voltage and is flagged. Differences |y_d - y| below
+ * the rounding error of the model output (4 (K + 2) eps times the output scale)
+ * count as equal, so rounding noise cannot push the voltage across a flat region.
+ */
+
+/** Per-sample flags of pihyst_compensator_step / _run (bits, 0 = desired reached). */
+enum {
+    PIHYST_COMP_SAT_LOW = 1,  /**< out of reach below: voltage at u_min */
+    PIHYST_COMP_SAT_HIGH = 2, /**< out of reach above: voltage at u_max */
+    PIHYST_COMP_NAN = 4,      /**< desired value NaN: last voltage held */
+    PIHYST_COMP_SLEW = 8      /**< not reached within the slew limit: voltage moved by max_step */
+};
+
+/** Scratch a compensator needs, in doubles, for K = n_ops operators and a model with
+ *  n_points polyline breakpoints in total (rising plus falling; 0 for classical and
+ *  multislope). pihyst_compensator_scratch_len gives the exact figure for a model. */
+#define PIHYST_COMPENSATOR_SCRATCH_LEN(n_ops, n_points) (6 * (n_ops) + 2 * (n_points))
+
+/** Compensator: an exact inverse of a model with w >= 0, with limits.
+ *  Transparent for static allocation; fill it with pihyst_compensator_init. */
+typedef struct {
+    pihyst_model *model; /**< initialised model (caller-owned); its state is advanced
+                              with every voltage the compensator chooses */
+    double u_min, u_max; /**< voltage limits, inside the model's input range */
+    double max_step;     /**< slew limit: max |u[t] - u[t-1]|, > 0; INFINITY = none */
+    double u_last;       /**< last voltage (applied to the model state) */
+    double y_last;       /**< model output at u_last with the current state */
+    double tol;          /**< equality band of |y_d - y_last| (rounding of the output) */
+    double *scratch;     /**< caller-owned, scratch_len doubles: kinks, then event lists */
+    size_t scratch_len;  /**< >= pihyst_compensator_scratch_len(model) */
+    size_t events_cap;   /**< capacity of the first event list (pairs) */
+} pihyst_compensator;
+
+/** Scratch length (doubles) that pihyst_compensator_init needs for this model. */
+size_t pihyst_compensator_scratch_len(const pihyst_model *m);
+
+/** Validate and wire up a compensator, then apply u_initial to the model's current
+ *  state (a no-op for a state reached by running the model up to u_initial).
+ *  @param[out] c          compensator to fill
+ *  @param[in,out] m       initialised model; must outlive c; weights must be >= 0
+ *  @param[in]  u_min,u_max voltage limits with m->u_min <= u_min < u_max <= m->u_max;
+ *                         NAN selects the model's bound
+ *  @param[in]  max_step   slew limit (> 0, volts per sample), INFINITY for none
+ *  @param[in]  u_initial  voltage before the first sample, in [u_min, u_max]
+ *  @param[out] scratch    scratch_len doubles of caller-owned scratch
+ *  @return PIHYST_OK, PIHYST_ENULL, PIHYST_ENEGATIVE_WEIGHT, PIHYST_ELIMITS,
+ *          PIHYST_ENONFINITE (u_initial NaN or infinite), PIHYST_ESIZE (scratch short) */
+pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, double u_min,
+                                      double u_max, double max_step, double u_initial,
+                                      double *scratch, size_t scratch_len);
+
+/** Set the model state to state (K values; NULL = zeros) and the last voltage to
+ *  u_last, applying u_last to the state (f_k <- clamp(f_k, R_k(u_last), F_k(u_last))).
+ *  On error (state not finite, u_last NaN or outside the limits) nothing changes. */
+pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const double *state,
+                                       double u_last);
+
+/** One sample: the voltage for the desired output y_desired (any double, NaN and
+ *  infinities included), applied to the model. *flags (may be NULL) receives the
+ *  PIHYST_COMP_* bits; c->y_last then holds the model's output for that voltage. */
+double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned *flags);
+
+/** A block of n samples: u[t] (and y[t], the model output, if y != NULL; flags[t] if
+ *  flags != NULL) for y_desired[t]. Equal to n calls of step. Arrays may not overlap.
+ *  @return the number of samples with a flag set (not reached, or NaN). */
+size_t pihyst_compensator_run(pihyst_compensator *c, const double *y_desired, double *u,
+                              double *y, unsigned char *flags, size_t n);
 
 #ifdef __cplusplus
 }

@@ -437,6 +437,11 @@ const char *pihyst_status_text(pihyst_status status)
         return "polyline breakpoints must be strictly increasing and values non-decreasing";
     case PIHYST_EENVELOPE: return "rising envelope above falling envelope on the input range";
     case PIHYST_ERANGE: return "input range must have u_min < u_max";
+    case PIHYST_ENEGATIVE_WEIGHT:
+        return "compensation needs non-negative weights (the model must be monotone)";
+    case PIHYST_ELIMITS:
+        return "voltage limits must lie in the model's input range with u_min < u_max, the "
+               "slew limit must be > 0, and the voltage must lie within the limits";
     }
     return "unknown status";
 }

@@ -20,6 +20,7 @@ void test_check(int ok, const char *what, const char *file, int line)
 int main(void)
 {
     run_model_tests();
+    run_inverse_tests();
     printf("%d passed, %d failed\n", test_passed, test_failed);
     return test_failed == 0 ? 0 : 1;
 }

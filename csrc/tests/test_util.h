@@ -10,4 +10,5 @@ void test_check(int ok, const char *what, const char *file, int line);
 #define CHECK_NEAR(x, y, tol) test_check(fabs((x) - (y)) <= (tol), #x " ~ " #y, __FILE__, __LINE__)
 
 void run_model_tests(void);
+void run_inverse_tests(void);
 #endif

@@ -1,0 +1,332 @@
+/* Tests of pihyst_compensator_*: exact round trip on reachable trajectories with minor
+ * loops (classical, multislope, pwl), hold on flat stretches, limits and slew limit
+ * under any input (NaN, infinities, 1e300), step == run, chunked == whole, validation. */
+#include "pihyst.h"
+#include "test_util.h"
+
+#include <float.h>
+#include <string.h>
+
+#define N_WALK 4000
+
+static const pihyst_shape paper_shape = {150.0, 0.8, 1.2, 0.5};
+
+static unsigned lcg_state = 2024u;
+static double uniform(void) /* [0, 1) */
+{
+    lcg_state = lcg_state * 1103515245u + 12345u;
+    return (double)(lcg_state >> 8) / (double)(1u << 24);
+}
+
+/* A voltage walk in [lo, hi] with many reversals of every size (minor loops),
+ * touching both limits now and then. */
+static void voltage_walk(double *u, int n, double lo, double hi)
+{
+    int i;
+    double v = lo, target = hi;
+    for (i = 0; i < n; ++i) {
+        double step = (hi - lo) * 0.02 * uniform();
+        if (uniform() < 0.05) target = lo + (hi - lo) * uniform();
+        if (uniform() < 0.01) target = uniform() < 0.5 ? lo : hi;
+        v = v < target ? (v + step < target ? v + step : target)
+                       : (v - step > target ? v - step : target);
+        u[i] = v;
+    }
+}
+
+/* Desired = the model's output for a voltage walk; compensate from the same start and
+ * check predict(compensate(y_d)) == y_d and the limits. Returns the largest
+ * |u_comp - u_walk| (the inverse is unique where the model is strictly increasing). */
+static double round_trip(pihyst_model *m, double *scratch, size_t scratch_len)
+{
+    static double u[N_WALK], yd[N_WALK], uc[N_WALK], yc[N_WALK];
+    static unsigned char flags[N_WALK];
+    pihyst_compensator c;
+    double du = 0.0, err = 0.0;
+    int i;
+    voltage_walk(u, N_WALK, m->u_min, m->u_max);
+    pihyst_model_reset(m, NULL);
+    pihyst_model_run(m, u, yd, N_WALK);
+    pihyst_model_reset(m, NULL);
+    CHECK(pihyst_compensator_init(&c, m, NAN, NAN, INFINITY, m->u_min, scratch, scratch_len) ==
+          PIHYST_OK);
+    pihyst_compensator_run(&c, yd, uc, yc, flags, N_WALK);
+    for (i = 0; i < N_WALK; ++i) {
+        if (fabs(yc[i] - yd[i]) > err) err = fabs(yc[i] - yd[i]);
+        if (fabs(uc[i] - u[i]) > du) du = fabs(uc[i] - u[i]);
+        CHECK(uc[i] >= m->u_min && uc[i] <= m->u_max);
+        /* a flag only where the voltage sits at a limit */
+        CHECK(flags[i] == 0 || uc[i] == m->u_min || uc[i] == m->u_max);
+    }
+    CHECK(err <= 1e-9);
+    /* the predicted displacement is the model's own output for those voltages, from the
+     * start state with the initial voltage applied */
+    pihyst_model_reset(m, NULL);
+    pihyst_model_step(m, m->u_min);
+    pihyst_model_run(m, uc, u, N_WALK);
+    for (i = 0; i < N_WALK; ++i) CHECK(u[i] == yc[i]);
+    return du;
+}
+
+static void test_round_trip_paper_models(void)
+{
+    const double rc[4] = {0.0, 10.0, 30.0, 150.0}, wc[4] = {0.008, 0.252, 0.019, 0.582};
+    const double rm[4] = {0.0, 20.0, 30.0, 40.0}, wm[4] = {0.196, 0.026, 0.046, 0.028};
+    double coef[PIHYST_COEF_LEN(4)], state[4], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(4, 0)];
+    pihyst_model m;
+    CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 4, rc, wc, 0.0, 0.0, 150.0, NULL, NULL, coef,
+                            state, NULL) == PIHYST_OK);
+    CHECK(round_trip(&m, scratch, sizeof scratch / sizeof *scratch) <= 1e-9);
+    CHECK(pihyst_model_init(&m, PIHYST_MULTISLOPE, 4, rm, wm, 1.5, 0.0, 150.0, &paper_shape, NULL,
+                            coef, state, NULL) == PIHYST_OK);
+    round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+}
+
+static void test_round_trip_many_operators(void)
+{
+    enum { K = 64 };
+    double r[K], w[K], coef[PIHYST_COEF_LEN(K)], state[K];
+    double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(K, 0)];
+    pihyst_model m;
+    int k, fam;
+    for (fam = 0; fam < 2; ++fam) {
+        for (k = 0; k < K; ++k) {
+            r[k] = (fam ? 50.0 : 150.0) * k / K;
+            w[k] = k % 7 == 3 ? 0.0 : 0.05 * uniform(); /* zero weights are allowed */
+        }
+        w[0] = 0.3;
+        CHECK(pihyst_model_init(&m, (pihyst_family)fam, K, r, w, -2.0, fam ? 0.0 : -10.0, 150.0,
+                                &paper_shape, NULL, coef, state, NULL) == PIHYST_OK);
+        round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+    }
+}
+
+/* The classical operators r = 0 and r = 10 as polylines (r = 10 given by one short
+ * segment in the middle of the range, continued by its extensions), and a 4-point
+ * S-shaped pair. */
+static void test_round_trip_pwl(void)
+{
+    const size_t rs[4] = {0, 2, 4, 8}, fs[4] = {0, 2, 4, 7};
+    const double rx[8] = {0, 150, 50, 60, 0, 40, 90, 150};
+    const double ry[8] = {0, 150, 40, 50, 0, 5, 60, 80};
+    const double fx[7] = {0, 150, 30, 40, 0, 60, 150};
+    const double fy[7] = {0, 150, 40, 50, 0, 50, 80};
+    const double w[3] = {0.1, 0.2, 0.15}, r[2] = {0.0, 10.0};
+    double coef[PIHYST_COEF_LEN(3)], state[3], coef_c[PIHYST_COEF_LEN(2)], state_c[2];
+    double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(3, 15)];
+    double scratch_c[PIHYST_COMPENSATOR_SCRATCH_LEN(2, 0)];
+    double u[200], y[200], u_p[200], u_c[200];
+    pihyst_pwl p;
+    pihyst_model m, mc;
+    pihyst_compensator c, cc;
+    int i;
+    p.rise_start = rs; p.rise_x = rx; p.rise_y = ry;
+    p.fall_start = fs; p.fall_x = fx; p.fall_y = fy;
+    CHECK(pihyst_model_init(&m, PIHYST_PWL, 3, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
+                            NULL) == PIHYST_OK);
+    CHECK(pihyst_compensator_scratch_len(&m) == 6 * 3 + 2 * 8);
+    round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+    /* two operators: the pwl inverse equals the classical inverse */
+    CHECK(pihyst_model_init(&m, PIHYST_PWL, 2, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
+                            NULL) == PIHYST_OK);
+    CHECK(pihyst_model_init(&mc, PIHYST_CLASSICAL, 2, r, w, 0.0, 0.0, 150.0, NULL, NULL, coef_c,
+                            state_c, NULL) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, 22) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&cc, &mc, NAN, NAN, INFINITY, 0.0, scratch_c, 12) == PIHYST_OK);
+    for (i = 0; i < 200; ++i) y[i] = 12.0 * sin(0.05 * i) * sin(0.011 * i) + 9.0;
+    pihyst_compensator_run(&c, y, u_p, NULL, NULL, 200);
+    pihyst_compensator_run(&cc, y, u_c, u, NULL, 200);
+    for (i = 0; i < 200; ++i) CHECK_NEAR(u_p[i], u_c[i], 1e-9);
+}
+
+/* Many pwl operators listed in random order: the event list arrives unsorted and the
+ * sort falls back to heapsort; the result must still be exact. */
+static void test_unsorted_pwl(void)
+{
+    enum { K = 40 };
+    size_t rs[K + 1], fs[K + 1];
+    double rx[4 * K], ry[4 * K], fx[4 * K], fy[4 * K], w[K];
+    double coef[PIHYST_COEF_LEN(K)], state[K], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(K, 8 * K)];
+    pihyst_pwl p;
+    pihyst_model m;
+    int k, j;
+    for (k = 0; k <= K; ++k) rs[k] = fs[k] = 4 * (size_t)k;
+    for (k = 0; k < K; ++k) {
+        /* ramp-smoothed relay (KP kernel) with random switching voltages s1 <= s2:
+         * 0 up to s, then a ramp of the given width, then 1 */
+        double s1 = 140.0 * uniform(), s2 = s1 + 10.0 * uniform(), width = 1.0 + 9.0 * uniform();
+        const double xs[4] = {-1.0, 0.0, 1.0, 200.0}, ys[4] = {0.0, 0.0, 1.0, 1.0};
+        for (j = 0; j < 4; ++j) {
+            rx[4 * k + j] = j == 0 || j == 3 ? xs[j] : s2 + width * xs[j];
+            fx[4 * k + j] = j == 0 || j == 3 ? xs[j] : s1 + width * xs[j];
+            ry[4 * k + j] = fy[4 * k + j] = ys[j];
+        }
+        w[k] = 0.5 + uniform();
+    }
+    p.rise_start = rs; p.rise_x = rx; p.rise_y = ry;
+    p.fall_start = fs; p.fall_x = fx; p.fall_y = fy;
+    CHECK(pihyst_model_init(&m, PIHYST_PWL, K, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
+                            NULL) == PIHYST_OK);
+    round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+}
+
+/* Multislope with thresholds > 0 only: after the top at 150 V the output holds while
+ * the voltage falls by h r_min = 5 V. A desired output that stays at its maximum must
+ * hold the voltage at 150 V, not jump to the other end of the flat stretch. */
+static void test_flat_hold(void)
+{
+    const double r[3] = {10.0, 20.0, 40.0}, w[3] = {0.2, 0.1, 0.05};
+    double coef[PIHYST_COEF_LEN(3)], state[3], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(3, 0)];
+    double u[190], yd[190], uc[190], yc[190];
+    pihyst_model m;
+    pihyst_compensator c;
+    int i;
+    for (i = 0; i < 190; ++i) u[i] = i <= 150 ? (double)i : 150.0 - 0.125 * (i - 150); /* to 145 */
+    CHECK(pihyst_model_init(&m, PIHYST_MULTISLOPE, 3, r, w, 0.0, 0.0, 150.0, &paper_shape, NULL,
+                            coef, state, NULL) == PIHYST_OK);
+    pihyst_model_run(&m, u, yd, 190);
+    for (i = 151; i < 190; ++i) CHECK(yd[i] == yd[150]); /* the model is flat there */
+    pihyst_model_reset(&m, NULL);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, 18) == PIHYST_OK);
+    pihyst_compensator_run(&c, yd, uc, yc, NULL, 190);
+    CHECK_NEAR(uc[150], 150.0, 1e-9);
+    for (i = 151; i < 190; ++i) CHECK(uc[i] == uc[150]);
+    /* then a small decrease crosses the flat stretch to where the output starts falling */
+    CHECK(pihyst_compensator_step(&c, yd[150] - 1e-6, NULL) < 145.0 + 1e-3);
+    CHECK(c.u_last > 144.99);
+    /* from rest, a desired value equal to the current output holds 0 V */
+    CHECK(pihyst_compensator_reset(&c, NULL, 0.0) == PIHYST_OK);
+    CHECK(pihyst_compensator_step(&c, 0.0, NULL) == 0.0);
+}
+
+static const double garbage[] = {NAN, INFINITY, -INFINITY, 1e300, -1e300, 5.0, NAN, 40.0,
+                                 -3.0, 1e-300, 20.0, -INFINITY, 19.0, 21.0, DBL_MAX};
+
+static void test_limits_and_slew(void)
+{
+    const double r[4] = {0.0, 10.0, 30.0, 150.0}, w[4] = {0.008, 0.252, 0.019, 0.582};
+    double coef[PIHYST_COEF_LEN(4)], state[4], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(4, 0)];
+    const int ng = (int)(sizeof garbage / sizeof *garbage);
+    pihyst_model m;
+    pihyst_compensator c;
+    unsigned fl;
+    int i, pass;
+    CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 4, r, w, 0.0, 0.0, 150.0, NULL, NULL, coef,
+                            state, NULL) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, INFINITY, 10.0, scratch, 24) == PIHYST_OK);
+    CHECK(pihyst_compensator_step(&c, INFINITY, &fl) == 120.0 && fl == PIHYST_COMP_SAT_HIGH);
+    CHECK(pihyst_compensator_step(&c, 1e300, &fl) == 120.0 && fl == PIHYST_COMP_SAT_HIGH);
+    CHECK(pihyst_compensator_step(&c, NAN, &fl) == 120.0 && fl == PIHYST_COMP_NAN);
+    CHECK(pihyst_compensator_step(&c, -1e300, &fl) == 10.0 && fl == PIHYST_COMP_SAT_LOW);
+    CHECK(pihyst_compensator_step(&c, -INFINITY, &fl) == 10.0 && fl == PIHYST_COMP_SAT_LOW);
+    for (pass = 0; pass < 2; ++pass) {
+        double prev, step = pass ? 0.1 : 3.7;
+        CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, step, 10.0, scratch, 24) ==
+              PIHYST_OK);
+        prev = c.u_last;
+        for (i = 0; i < 3000; ++i) {
+            double yd = i < ng ? garbage[i] : (uniform() < 0.1 ? garbage[i % ng]
+                                                                : 60.0 * uniform() - 10.0);
+            double u = pihyst_compensator_step(&c, yd, &fl);
+            CHECK(u >= 10.0 && u <= 120.0);
+            CHECK(fabs(u - prev) <= step);
+            if (isnan(yd)) CHECK(u == prev && fl == PIHYST_COMP_NAN);
+            if (fl == PIHYST_COMP_SLEW) CHECK(fabs(u - prev) >= step * (1.0 - 1e-12));
+            prev = u;
+        }
+    }
+}
+
+/* step == run bit for bit; two chunks == one block; reset restores the start */
+static void test_identities(void)
+{
+    enum { N = 700, K = 9 };
+    double r[K], w[K], coef[PIHYST_COEF_LEN(K)], state[K];
+    double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(K, 0)];
+    double yd[N], u_run[N], y_run[N], u_chunk[N], y_chunk[N];
+    unsigned char f_run[N], f_chunk[N];
+    pihyst_model m;
+    pihyst_compensator c;
+    int i, k, fam;
+    size_t n1, n2, n3;
+    for (i = 0; i < N; ++i) yd[i] = 30.0 * sin(0.03 * i) * cos(0.0071 * i) + 15.0;
+    yd[100] = NAN;
+    yd[200] = 1e300;
+    for (fam = 0; fam < 2; ++fam) {
+        for (k = 0; k < K; ++k) {
+            r[k] = (fam ? 5.0 : 14.0) * k;
+            w[k] = 0.04 * (k + 1);
+        }
+        CHECK(pihyst_model_init(&m, (pihyst_family)fam, K, r, w, 0.0, 0.0, 150.0, &paper_shape,
+                                NULL, coef, state, NULL) == PIHYST_OK);
+        CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, 2.5, 0.0, scratch, 6 * K) == PIHYST_OK);
+        n1 = pihyst_compensator_run(&c, yd, u_run, y_run, f_run, N);
+        CHECK(n1 >= 2);
+        CHECK(pihyst_compensator_reset(&c, NULL, 0.0) == PIHYST_OK);
+        for (i = 0; i < N; ++i) {
+            unsigned fl;
+            CHECK(pihyst_compensator_step(&c, yd[i], &fl) == u_run[i]);
+            CHECK(c.y_last == y_run[i] && fl == f_run[i]);
+        }
+        CHECK(pihyst_compensator_reset(&c, NULL, 0.0) == PIHYST_OK);
+        n2 = pihyst_compensator_run(&c, yd, u_chunk, y_chunk, f_chunk, 333);
+        n3 = pihyst_compensator_run(&c, yd + 333, u_chunk + 333, y_chunk + 333, f_chunk + 333,
+                                    N - 333);
+        CHECK(n2 + n3 == n1);
+        for (i = 0; i < N; ++i)
+            CHECK(u_chunk[i] == u_run[i] && y_chunk[i] == y_run[i] && f_chunk[i] == f_run[i]);
+        CHECK((f_run[100] & PIHYST_COMP_NAN) && u_run[100] == u_run[99]);
+    }
+}
+
+static void test_validation_and_reset(void)
+{
+    const double r[3] = {0.0, 10.0, 20.0}, w[3] = {0.5, 0.2, 0.1}, wneg[3] = {0.5, -0.2, 0.1};
+    const double bad_state[3] = {0.0, NAN, 0.0}, far_state[3] = {100.0, 100.0, -100.0};
+    double coef[PIHYST_COEF_LEN(3)], state[3], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(3, 0)];
+    pihyst_model m;
+    pihyst_compensator c;
+    CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 3, r, wneg, 0, 0, 150, NULL, NULL, coef, state,
+                            NULL) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, 18) ==
+          PIHYST_ENEGATIVE_WEIGHT);
+    CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 3, r, w, 0, 0, 150, NULL, NULL, coef, state,
+                            NULL) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, 17) == PIHYST_ESIZE);
+    CHECK(pihyst_compensator_init(&c, &m, -1, NAN, INFINITY, 0, scratch, 18) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, 151, INFINITY, 0, scratch, 18) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, 50, 50, INFINITY, 50, scratch, 18) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, 0.0, 0, scratch, 18) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, NAN, 0, scratch, 18) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, 10, NAN, INFINITY, 0, scratch, 18) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, NAN, scratch, 18) ==
+          PIHYST_ENONFINITE);
+    CHECK(pihyst_compensator_init(NULL, &m, NAN, NAN, INFINITY, 0, scratch, 18) == PIHYST_ENULL);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, NULL, 18) == PIHYST_ENULL);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 30, scratch, 18) == PIHYST_OK);
+    CHECK(c.u_last == 30.0 && c.u_min == 0.0 && c.u_max == 150.0);
+    /* the model state has had 30 V applied: 30, 20, 10 */
+    CHECK(state[0] == 30.0 && state[1] == 20.0 && state[2] == 10.0);
+    CHECK_NEAR(c.y_last, 0.5 * 30 + 0.2 * 20 + 0.1 * 10, 1e-12);
+    CHECK(pihyst_compensator_reset(&c, bad_state, 0.0) == PIHYST_ENONFINITE);
+    CHECK(pihyst_compensator_reset(&c, NULL, 151.0) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_reset(&c, NULL, NAN) == PIHYST_ENONFINITE);
+    CHECK(c.u_last == 30.0 && state[0] == 30.0); /* unchanged by the failed resets */
+    /* an inconsistent state is brought onto the envelopes of the voltage */
+    CHECK(pihyst_compensator_reset(&c, far_state, 50.0) == PIHYST_OK);
+    CHECK(state[0] == 50.0 && state[1] == 60.0 && state[2] == 30.0);
+    CHECK(strlen(pihyst_status_text(PIHYST_ENEGATIVE_WEIGHT)) > 0);
+    CHECK(strlen(pihyst_status_text(PIHYST_ELIMITS)) > 0);
+}
+
+void run_inverse_tests(void)
+{
+    test_round_trip_paper_models();
+    test_round_trip_many_operators();
+    test_round_trip_pwl();
+    test_unsorted_pwl();
+    test_flat_hold();
+    test_limits_and_slew();
+    test_identities();
+    test_validation_and_reset();
+}
