@@ -108,6 +108,20 @@ static int walk(const double *a, size_t na, const double *b, size_t nb, double s
 {
     double z = 0.0, d0 = 0.0, z_end;
     size_t i = 0, j = 0;
+    if (nb == 0) { /* one list (classical, pwl) */
+        for (i = 0; i < na; ++i) {
+            const double de = a[2 * i], ze = z + s * (de - d0);
+            if (ze >= target) {
+                const double d = d0 + (target - z) / s;
+                *d_out = d < de ? d : de;
+                return 1;
+            }
+            z = ze;
+            d0 = de;
+            s += a[2 * i + 1];
+        }
+        na = 0;
+    }
     for (;;) {
         double de, dse, ze;
         if (i < na && (j >= nb || a[2 * i] <= b[2 * j])) {
