@@ -10,10 +10,10 @@ import argparse
 import sys
 
 from pihyst import __version__
-from pihyst.cli import predict
+from pihyst.cli import predict, simulate
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict]
+COMMANDS = [predict, simulate]
 
 
 def build_parser():

@@ -1,0 +1,98 @@
+"""pihyst simulate --plant NAME --signal KIND [options] -o DATA.csv"""
+
+from pihyst import __version__
+from pihyst import signals
+from pihyst.cli.errors import UsageError
+from pihyst.csvio import write_columns
+from pihyst.plant import PLANT_NAMES, make_plant
+
+SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
+
+
+def register(sub):
+    p = sub.add_parser(
+        "simulate", help="record a loop from a simulated piezo beam",
+        description="Drive a simulated beam (not a PI model: Preisach or Bouc-Wen hysteresis "
+                    "with creep, sensor noise and 10 mV supply steps) with a voltage signal "
+                    "and write time_s, voltage_V and the measured displacement_um. The beam "
+                    "starts at rest at 0 V after a full 0 -> 150 -> 0 V cycle.",
+        epilog="examples: pihyst simulate -o loop.csv  (the paper's 0-150 V, 300 s triangle "
+               "on the paper-beam);  pihyst simulate --plant remanent --signal random-ramps "
+               "--ramps 30 --seed 2 -o ramps.csv")
+    p.add_argument("--plant", choices=PLANT_NAMES, default="paper-beam",
+                   help="simulated beam (default: paper-beam, calibrated to the paper)")
+    p.add_argument("--signal", choices=SIGNALS, default="triangle",
+                   help="drive signal (default: triangle)")
+    p.add_argument("--min", type=float, default=0.0, metavar="V", dest="u_min",
+                   help="lowest voltage (default 0)")
+    p.add_argument("--max", type=float, default=None, metavar="V", dest="u_max",
+                   help="highest voltage (default: the beam's 150 V)")
+    p.add_argument("--period", type=float, default=signals.PAPER_PERIOD_S, metavar="S",
+                   help="period of triangle and sine, and of the first decaying triangle "
+                        "(default 300 s)")
+    p.add_argument("--cycles", type=int, default=1, metavar="N",
+                   help="cycles of triangle or sine (default 1)")
+    p.add_argument("--dt", type=float, default=signals.DEFAULT_DT, metavar="S",
+                   help="sample interval (default 0.1 s)")
+    p.add_argument("--triangles", type=int, default=5, metavar="N",
+                   help="decaying-triangles: number of triangles (default 5)")
+    p.add_argument("--ratio", type=float, default=0.7, metavar="R",
+                   help="decaying-triangles: peak ratio of successive triangles (default 0.7)")
+    p.add_argument("--ramps", type=int, default=20, metavar="N",
+                   help="random-ramps: number of ramps (default 20)")
+    p.add_argument("--rate", type=float, default=None, metavar="V/S",
+                   help="random-ramps: ramp rate (default: the triangle's, 1 V/s for "
+                        "0-150 V in 300 s)")
+    p.add_argument("--steps", type=int, default=10, metavar="N",
+                   help="staircase: steps up (and as many down) (default 10)")
+    p.add_argument("--step-time", type=float, default=10.0, metavar="S",
+                   help="staircase: time per step (default 10 s)")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="seed of the sensor noise and of random-ramps' levels (default 0)")
+    p.add_argument("--no-noise", action="store_true", help="no sensor noise")
+    p.add_argument("--no-creep", action="store_true", help="no creep")
+    p.add_argument("--no-quantisation", action="store_true",
+                   help="no 10 mV supply quantisation")
+    p.add_argument("--dynamics", action="store_true",
+                   help="add the beam's second-order dynamics (54 Hz resonance)")
+    p.add_argument("-o", "--output", metavar="DATA.csv", required=True, help="output CSV")
+    p.set_defaults(run=run)
+
+
+def make_signal(args, u_max):
+    """(t, u) of the chosen signal; bad options raise UsageError."""
+    kind = args.signal
+    common = {"u_min": args.u_min, "u_max": u_max, "dt": args.dt}
+    try:
+        if kind == "triangle":
+            return signals.triangle(period_s=args.period, n_cycles=args.cycles, **common)
+        if kind == "sine":
+            return signals.sine(period_s=args.period, n_cycles=args.cycles, **common)
+        if kind == "decaying-triangles":
+            return signals.decaying_triangles(period_s=args.period, n_triangles=args.triangles,
+                                              ratio=args.ratio, **common)
+        if kind == "random-ramps":
+            return signals.random_ramps(n_ramps=args.ramps, rate=args.rate, seed=args.seed,
+                                        **common)
+        return signals.staircase(n_steps=args.steps, step_s=args.step_time, **common)
+    except ValueError as err:
+        raise UsageError(f"{kind}: {err}") from None
+
+
+def run(args):
+    plant = make_plant(args.plant, seed=args.seed, noise=not args.no_noise,
+                       creep=not args.no_creep, quantisation=not args.no_quantisation,
+                       dynamics=args.dynamics)
+    u_max = plant.u_max if args.u_max is None else args.u_max
+    if not (plant.u_min <= args.u_min and u_max <= plant.u_max):
+        raise UsageError(f"--min/--max must lie in the beam's drive range "
+                         f"[{plant.u_min:g}, {plant.u_max:g}] V, got {args.u_min:g}..{u_max:g}")
+    t, u = make_signal(args, u_max)
+    y = plant.run(u, t)
+    options = ", ".join(f"{k}={v}" for k, v in sorted(vars(args).items())
+                        if k not in ("run", "output", "command"))
+    write_columns(args.output, {"time_s": t, "voltage_V": u, "displacement_um": y},
+                  comments=[f"pihyst {__version__} simulate ({options})", plant.describe()])
+    print(f"wrote {u.size} samples ({t[-1]:g} s) to {args.output}: {args.signal} "
+          f"{args.u_min:g}..{u_max:g} V on {plant.name}, displacement "
+          f"{y.min():.4g} .. {y.max():.4g} um")
