@@ -3,6 +3,7 @@ compensation for piezoelectric actuators (Xu, Zhang, Rong and Ni 2020, and beyon
 
 __version__ = "0.1.0"
 
+from pihyst.compensate import CompensationResult, Compensator, compensate  # noqa: E402
 from pihyst.io import load_model, save_model  # noqa: E402
 from pihyst.model import (  # noqa: E402
     ClassicalPI,
@@ -16,12 +17,15 @@ from pihyst.model import (  # noqa: E402
 
 __all__ = [
     "ClassicalPI",
+    "CompensationResult",
+    "Compensator",
     "InputRangeError",
     "InvalidModelError",
     "MultislopePI",
     "PIModel",
     "PiecewiseLinearPI",
     "Response",
+    "compensate",
     "load_model",
     "save_model",
 ]

@@ -218,3 +218,123 @@ def _concat(polylines, name):
         starts.append(total)
     return (np.asarray(starts, dtype=np.uintp), np.ascontiguousarray(np.concatenate(xs)),
             np.ascontiguousarray(np.concatenate(ys)))
+
+
+# ---------------------------------------------------------------- compensator (inverse)
+
+cdef extern from "pihyst.h" nogil:
+    enum:
+        PIHYST_COMP_SAT_LOW
+        PIHYST_COMP_SAT_HIGH
+        PIHYST_COMP_NAN
+        PIHYST_COMP_SLEW
+    ctypedef struct pihyst_compensator:
+        double u_min
+        double u_max
+        double max_step
+        double u_last
+        double y_last
+        double tol
+    size_t pihyst_compensator_scratch_len(const pihyst_model *m)
+    pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, double u_min,
+                                          double u_max, double max_step, double u_initial,
+                                          double *scratch, size_t scratch_len)
+    pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const double *state,
+                                           double u_last)
+    double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned *flags)
+    size_t pihyst_compensator_run(pihyst_compensator *c, const double *y_desired, double *u,
+                                  double *y, unsigned char *flags, size_t n)
+
+FLAG_SATURATED_LOW = PIHYST_COMP_SAT_LOW
+FLAG_SATURATED_HIGH = PIHYST_COMP_SAT_HIGH
+FLAG_NAN = PIHYST_COMP_NAN
+FLAG_SLEW = PIHYST_COMP_SLEW
+
+
+cdef class Compensator:
+    """Exact streaming inverse of a :class:`Bank` with non-negative weights.
+
+    Takes over ``bank``: every voltage it chooses is applied to the bank's state.
+    ``u_min``/``u_max`` are the voltage limits (inside the bank's input range),
+    ``max_step`` the largest |u[t] - u[t-1]| (``inf`` for none), ``initial_voltage``
+    the voltage before the first sample (applied to the bank's current state).
+    """
+    cdef pihyst_compensator c
+    cdef Bank bank
+    cdef object _scratch
+    cdef readonly unsigned last_flags
+
+    def __init__(self, Bank bank, double u_min, double u_max, double max_step,
+                 double initial_voltage):
+        cdef double[::1] s_v
+        self.bank = bank
+        self._scratch = np.zeros(max(pihyst_compensator_scratch_len(&bank.m), 1))
+        s_v = self._scratch
+        status = pihyst_compensator_init(&self.c, &bank.m, u_min, u_max, max_step,
+                                         initial_voltage, &s_v[0], s_v.shape[0])
+        if status != PIHYST_OK:
+            raise CoreError(pihyst_status_text(status).decode())
+        self.last_flags = 0
+
+    @property
+    def state(self):
+        """A copy of the operator state (after the last voltage)."""
+        return self.bank.state
+
+    @property
+    def voltage(self):
+        """The last voltage."""
+        return self.c.u_last
+
+    @property
+    def output(self):
+        """The model output at the last voltage."""
+        return self.c.y_last
+
+    @property
+    def limits(self):
+        return (self.c.u_min, self.c.u_max)
+
+    @property
+    def max_step(self):
+        return self.c.max_step
+
+    @property
+    def tolerance(self):
+        """|y_d - y| at or below which the voltage holds (rounding of the output)."""
+        return self.c.tol
+
+    def reset(self, state, double voltage):
+        """Set the operator state (None: zeros) and the last voltage, applying it."""
+        cdef const double[::1] v
+        cdef const double *p = NULL
+        if state is not None:
+            v = _vector(state, self.bank.n_ops, "state")
+            p = &v[0]
+        status = pihyst_compensator_reset(&self.c, p, voltage)
+        if status != PIHYST_OK:
+            raise CoreError(pihyst_status_text(status).decode())
+        self.last_flags = 0
+
+    def step(self, double y_desired):
+        """The voltage for one desired output; flags in ``last_flags``."""
+        cdef unsigned flags
+        u = pihyst_compensator_step(&self.c, y_desired, &flags)
+        self.last_flags = flags
+        return u
+
+    def run(self, y_desired):
+        """(voltage, output, flags) arrays for a block of desired outputs."""
+        cdef const double[::1] d_v = _vector(y_desired, name="y_desired")
+        cdef Py_ssize_t n = d_v.shape[0]
+        u = np.empty(n)
+        y = np.empty(n)
+        flags = np.zeros(n, dtype=np.uint8)
+        cdef double[::1] u_v = u
+        cdef double[::1] y_v = y
+        cdef unsigned char[::1] f_v = flags
+        if n:
+            with nogil:
+                pihyst_compensator_run(&self.c, &d_v[0], &u_v[0], &y_v[0], &f_v[0], n)
+            self.last_flags = f_v[n - 1]
+        return u, y, flags

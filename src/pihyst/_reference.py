@@ -98,3 +98,172 @@ class Bank:
         phi = self.operators(u)
         d = np.asarray(d, dtype=float)
         return phi.T @ phi, phi.T @ d, phi.sum(axis=0)
+
+
+# ---------------------------------------------------------------- compensator (inverse)
+
+FLAG_SATURATED_LOW, FLAG_SATURATED_HIGH, FLAG_NAN, FLAG_SLEW = 1, 2, 4, 8
+
+
+def _polyline_many(x, y, u):
+    """The polyline of :func:`polyline` at every value of the array ``u``."""
+    if x.size == 1:
+        return np.full(u.shape, float(y[0]))
+    i = np.clip(np.searchsorted(x, u, side="right") - 1, 0, x.size - 2)
+    return y[i] + (y[i + 1] - y[i]) * (u - x[i]) / (x[i + 1] - x[i])
+
+
+class Compensator:
+    """NumPy twin of :class:`pihyst._core.Compensator`: same constructor and methods.
+
+    Independent of the C segment walk. For each sample it lists every breakpoint of
+
+        y(u) = offset + sum_k w_k max(R_k(u), min(F_k(u), f_k))
+
+    in the window of allowed voltages: the envelopes' own kinks, and on every piece
+    between them the voltages where R_k or F_k crosses f_k. Between consecutive
+    breakpoints y is linear, so after evaluating y at all of them by the formula above,
+    the voltage nearest the last one with y(u) = y_d follows from one linear
+    interpolation in the first bracketing interval. Slow (O(K^2) per sample), clear.
+    """
+
+    def __init__(self, bank, u_min, u_max, max_step, initial_voltage):
+        if np.any(bank.weights < 0):
+            raise CoreError("compensation needs non-negative weights")
+        self.bank = bank
+        lo, hi = float(u_min), float(u_max)  # explicit: this Bank does not keep its range
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi) or not max_step > 0:
+            raise CoreError("invalid voltage limits or slew limit")
+        if not np.isfinite(initial_voltage):
+            raise CoreError("initial voltage is not finite")
+        if not lo <= initial_voltage <= hi:
+            raise CoreError("initial voltage outside the limits")
+        self.limits = (lo, hi)
+        self.max_step = float(max_step)
+        # rounding of the output: 4 (K + 2) eps (|offset| + sum_k w_k max|envelopes|)
+        r_lo, f_lo = bank.envelopes(lo)
+        r_hi, f_hi = bank.envelopes(hi)
+        big = np.max(np.abs([r_lo, f_lo, r_hi, f_hi]), axis=0)
+        scale = abs(bank.offset) + float(bank.weights @ big)
+        self.tolerance = 4.0 * (bank.n_ops + 2) * np.finfo(float).eps * scale
+        self.last_flags = 0
+        self._apply(float(initial_voltage))
+
+    # ------------------------------------------------------------ the model, vectorized
+    def _envelopes_at(self, u):
+        """R, F of shape (len(u), K)."""
+        b = self.bank
+        u = np.asarray(u, dtype=float)[:, None]
+        if b.family == "classical":
+            return u - b.thresholds, u + b.thresholds
+        if b.family == "multislope":
+            r, U, a, bb, h = b.thresholds, b.U, b.a, b.b, b.h
+            return (np.maximum(a * (u - r), bb * u - r - (bb - 1) * U),
+                    np.minimum(bb * u, a * u + (1 - a) * U - (1 - a * h) * r))
+        u = u[:, 0]
+        rise = np.column_stack([_polyline_many(x, y, u) for x, y in b.rising])
+        fall = np.column_stack([_polyline_many(x, y, u) for x, y in b.falling])
+        return rise, fall
+
+    def _kinks(self):
+        b = self.bank
+        if b.family == "classical":
+            return np.empty(0)
+        if b.family == "multislope":
+            r, U, a, bb, h = b.thresholds, b.U, b.a, b.b, b.h
+            rise_kink = (r * (1 - a) + (bb - 1) * U) / (bb - a)   # a(u - r) = b u - r - (b-1)U
+            fall_kink = ((1 - a) * U - (1 - a * h) * r) / (bb - a)  # b u = a u + (1-a)U - (1-ah)r
+            return np.concatenate([rise_kink, fall_kink])
+        return np.concatenate([x for x, _ in b.rising] + [x for x, _ in b.falling])
+
+    def _output_at(self, u, f):
+        rise, fall = self._envelopes_at(u)
+        return self.bank.offset + np.maximum(rise, np.minimum(fall, f)) @ self.bank.weights
+
+    def _breakpoints(self, lo, hi, u_p, f):
+        """Every breakpoint of y(u) in [lo, hi] (with lo, hi and u_p), sorted."""
+        kinks = self._kinks()
+        p = np.unique(np.concatenate([[lo, hi, u_p], kinks[(kinks > lo) & (kinks < hi)]]))
+        points = [p]
+        env = self._envelopes_at(p)
+        for e in env:  # R and F: where a linear piece crosses the level f_k
+            e0, e1 = e[:-1], e[1:]
+            p0, p1 = p[:-1, None], p[1:, None]
+            crosses = ((e0 - f) * (e1 - f) <= 0) & (e1 != e0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                u = p0 + (f - e0) * (p1 - p0) / (e1 - e0)
+            u = u[crosses]
+            points.append(u[(u >= lo) & (u <= hi)])
+        return np.unique(np.concatenate(points))
+
+    # ------------------------------------------------------------ state
+    def _apply(self, u):
+        self.output = self.bank.step(u)
+        self.voltage = u
+
+    @property
+    def state(self):
+        return self.bank.state
+
+    def reset(self, state, voltage):
+        if not np.isfinite(voltage):
+            raise CoreError("voltage is not finite")
+        if not self.limits[0] <= voltage <= self.limits[1]:
+            raise CoreError("voltage outside the limits")
+        if state is not None and not np.all(np.isfinite(state)):
+            raise CoreError("state is not finite")
+        self.bank.reset(state)
+        self._apply(float(voltage))
+        self.last_flags = 0
+
+    # ------------------------------------------------------------ one sample
+    def _window(self, u_p):
+        lo, hi = self.limits
+        step = self.max_step
+        top, bottom = u_p + step, u_p - step
+        while top - u_p > step:  # keep (end - u_p) <= max_step in floating point
+            top = np.nextafter(top, u_p)
+        while u_p - bottom > step:
+            bottom = np.nextafter(bottom, u_p)
+        return (max(lo, bottom), bottom > lo), (min(hi, top), top < hi)
+
+    def step(self, y_desired):
+        y_d = float(y_desired)
+        u_p, y_p = self.voltage, self.output
+        flags = 0
+        if np.isnan(y_d):
+            flags = FLAG_NAN
+        elif abs(y_d - y_p) > self.tolerance:
+            (lo, slew_lo), (hi, slew_hi) = self._window(u_p)
+            f = self.bank.state
+            c = self._breakpoints(lo, hi, u_p, f)
+            up = y_d > y_p
+            c = c[c >= u_p] if up else c[c <= u_p][::-1]  # walk away from u_p
+            y = self._output_at(c, f)
+            sign = 1.0 if up else -1.0
+            reached = np.flatnonzero(sign * (y - y_d) >= 0)
+            if reached.size == 0:
+                u = hi if up else lo
+                slew = slew_hi if up else slew_lo
+                flags = FLAG_SLEW if slew else (FLAG_SATURATED_HIGH if up else FLAG_SATURATED_LOW)
+            elif reached[0] == 0:
+                u = u_p
+            else:
+                j = reached[0]
+                # the linear piece between breakpoints j - 1 and j holds y_d
+                u = c[j - 1] + (y_d - y[j - 1]) * (c[j] - c[j - 1]) / (y[j] - y[j - 1])
+                u = float(np.clip(u, min(c[j - 1], c[j]), max(c[j - 1], c[j])))
+            self._apply(float(u))
+        self.last_flags = flags
+        return self.voltage
+
+    def run(self, y_desired):
+        y_desired = np.asarray(y_desired, dtype=float)
+        u = np.empty(y_desired.size)
+        y = np.empty(y_desired.size)
+        flags = np.zeros(y_desired.size, dtype=np.uint8)
+        for t, y_d in enumerate(y_desired):
+            u[t] = self.step(y_d)
+            y[t] = self.output
+            flags[t] = self.last_flags
+        return u, y, flags

@@ -228,6 +228,12 @@ class ClassicalPI(PIModel):
     def _describe(self):
         return f"thresholds={self.thresholds.tolist()}"
 
+    def inverse(self):
+        """The analytic inverse, a :class:`ClassicalPI` from displacement to voltage
+        (DESIGN.md section 4; see :func:`pihyst.inverse.classical_inverse`)."""
+        from pihyst.inverse import classical_inverse
+        return classical_inverse(self)
+
 
 class MultislopePI(PIModel):
     """Multislope PI model of Xu et al. (2020), eq. 6, with shape (U, a, b, h).
