@@ -373,16 +373,3 @@ def test_voltage_just_beyond_the_range_rounds_into_it():
     y = make_plant(noise=False).run(np.array([0.0, 150.004]), np.array([0.0, 1.0]))
     assert np.isfinite(y).all()
 
-
-def test_docstring_examples_run():
-    import doctest
-
-    import pihyst.plant
-    import pihyst.signals
-    import pihyst.simbeam.boucwen
-    import pihyst.simbeam.lti
-    import pihyst.simbeam.preisach
-    for module in (pihyst.plant, pihyst.signals, pihyst.simbeam.boucwen, pihyst.simbeam.lti,
-                   pihyst.simbeam.preisach):
-        result = doctest.testmod(module)
-        assert result.failed == 0 and result.attempted > 0, module.__name__
