@@ -231,8 +231,9 @@ class KrasnoselskiiPokrovskii(Family):
     """Krasnosel'skii-Pokrovskii kernels (DESIGN.md section 3): ramp-smoothed relays
     R(v) = sat((v - c_j)/w + 1/2), F(v) = sat((v - c_i)/w + 1/2), c_i <= c_j on a grid of
     ``n_grid`` centres over [0, S], width w = S/(n_grid - 1); sat clamps to [0, 1]. A
-    Preisach-type basis: captures asymmetric loops; its weights are regularized towards
-    smoothness over the (c_i, c_j) plane where the data cannot decide."""
+    Preisach-type basis: captures asymmetric loops; where the data cannot decide, its
+    weights are regularized towards a density that depends only on the loop width
+    c_j - c_i (see :meth:`penalty`)."""
 
     name = "kp"
     title = "Krasnosel'skii-Pokrovskii kernels (regularized)"
@@ -262,16 +263,22 @@ class KrasnoselskiiPokrovskii(Family):
                                  initial_state=state_v)
 
     def penalty(self, pairs):
-        """D^T D for D the differences of the weights of neighbouring kernels
-        ((i, j)-(i+1, j) and (i, j)-(i, j+1)) in the Preisach plane."""
+        """D^T D for D the differences of the weights of kernels (i, j) and (i+1, j+1):
+        neighbours along the diagonal of the Preisach plane, with the same width
+        c_j - c_i. Where the data cannot decide, the density then depends only on the
+        loop width, as in a classical PI model, whose minor loops follow from its major
+        loop (this generalizes to reversals inside the range far better than plain
+        smoothing towards all neighbours)."""
         index = {p: k for k, p in enumerate(pairs)}
         rows = []
         for (i, j), k in index.items():
-            for nb in ((i + 1, j), (i, j + 1)):
-                if nb in index:
-                    row = np.zeros(len(pairs))
-                    row[k], row[index[nb]] = 1.0, -1.0
-                    rows.append(row)
+            nb = index.get((i + 1, j + 1))
+            if nb is not None:
+                row = np.zeros(len(pairs))
+                row[k], row[nb] = 1.0, -1.0
+                rows.append(row)
+        if not rows:
+            return np.zeros((len(pairs), len(pairs)))
         D = np.array(rows)
         return D.T @ D
 

@@ -204,7 +204,7 @@ class FitReport:
         if "regularization" in best:
             reg = best["regularization"]
             lines.append(f"{reg['kernels']} kernels on a grid, {best['n_operators']} with "
-                         f"non-zero weight; smoothness regularization lambda = "
+                         f"non-zero weight; regularized towards a width-only density, lambda = "
                          f"{reg['lambda']:.3g} ({reg['rule']})")
         ch = best.get("threshold_choice")
         if ch:

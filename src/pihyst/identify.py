@@ -34,17 +34,18 @@ from pihyst.metrics import error_summary
 from pihyst.model import InvalidModelError
 from pihyst.qp import solve_qp
 from pihyst.records import checked_signals, layout, starts_at_rest
-from pihyst.thresholds import DEFAULT_MAX_EXHAUSTIVE, SubsetProblem, choose_size
+from pihyst.thresholds import (DEFAULT_MAX_EXHAUSTIVE, PATH_MAX_EXHAUSTIVE, SubsetProblem,
+                               choose_size)
 
 DEFAULT_N_CANDIDATES = 16
 INITIAL_STATES = ("auto", "cycled", "settle", "zero")
 SHAPE_BOUNDS = {"a": (0.05, 0.995), "b": (1.005, 3.0), "h": (0.0, 1.0)}
-KP_LAMBDAS = 10.0 ** np.arange(-8, 1)
-KP_DEFAULT_LAMBDA = 1e-4
+KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
+KP_DEFAULT_LAMBDA = 1e-2
 CONSTANT_COLUMN = 1e-9  # an operator whose output varies less than this * S never moved
 
 
-def _family(name, shape, identify):
+def _family(name, shape, identify, input_segments=4, kp_grid=16):
     if name == "classical":
         return Classical()
     if name in ("multislope", "multislope-identified"):
@@ -52,9 +53,9 @@ def _family(name, shape, identify):
         base = cls()
         return base.with_shape(**(shape or {})) if shape else base
     if name == "modified-pi":
-        return ModifiedPI()
+        return ModifiedPI(input_segments)
     if name == "kp":
-        return KrasnoselskiiPokrovskii()
+        return KrasnoselskiiPokrovskii(kp_grid)
     raise FitError(f"unknown model family {name!r}; expected one of {', '.join(FAMILY_NAMES)}")
 
 
@@ -277,7 +278,7 @@ class _Fitter:
             path = [best]
             size_rule = f"requested: {self.n_operators}"
         else:
-            path = prob.path(self.max_exhaustive)
+            path = prob.path(min(self.max_exhaustive, PATH_MAX_EXHAUSTIVE))
             if self.rec.has_held_back:
                 best = choose_size(path)
                 size_rule = ("smallest number of operators within 1 % of the lowest "
@@ -391,6 +392,13 @@ class _Fitter:
         pairs = fam.pairs()
         template = fam.template(pairs, rec.S)
         state0, parts, rows = self._grams(template)
+        const = self._constant_columns(parts, len(pairs))
+        if const.size:
+            # e.g. the widest kernel: after a full cycle it stays at 1/2 for good
+            pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
+            template = fam.template(pairs, rec.S)
+            state0, parts, rows = self._grams(template)
+            self.notes.append(f"{const.size} kernels dropped: the input never moves them")
         names = [f"kernel {p}" for p in pairs]
         prob = self._problem(parts, rows, len(pairs), names)
         n_ops = len(pairs)
@@ -419,7 +427,8 @@ class _Fitter:
             self.notes.append("nothing held back: regularization strength not chosen from data")
         x = solve(lam, warn=True)
         reg = {"lambda": lam, "scale": float(scale), "rule": rule, "tried": tried,
-               "kernels": len(pairs)}
+               "kernels": len(pairs),
+               "penalty": "differences of neighbouring kernels along the diagonal (same width)"}
         self._kp_solve = solve
         return self._result(fam, pairs, tuple(range(n_ops)), cols, x, state0, parts, prob,
                             None, [], regularization=reg)
@@ -495,7 +504,7 @@ def _reason(r, cand, base, judged_on):
 def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
         n_candidates=DEFAULT_N_CANDIDATES, shape=None, identify_shape=True, offset=True,
         nonnegative=True, bounds=None, through=None, initial_state="auto",
-        holdout="alternate", refit=True, input_range=None,
+        holdout="alternate", refit=True, input_range=None, input_segments=4, kp_grid=16,
         max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
     """Fit PI-type hysteresis models to a measured record and keep the most accurate.
 
@@ -548,8 +557,13 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         choice. The report's held-back errors are those of the fit before the refit.
     input_range : (min, max), optional
         Input range of the model; default the data's span.
+    input_segments : int
+        ``"modified-pi"``: number of equal segments of its monotone input function.
+    kp_grid : int
+        ``"kp"``: number of kernel centres per axis (kp_grid (kp_grid + 1) / 2 kernels).
     max_exhaustive : int
-        Largest number of subsets of one size searched exhaustively.
+        Largest number of subsets of the requested size searched exhaustively (the
+        automatic size search uses at most 600 per size, then greedy selection + swaps).
 
     Returns
     -------
@@ -608,7 +622,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     caught = {}
     for name in names:
         fam = _family(name, shape if name.startswith("multislope") else None,
-                      identify_shape)
+                      identify_shape, input_segments, kp_grid)
         if not fam.subset_search and (thresholds is not None or candidates is not None
                                       or n_operators is not None):
             msg = "has no thresholds (a grid of kernels, regularized)"

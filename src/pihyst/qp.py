@@ -7,9 +7,9 @@ weights x, i.e. the quadratic programme
     subject to  lower <= x <= upper,  A_eq x = b_eq,
 
 on the small K x K matrix H, never on A itself. Before solving, the variables are scaled
-so that H has a unit diagonal (x_i = x'_i / sqrt(H_ii)); a scaled H whose smallest
-eigenvalue is below ``rcond`` times its largest is ill-conditioned: a ridge of
-``rcond * lambda_max`` is added (which picks the smallest weights among the almost
+so that H has a unit diagonal (x_i = x'_i / sqrt(H_ii)); a scaled H whose condition
+number (LAPACK's 1-norm estimate) exceeds 1/``rcond`` is ill-conditioned: a ridge of
+``rcond * ||H'||_1`` (>= rcond * lambda_max) is added (which picks the smallest weights among the almost
 equally good ones) and an :class:`~pihyst.exceptions.IllConditionedWarning` says so.
 """
 
@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import quadprog
+from scipy.linalg.lapack import dpocon, dpotrf, dpotrs
 
 from pihyst.exceptions import IllConditionedWarning, InfeasibleConstraintsError
 
@@ -29,7 +30,8 @@ class QPSolution:
     """Result of :func:`solve_qp`.
 
     ``x``: the solution; ``objective``: 1/2 x^T H x - g^T x (without the ridge);
-    ``condition``: condition number of the diagonally scaled H; ``regularized``: whether
+    ``condition``: condition number (1-norm estimate) of the diagonally scaled H;
+    ``regularized``: whether
     a ridge was needed."""
 
     x: np.ndarray
@@ -85,7 +87,7 @@ def solve_qp(H, g, *, lower=None, upper=None, A_eq=None, b_eq=None, rcond=DEFAUL
     A_eq, b_eq : (m, n) and (m,) array_like, optional
         Equality constraints A_eq x = b_eq.
     rcond : float
-        Smallest admissible ratio of the extreme eigenvalues of the scaled H.
+        Smallest admissible reciprocal condition number of the scaled H.
     warn : bool
         Issue an :class:`~pihyst.exceptions.IllConditionedWarning` when a ridge was needed.
     names : list of str, optional
@@ -131,19 +133,25 @@ def solve_qp(H, g, *, lower=None, upper=None, A_eq=None, b_eq=None, rcond=DEFAUL
     Hs = H / np.outer(s, s)
     Hs = 0.5 * (Hs + Hs.T)
     gs = g / s
-    lam, V = np.linalg.eigh(Hs)
-    lam_max = max(float(lam[-1]), np.finfo(float).tiny)
-    condition = lam_max / lam[0] if lam[0] > 0 else np.inf
-    regularized = not lam[0] > rcond * lam_max
+    # Condition number (1-norm estimate) from the Cholesky factor of H'; H' not positive
+    # definite counts as infinitely ill-conditioned.
+    norm1 = float(np.abs(Hs).sum(axis=0).max())
+    factor, info = dpotrf(Hs, lower=0, clean=1)
+    condition = np.inf
+    if info == 0 and norm1 > 0:
+        rc, info = dpocon(factor, norm1)
+        condition = 1.0 / rc if info == 0 and rc > 0 else np.inf
+    regularized = not condition < 1.0 / rcond
     if regularized:
-        lam = lam + rcond * lam_max
-        Hs = Hs + rcond * lam_max * np.eye(n)
         if warn:
-            _warn_ill_conditioned(V[:, 0], condition, names)
+            _warn_ill_conditioned(np.linalg.eigh(Hs)[1][:, 0], condition, names)
+        # ridge rcond * lambda_max, with lambda_max <= ||H'||_1
+        Hs = Hs + rcond * max(norm1, np.finfo(float).tiny) * np.eye(n)
+        factor, info = dpotrf(Hs, lower=0, clean=1)
     # Without equality constraints, the unconstrained minimizer x' = H'^-1 g' is the
     # answer whenever it is within the bounds (no constraint active).
-    if A_eq is None or not np.size(A_eq):
-        x = (V @ ((V.T @ gs) / lam)) / s
+    if (A_eq is None or not np.size(A_eq)) and info == 0:
+        x = dpotrs(factor, gs, lower=0)[0] / s
         if (x >= lo).all() and (x <= hi).all():
             return QPSolution(x=x, objective=float(0.5 * x @ H @ x - g @ x),
                               condition=float(condition), regularized=bool(regularized))

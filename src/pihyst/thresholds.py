@@ -21,7 +21,8 @@ import numpy as np
 from pihyst.exceptions import InfeasibleConstraintsError
 from pihyst.qp import solve_qp
 
-DEFAULT_MAX_EXHAUSTIVE = 2000
+DEFAULT_MAX_EXHAUSTIVE = 2000     # a requested size: 4 of 16 (1820 subsets) is exhaustive
+PATH_MAX_EXHAUSTIVE = 600         # every size in turn: 1..3 of 16 exhaustive, then greedy
 SIZE_TOLERANCE = 0.01  # automatic size: the smallest within 1 % of the best held-back RMS
 STALL = 0.002          # automatic size: a size gaining less than 0.2 % does not count
 
@@ -138,7 +139,7 @@ class SubsetProblem:
                 return current
             current, best = cand, self.score(cand)
 
-    def path(self, max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, sizes=None, patience=3):
+    def path(self, max_exhaustive=PATH_MAX_EXHAUSTIVE, sizes=None, patience=3):
         """Best subset of every size in ``sizes`` (default 1..K).
 
         Without explicit ``sizes`` the path stops once ``patience`` sizes in a row have
