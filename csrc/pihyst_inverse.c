@@ -20,7 +20,8 @@
  *      s > 0 there because z rises across the segment. That d is the smallest
  *      solution: the voltage nearest u_p (flat stretches before it are passed over,
  *      never entered). If no segment reaches the target, the window's end is taken
- *      and flagged (limit, or slew limit if that end is the slew bound).
+ *      and flagged (limit, or slew limit if that end is the slew bound), unless the
+ *      model's output there meets y_d to rounding after all.
  *   4. Apply the voltage to the model, which gives the new state and y_last.
  *
  * Events per family, going up (R_k, crossing c_k = least u >= u_p with R_k(u) >= f_k)
@@ -524,6 +525,8 @@ double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned
             fl = slew ? PIHYST_COMP_SLEW : (up ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW);
         }
         if (u != u_p) apply(c, u);
+        /* at the window's end the model may meet y_d after all, to rounding: not a miss */
+        if (fl && fabs(y_desired - c->y_last) <= c->tol) fl = 0;
     }
     if (flags) *flags = fl;
     return c->u_last;
