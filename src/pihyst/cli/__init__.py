@@ -10,10 +10,10 @@ import argparse
 import sys
 
 from pihyst import __version__
-from pihyst.cli import compensate, demo, predict, report, simulate
+from pihyst.cli import compensate, predict, simulate
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict, simulate, compensate, demo, report]
+COMMANDS = [predict, simulate, compensate]
 
 
 def build_parser():
