@@ -1,0 +1,124 @@
+"""pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N] [--json]
+-o MODEL.json"""
+
+import sys
+import warnings
+
+from pihyst import __version__
+from pihyst.cli.errors import UsageError
+from pihyst.csvio import CSVError, column_number, read_columns
+from pihyst.exceptions import FitError, PihystWarning
+from pihyst.families import FAMILY_NAMES
+from pihyst.identify import INITIAL_STATES, fit
+from pihyst.io import save_model
+
+_COLUMNS = {"input": "voltage_V", "output": "displacement_um"}
+
+
+def register(sub):
+    p = sub.add_parser(
+        "fit", help="fit hysteresis models to a measured loop",
+        description="Fit PI-type models to the voltage_V and displacement_um columns of "
+                    "DATA.csv, judge them on held-back cycles, save the most accurate as "
+                    "MODEL.json and print a report (errors, family comparison, why each "
+                    "threshold was chosen).",
+        epilog="example: pihyst fit loop.csv -o model.json   "
+               "(then: pihyst predict model.json loop.csv -o predicted.csv)")
+    p.add_argument("data", metavar="DATA.csv", help="CSV with voltage_V and displacement_um")
+    p.add_argument("-o", "--output", metavar="MODEL.json", required=True,
+                   help="model file to write (loads with pihyst.load_model)")
+    p.add_argument("--model", metavar="FAMILY", choices=FAMILY_NAMES,
+                   help=f"fit only this family ({', '.join(FAMILY_NAMES)}); default: all, "
+                        f"the most accurate on held-back cycles is saved")
+    p.add_argument("--thresholds", metavar="LIST",
+                   help="comma-separated thresholds to use as they are (input units, from "
+                        "the bottom of the input range), e.g. 0,10,30")
+    p.add_argument("--n-operators", metavar="N", type=int,
+                   help="number of operators to choose from the candidates (default: "
+                        "chosen from the data)")
+    p.add_argument("--candidates", metavar="N", type=int, default=16,
+                   help="size of the candidate threshold grid (default 16, as the paper)")
+    p.add_argument("--holdout", metavar="HOW", default="alternate",
+                   help="held-back cycles: 'alternate' (default), a fraction such as 0.5 "
+                        "(the last half of the record), or 'none'")
+    p.add_argument("--initial-state", choices=INITIAL_STATES, default="auto",
+                   help="operator state at the first sample: 'cycled' (at rest after a full "
+                        "cycle), 'settle' (the first sweep settles it), 'zero'; 'auto' "
+                        "(default): cycled if the record starts at its lowest input")
+    p.add_argument("--through-top", action="store_true",
+                   help="make the model pass exactly through the measured point at the "
+                        "highest input")
+    p.add_argument("--no-offset", action="store_true",
+                   help="do not fit an output offset (default: fitted, the sensor's zero "
+                        "is arbitrary)")
+    p.add_argument("--json", action="store_true",
+                   help="print the report as JSON instead of a table")
+    p.set_defaults(run=run)
+
+
+def _thresholds(text):
+    if text is None:
+        return None
+    values = []
+    for item in text.split(","):
+        try:
+            values.append(float(item))
+        except ValueError:
+            raise UsageError(f"--thresholds: {item.strip()!r} is not a number "
+                             f"(expected a comma-separated list such as 0,10,30)") from None
+    return values
+
+
+def _holdout(text):
+    if text in ("alternate",):
+        return text
+    if text in ("none", "0"):
+        return None
+    try:
+        f = float(text)
+    except ValueError:
+        raise UsageError(f"--holdout: expected 'alternate', 'none' or a fraction, got "
+                         f"{text!r}") from None
+    if not 0 < f < 1:
+        raise UsageError(f"--holdout: a fraction must be between 0 and 1, got {text}")
+    return f
+
+
+def _error(err, path, lines):
+    """A FitError as a one-line file:line:column error."""
+    col = column_number(path, _COLUMNS[err.column]) if err.column in _COLUMNS else 0
+    if err.index is not None and 0 <= err.index < len(lines):
+        return CSVError(path, int(lines[err.index]), col, str(err))
+    if col:
+        return CSVError(path, int(lines[0]), col, str(err))
+    return UsageError(f"{path}: {err}")
+
+
+def run(args):
+    thresholds = _thresholds(args.thresholds)
+    holdout = _holdout(args.holdout)
+    if args.n_operators is not None and args.n_operators < 1:
+        raise UsageError(f"--n-operators must be at least 1, got {args.n_operators}")
+    if args.candidates < 2:
+        raise UsageError(f"--candidates must be at least 2, got {args.candidates}")
+    columns, lines = read_columns(args.data, list(_COLUMNS.values()))
+    u, y = columns["voltage_V"], columns["displacement_um"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PihystWarning)
+        try:
+            result = fit(u, y, family=args.model, thresholds=thresholds,
+                         n_operators=args.n_operators, n_candidates=args.candidates,
+                         holdout=holdout, initial_state=args.initial_state,
+                         through="top" if args.through_top else None,
+                         offset=not args.no_offset)
+        except FitError as err:
+            raise _error(err, args.data, lines) from None
+    model = result.model
+    model.metadata["source"] = {"data": args.data, "command": f"pihyst {__version__} fit"}
+    save_model(model, args.output)
+    for w in caught:
+        print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)
+    print(result.report.to_json() if args.json else result.report)
+    if not args.json:
+        print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
+              f"operators (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
