@@ -15,7 +15,7 @@ from strategies import U, classical_models, multislope_models, pwl_models, rando
 PAPER_CLASSICAL = pihyst.load_model("examples/paper_table1_classical.json")
 PAPER_MULTISLOPE = pihyst.load_model("examples/paper_table1_multislope.json")
 
-SETTINGS = settings(max_examples=int(__import__('os').environ.get('PIHYST_EXAMPLES', 60)), deadline=None,
+SETTINGS = settings(max_examples=60, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow])
 
 
