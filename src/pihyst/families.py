@@ -196,7 +196,8 @@ class ModifiedPI(Family):
         self.n_fixed = self.n_segments
 
     def candidates(self, S, n_candidates):
-        return Classical().candidates(S, n_candidates)
+        # r = 0 is left out: that play is R = F = v, the sum of the input segments
+        return np.arange(1, n_candidates + 1) * (0.5 * S / (n_candidates + 1))
 
     def max_threshold(self, S):
         return 0.5 * S

@@ -350,6 +350,12 @@ class _Fitter:
                        options={"maxfev": 60 * len(names), "xatol": 1e-4,
                                 "fatol": 1e-7 * max(self.rec.measured_range, 1e-300)})
         x = res.x if res.fun <= f0 else x0
+        at_bound = [f"{k} = {v:.4g}" for k, v, (lo, hi) in
+                    zip(names, x, self._shape_bounds(names))
+                    if min(v - lo, hi - v) <= 1e-3 * (hi - lo)]
+        if at_bound and res.fun < f0:
+            self.notes.append(f"identified shape at the edge of its search range: "
+                              f"{', '.join(at_bound)} (the data favour a shape beyond it)")
         return fam.with_shape(**dict(zip(names, (float(v) for v in x)))), f0, min(res.fun, f0)
 
     def _identify_shape(self, fam):
