@@ -10,10 +10,10 @@ import argparse
 import sys
 
 from pihyst import __version__
-from pihyst.cli import compensate, fit, predict, simulate
+from pihyst.cli import compensate, demo, fit, predict, report, simulate
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict, fit, simulate, compensate]
+COMMANDS = [predict, fit, simulate, compensate, demo, report]
 
 
 def build_parser():

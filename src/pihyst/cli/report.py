@@ -1,0 +1,66 @@
+"""pihyst report DATA.csv [--out DIR]: fit and compare models on a measured loop."""
+
+import os
+import time
+
+import numpy as np
+
+from pihyst.cli.errors import UsageError
+from pihyst.csvio import CSVError, read_columns
+
+
+def register(sub):
+    p = sub.add_parser(
+        "report", help="fit-and-compare report from a measured loop (no simulator)",
+        description="Fit the conventional PI and the multislope PI with the paper's "
+                    "thresholds (scaled to the record's input span) and pihyst's automatic "
+                    "best to the voltage_V and displacement_um columns of DATA.csv, and "
+                    "write the comparison as a report: report.html (self-contained), the "
+                    "figures as PNG, metrics.json, the data with the predictions as CSV and "
+                    "the models as JSON.",
+        epilog="example: pihyst simulate -o loop.csv && pihyst report loop.csv --out rep")
+    p.add_argument("data", metavar="DATA.csv",
+                   help="CSV with voltage_V and displacement_um (time_s optional)")
+    p.add_argument("--out", metavar="DIR", default=None,
+                   help="output folder (default: DATA-report next to DATA.csv)")
+    p.set_defaults(run=run)
+
+
+def run(args):
+    try:
+        from pihyst.report import write_report
+    except ImportError as err:
+        raise UsageError(f"pihyst report needs matplotlib to draw the report ({err}); "
+                         "install it with: pip install 'pihyst[plot]'") from None
+    from pihyst.exceptions import FitError
+    from pihyst.experiment import loop_study
+
+    cols, _ = read_columns(args.data, ["voltage_V", "displacement_um"], optional=["time_s"])
+    u, y = cols["voltage_V"], cols["displacement_um"]
+    if np.ptp(u) <= 0:
+        raise CSVError(args.data, 0, 0, "voltage_V is constant: there is no loop to fit")
+    t = cols.get("time_s", np.arange(u.size, dtype=float))
+    out = args.out or os.path.splitext(args.data)[0] + "-report"
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise UsageError(f"--out {out}: exists and is not a folder")
+    t0 = time.perf_counter()
+
+    def say(line):
+        print(f"pihyst report: {line}", flush=True)
+
+    try:
+        study = loop_study(t, u, y, source=f"Measured record {args.data}: {u.size} samples",
+                           progress=say)
+    except FitError as err:
+        raise UsageError(f"{args.data}: {err}") from None
+    try:
+        files = write_report(study, out, command=f"pihyst report {args.data} --out {out}",
+                             progress=say)
+    except OSError as err:
+        raise UsageError(f"--out {out}: cannot write the report: {err.strerror}") from None
+    fit = study.metrics["fit"]
+    print(f"pihyst report: wrote {len(files)} files to {out} in "
+          f"{time.perf_counter() - t0:.1f} s; open {os.path.join(out, 'report.html')}")
+    print("  mean |error|: " + ", ".join(
+        f"{study.models[k].label} {fit[k]['mean_abs']:.4g}"
+        for k in ("classical", "multislope", "best")))
