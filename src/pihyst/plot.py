@@ -71,7 +71,7 @@ def loop_plot(u, y, fits, *, labels=None, title="Measured loop and fitted models
         ax.plot(u, y_hat, label=_label(key, labels), **_style(key))
     ax.set(title=title, xlabel=xlabel, ylabel=ylabel)
     ax.grid(alpha=0.3)
-    ax.legend(loc="upper left", fontsize=9)
+    ax.legend(loc="lower right", fontsize=8)   # below the rising branch: empty
     return fig
 
 

@@ -315,13 +315,14 @@ def _summary(study):
     if study.mode == "demo":
         best = m["validation"]["best"]["mean_abs"]
         text += (f" On data with reversals inside the range, which no model was fitted on, "
-                 f"pihyst's automatic choice ({html.escape(study.models['best'].label)}) "
+                 f"pihyst's automatic choice ({html.escape(m['models']['best']['title'])}) "
                  f"errs by {_f(best, 3)} um on average, against "
                  f"{_f(m['validation']['multislope']['mean_abs'], 3)} um for the multislope "
                  f"PI and {_f(m['validation']['classical']['mean_abs'], 3)} um for the "
                  f"conventional PI.")
     text += "</p>"
-    return text + _table(["quantity", "pihyst", "paper"], rows)
+    paper_head = "paper" if study.mode == "demo" else "paper (its own beam, for reference)"
+    return text + _table(["quantity", "pihyst", paper_head], rows)
 
 
 # ----------------------------------------------------------------------------- html
