@@ -16,8 +16,7 @@ $(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*
 install: $(BIN)/pihyst
 
 demo: install
-	mkdir -p out
-	$(BIN)/pihyst predict examples/paper_table1_multislope.json examples/triangle_0_150V.csv -o out/paper_multislope_loop.csv
+	$(BIN)/pihyst demo --out out/demo
 
 ctest:
 	$(MAKE) -C csrc test

@@ -64,3 +64,12 @@ def test_bad_files_name_the_file_and_position(tmp_path):
     p.write_text(json.dumps({"family": "classical", "thresholds": [0, 5, 1], "weights": [1] * 3}))
     with pytest.raises(pihyst.InvalidModelError, match="broken.json: .*strictly increasing"):
         pihyst.load_model(p)
+
+
+def test_saved_files_get_the_usual_permissions(tmp_path):
+    import os
+    path = tmp_path / "m.json"
+    pihyst.ClassicalPI([0], [1]).save(path)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
