@@ -208,12 +208,21 @@ class FitReport:
                          f"{reg['lambda']:.3g} ({reg['rule']})")
         ch = best.get("threshold_choice")
         if ch:
+            where = "held-back" if ch["judged_on"] == "held_back" else "fitted"
             lines.append(f"chosen from {len(ch['candidates'])} candidates "
-                         f"({ch['candidates'][0]:.4g} .. {ch['candidates'][-1]:.4g}) by "
-                         f"{ch['search']} search ({ch['subsets_evaluated']} subsets); size: "
-                         f"{ch['size_rule']}")
+                         f"({ch['candidates'][0]:.4g} .. {ch['candidates'][-1]:.4g}), "
+                         f"{ch['search']} ({ch['subsets_evaluated']} subsets fitted and "
+                         f"judged on the {where} data); size: {ch['size_rule']}")
+            if len(ch["sizes"]) > 1:
+                n_best = best["n_operators"]
+                lines.append(f"{where} RMS of the best set of each size: " + ", ".join(
+                    f"{s['n_operators']}: {s['rms']:.4g}" + ("*" if s["n_operators"] == n_best
+                                                             else "")
+                    for s in ch["sizes"]))
             lines.append("why each threshold:")
             lines += [f"  {r['text']}" for r in ch["reasons"]]
+            if ch.get("note"):
+                lines.append(f"  ({ch['note']})")
         for n in best["notes"]:
             lines.append(f"note: {n}")
         for w in best["warnings"]:

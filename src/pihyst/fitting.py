@@ -361,6 +361,10 @@ class FamilyFitter:
         if choice is not None:
             choice["chosen"] = [float(v) for v in r]
             choice["shape_refined"] = True
+            choice["note"] = ("the thresholds were chosen, and the reasons computed, with the "
+                              "shape identified on all candidates; the shape was then refined "
+                              "for the chosen operators (thresholds kept as fractions of the "
+                              "largest valid one)")
         return fam, r, sub, cols, x, state0, parts, prob
 
     # ---------------------------------------------------------------- KP family

@@ -231,6 +231,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                              refit=bool(refit and rec.has_held_back),
                              final_errors=final_errors)
     model.metadata = {"fit": report.model_summary(), "pihyst_version": __version__}
+    if rec.layout.settle_end:
+        # the operator state once the first sweep has settled it: predictions of the same
+        # record continue from it (model.predict(u[sample:], initial_state=state))
+        end = rec.layout.settle_end
+        model.metadata["fit"]["settled"] = {
+            "sample": end, "state": model.simulate(rec.u[:end]).final_state.tolist()}
     models = {r["family"]: r["model"] for r in results}
     models[best["family"]] = model
     return FitResult(model=model, report=report, models=models)

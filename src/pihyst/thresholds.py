@@ -114,7 +114,7 @@ class SubsetProblem:
             method = "exhaustive"
         else:
             best = self._swap_refine(start if start is not None else self.greedy(size))
-            method = "greedy forward selection + swaps"
+            method = "greedy forward selection and swaps"
         return SubsetChoice(tuple(best), self.score(best), method, self.evaluations - before)
 
     def greedy(self, size):
