@@ -379,3 +379,16 @@ def test_cycled_state_matches_a_long_run():
     m = MultislopePI([0, 10, 40], [1, 1, 1])
     v = np.r_[np.linspace(0, 150, 301), np.linspace(150, 0, 301)]
     np.testing.assert_allclose(cycled_state(m, 150.0), m.simulate(v).final_state)
+
+
+def test_shape_identification_with_U_keeps_the_operators_valid():
+    true = MultislopePI([0, 15, 30], [0.2, 0.1, 0.15], U=170.0, input_range=(0, 150))
+    u = rich_signal(seed=18)
+    res = fit(u, true.predict(u), family="multislope-identified", n_operators=3,
+              identify_shape="with-U")
+    f = res.report.family("multislope-identified")
+    assert f["shape"]["U"] == pytest.approx(170.0, abs=2.0)
+    assert f["errors"]["held_back"]["rms"] < 0.01
+    for v in np.linspace(0, 150, 31):
+        R, F = res.model.envelopes(v)
+        assert np.all(R <= F + 1e-9)
