@@ -250,14 +250,10 @@ class FamilyFitter:
             size_rule = f"requested: {self.n_operators}"
         else:
             path = prob.path(min(self.max_exhaustive, PATH_MAX_EXHAUSTIVE))
-            if self.rec.has_held_back:
-                best = choose_size(path)
-                size_rule = ("smallest number of operators within 1 % of the lowest "
-                             "held-back RMS")
-            else:
-                best = choose_size(path, criterion="bic", fit_n=prob.fit.n,
-                                   n_params_extra=self.family.n_fixed + int(self.rec.fit_offset))
-                size_rule = "lowest BIC on the fitted data (nothing held back)"
+            best = choose_size(path)
+            size_rule = ("smallest number of operators within 1 % of the lowest "
+                         + ("held-back RMS" if self.rec.has_held_back else
+                            "fitted RMS (nothing held back)"))
         reasons = prob.reasons(best.subset)
         judged_on = "held_back" if self.rec.has_held_back else "fit"
         choice = {

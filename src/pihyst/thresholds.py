@@ -188,22 +188,14 @@ class SubsetProblem:
         return float(np.sqrt(self.judge.dd / self.judge.n))
 
 
-def choose_size(path, n_params_extra=0, criterion="held_back", fit_n=None):
-    """Pick a size from a :meth:`SubsetProblem.path`.
-
-    ``criterion="held_back"``: the smallest subset whose held-back RMS is within
-    ``SIZE_TOLERANCE`` of the lowest. ``criterion="bic"`` (nothing held back, the RMS are
-    on the fitted data): the lowest Bayesian information criterion
-    n ln(RMS^2) + p ln(n), p = operators + ``n_params_extra``.
-    """
+def choose_size(path):
+    """Pick a size from a :meth:`SubsetProblem.path`: the smallest subset whose judged RMS
+    is within ``SIZE_TOLERANCE`` (1 %) of the lowest. (An information criterion such as
+    BIC would trust every sample as independent; the residuals of a hysteresis fit are
+    dominated by smooth model error, so it keeps adding operators.)"""
     finite = [c for c in path if np.isfinite(c.rms)]
     if not finite:
         raise InfeasibleConstraintsError("no subset of the candidate operators satisfies the "
                                          "constraints")
-    if criterion == "bic":
-        def bic(c):
-            return (fit_n * math.log(max(c.rms, 1e-300) ** 2)
-                    + (len(c.subset) + n_params_extra) * math.log(fit_n))
-        return min(finite, key=bic)
     best = min(c.rms for c in finite)
     return next(c for c in finite if c.rms <= best * (1 + SIZE_TOLERANCE))
