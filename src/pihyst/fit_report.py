@@ -173,8 +173,8 @@ class FitReport:
         head = (f"  {'family':<24}{'ops':>5}{'fit RMS':>10}"
                 + (f"{'held-back RMS':>15}{'mean |e|':>10}{'max |e|':>10}{'% range':>9}"
                    if held else f"{'mean |e|':>10}{'max |e|':>10}{'% range':>9}"))
-        lines += [f"errors in {uout} ({'judged on held-back cycles' if held else 'on the fitted data'}):",
-                  head]
+        judged = "judged on held-back cycles" if held else "on the fitted data"
+        lines += [f"errors in {uout} ({judged}):", head]
         for f in self._data["families"]:
             e = f["errors"]
             j = e["held_back"] if held else e["fit"]

@@ -330,11 +330,11 @@ class FamilyFitter:
             return fam
         start = fam.shape(self.rec.S)
         new, f0, f1 = self._minimize_shape(fam)
-        self.notes.append(f"shape identified with all candidate operators: a {start['a']:.4g} -> "
-                          f"{new.a:.4g}, b {start['b']:.4g} -> {new.b:.4g}, h {start['h']:.4g} -> "
-                          f"{new.h:.4g}" + (f", U {start['U']:.4g} -> {new.shape(self.rec.S)['U']:.4g}"
-                                            if self.identify_shape == "with-U" else "")
-                          + f"; fitted RMS {f0:.4g} -> {f1:.4g}")
+        end = new.shape(self.rec.S)
+        changes = ", ".join(f"{k} {start[k]:.4g} -> {end[k]:.4g}" for k in ("a", "b", "h", "U")
+                            if k != "U" or self.identify_shape == "with-U")
+        self.notes.append(f"shape identified with all candidate operators: {changes}; "
+                          f"fitted RMS {f0:.4g} -> {f1:.4g}")
         return new
 
     def _refine_shape(self, fam, cand, chosen, choice):

@@ -182,9 +182,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                             "on: a kernel basis would overfit"})
             continue
         fitter = FamilyFitter(rec, fam, thresholds=thresholds, candidates=candidates,
-                         n_candidates=n_candidates, n_operators=n_operators,
-                         nonnegative=nonnegative, bounds=bounds,
-                         max_exhaustive=max_exhaustive, identify_shape=identify_shape)
+                              n_candidates=n_candidates, n_operators=n_operators,
+                              nonnegative=nonnegative, bounds=bounds,
+                              max_exhaustive=max_exhaustive, identify_shape=identify_shape)
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
             try:

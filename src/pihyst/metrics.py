@@ -4,7 +4,7 @@ Examples
 --------
 >>> import numpy as np
 >>> y, y_hat = np.array([0.0, 1.0, 2.0]), np.array([0.0, 1.5, 1.0])
->>> float(mean_abs_error(y, y_hat)), float(max_abs_error(y, y_hat)), round(float(rms_error(y, y_hat)), 4)
+>>> mean_abs_error(y, y_hat), max_abs_error(y, y_hat), round(rms_error(y, y_hat), 4)
 (0.5, 1.0, 0.6455)
 """
 

@@ -9,8 +9,9 @@ weights x, i.e. the quadratic programme
 on the small K x K matrix H, never on A itself. Before solving, the variables are scaled
 so that H has a unit diagonal (x_i = x'_i / sqrt(H_ii)); a scaled H whose condition
 number (LAPACK's 1-norm estimate) exceeds 1/``rcond`` is ill-conditioned: a ridge of
-``rcond * ||H'||_1`` (>= rcond * lambda_max) is added (which picks the smallest weights among the almost
-equally good ones) and an :class:`~pihyst.exceptions.IllConditionedWarning` says so.
+``rcond * ||H'||_1`` (>= rcond * lambda_max) is added (which picks the smallest weights
+among the almost equally good ones) and an
+:class:`~pihyst.exceptions.IllConditionedWarning` says so.
 """
 
 import warnings
