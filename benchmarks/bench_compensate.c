@@ -1,10 +1,13 @@
 /* Timing harness for the C compensator, compiled and run by bench_compensate.py
  * (gcc -O3 with the core's sources). Not part of the library.
  *
- *   bench_compensate FAMILY K N REPEATS      FAMILY: 0 classical, 1 multislope
+ *   bench_compensate FAMILY K N REPEATS [TRAJECTORY]
+ *       FAMILY: 0 classical, 1 multislope
+ *       TRAJECTORY: 0 (default) a walk of random steps up to 0.5 V with reversals at
+ *                   random levels; 1 ramps between random levels at 0.25 V per sample
  *
- * Desired trajectory: the model's own output for a voltage walk with minor loops (so
- * every sample is reachable). Prints one line:
+ * Desired trajectory: the model's own output for that voltage signal with minor loops
+ * (so every sample is reachable). Prints one line:
  *   <ns/sample exact step> <ns/sample bisection> <max |y - y_d| exact> <max |y - y_d| bisection>
  *
  * Bisection baseline: for the fixed state, the least u in the window [u_min, u_max] with
@@ -82,7 +85,7 @@ static void bisection_run(pihyst_model *m, const double *yd, double *u, double *
 
 int main(int argc, char **argv)
 {
-    int family, K, k, rep, reps;
+    int family, K, k, rep, reps, kind;
     size_t n, t;
     double *r, *w, *coef, *state, *scratch, *u, *yd, *uc, *yc;
     double v = 0.0, target = 150.0, best_exact = 1e30, best_bisect = 1e30;
@@ -91,10 +94,11 @@ int main(int argc, char **argv)
     pihyst_model m;
     pihyst_compensator c;
     size_t scratch_len;
-    if (argc != 5) {
-        fprintf(stderr, "usage: %s FAMILY K N REPEATS\n", argv[0]);
+    if (argc != 5 && argc != 6) {
+        fprintf(stderr, "usage: %s FAMILY K N REPEATS [TRAJECTORY]\n", argv[0]);
         return 2;
     }
+    kind = argc == 6 ? atoi(argv[5]) : 0;
     family = atoi(argv[1]);
     K = atoi(argv[2]);
     n = (size_t)atol(argv[3]);
@@ -116,10 +120,11 @@ int main(int argc, char **argv)
     if (pihyst_model_init(&m, family ? PIHYST_MULTISLOPE : PIHYST_CLASSICAL, (size_t)K, r, w, 0.0,
                           0.0, 150.0, &shape, NULL, coef, state, NULL) != PIHYST_OK)
         return 1;
-    /* voltage walk: steps up to 0.5 V per sample, reversals at random levels */
+    /* voltage walk: steps up to 0.5 V per sample, reversals at random levels; or ramps
+     * at 0.25 V per sample between random levels */
     for (t = 0; t < n; ++t) {
-        double step = 0.5 * uniform();
-        if (uniform() < 0.01) target = 150.0 * uniform();
+        double step = kind ? 0.25 : 0.5 * uniform();
+        if (kind ? v == target : uniform() < 0.01) target = 150.0 * uniform();
         v = v < target ? (v + step < target ? v + step : target)
                        : (v - step > target ? v - step : target);
         u[t] = v;

@@ -179,10 +179,12 @@ enum {
 /** Scratch a compensator needs, in doubles, for K = n_ops operators and a model with
  *  n_points polyline breakpoints in total (rising plus falling; 0 for classical and
  *  multislope). pihyst_compensator_scratch_len gives the exact figure for a model. */
-#define PIHYST_COMPENSATOR_SCRATCH_LEN(n_ops, n_points) (6 * (n_ops) + 2 * (n_points))
+#define PIHYST_COMPENSATOR_SCRATCH_LEN(n_ops, n_points) (10 * (n_ops) + 8 * (n_points))
 
 /** Compensator: an exact inverse of a model with w >= 0, with limits.
- *  Transparent for static allocation; fill it with pihyst_compensator_init. */
+ *  Transparent for static allocation; fill it with pihyst_compensator_init. The model's
+ *  state must change only through the compensator (step, run, reset) while it is in
+ *  use: the compensator keeps the sorted breakpoints between samples. */
 typedef struct {
     pihyst_model *model; /**< initialised model (caller-owned); its state is advanced
                               with every voltage the compensator chooses */
@@ -191,9 +193,15 @@ typedef struct {
     double u_last;       /**< last voltage (applied to the model state) */
     double y_last;       /**< model output at u_last with the current state */
     double tol;          /**< equality band of |y_d - y_last| (rounding of the output) */
-    double *scratch;     /**< caller-owned, scratch_len doubles: kinks, then event lists */
+    double *scratch;     /**< caller-owned, scratch_len doubles: kinks, event lists */
     size_t scratch_len;  /**< >= pihyst_compensator_scratch_len(model) */
     size_t events_cap;   /**< capacity of the first event list (pairs) */
+    /* events kept between samples while the direction stays the same (internal): */
+    int dir;             /**< +1 up, -1 down, 0 none (collect at the next sample) */
+    double base;         /**< voltage the event distances are measured from */
+    const double *events; /**< count sorted (distance, slope change) pairs in scratch */
+    size_t count, next;  /**< events, and the first one not yet passed */
+    double slope[2];     /**< slope |dy/du| just beyond u_last in direction dir (hi + lo) */
 } pihyst_compensator;
 
 /** Scratch length (doubles) that pihyst_compensator_init needs for this model. */

@@ -24,6 +24,14 @@
  *      model's output there meets y_d to rounding after all.
  *   4. Apply the voltage to the model, which gives the new state and y_last.
  *
+ * The sorted events are kept for the next sample while the direction stays the same:
+ * an operator not yet on its envelope keeps its f_k (so its crossing stays where it
+ * was), one on its envelope stays on it, and the kinks are fixed. The next sample in
+ * the same direction continues the walk from the first event not yet passed, with the
+ * slope reached there; only a reversal (or a reset) collects and sorts again, over the
+ * whole distance to the voltage limit. A tracking step thus costs O(1 + events passed)
+ * plus the model step, a reversal O(K) (O(K log K) for badly unsorted events).
+ *
  * Events per family, going up (R_k, crossing c_k = least u >= u_p with R_k(u) >= f_k)
  * and going down (F_k, crossing c_k = greatest u <= u_p with F_k(u) <= f_k):
  *   classical:  up   c_k = f_k + r_k, slope 1;   down  c_k = f_k - r_k, slope 1.
@@ -36,8 +44,9 @@
  *               Kinks go in a second list (sorted in k for the paper's shapes) that is
  *               merged with the crossings during the walk.
  *   pwl:        the crossing by binary search on the polyline's values, then every
- *               interior breakpoint beyond it with its slope change.
- * Events at or beyond the window's end are not collected.
+ *               interior breakpoint beyond it with its slope change, as two events
+ *               (+ new slope, - old slope) that the walk sums exactly.
+ * Events at or beyond the voltage limit are not collected.
  */
 #include "pihyst.h"
 
@@ -101,55 +110,68 @@ static void sort_events(double *ev, size_t n)
     }
 }
 
-/* Walk the merged sorted lists a (na events) and b (nb events) from distance 0 with
- * slope s, z(0) = 0, up to distance span. Returns 1 and the smallest d with
- * z(d) = target (0 < target) if z(span) >= target, else 0. */
-static int walk(const double *a, size_t na, const double *b, size_t nb, double s,
+/* Walk the sorted cached events ev[*next ..] (distances from the base voltage; q_p is
+ * u_p's distance from it, so an event lies d_e = ev - q_p beyond u_p) with slope *slope
+ * at u_p and z(0) = 0, up to distance span. Returns 1 and the smallest d with
+ * z(d) = target (0 < target) if z(span) >= target, else 0 with d = span. Events passed
+ * are consumed: *next and *slope then describe the voltage u_p + d. */
+static int walk(const double *ev, size_t n, size_t *next, double slope[2], double q_p,
                 double target, double span, double *d_out)
 {
-    double z = 0.0, d0 = 0.0, z_end;
-    size_t i = 0, j = 0;
-    if (nb == 0) { /* one list (classical, pwl) */
-        for (i = 0; i < na; ++i) {
-            const double de = a[2 * i], ze = z + s * (de - d0);
-            if (ze >= target) {
-                const double d = d0 + (target - z) / s;
-                *d_out = d < de ? d : de;
-                return 1;
-            }
-            z = ze;
-            d0 = de;
-            s += a[2 * i + 1];
-        }
-        na = 0;
-    }
-    for (;;) {
-        double de, dse, ze;
-        if (i < na && (j >= nb || a[2 * i] <= b[2 * j])) {
-            de = a[2 * i]; dse = a[2 * i + 1]; ++i;
-        } else if (j < nb) {
-            de = b[2 * j]; dse = b[2 * j + 1]; ++j;
-        } else {
-            break;
-        }
+    /* the slope is a compensated sum hi + lo (Knuth's TwoSum), so that a steep polyline
+     * segment joining and leaving (+huge, then -huge) leaves the small slopes intact */
+    double z = 0.0, d0 = 0.0, hi = slope[0], lo = slope[1], s = hi + lo, z_end;
+    size_t i;
+    int hit = 0;
+    for (i = *next; i < n; ++i) {
+        double de = ev[2 * i] - q_p, ze, t, bp;
+        if (de < d0) de = d0; /* passed already, to rounding */
+        if (!(de < span)) break;
         /* z(d_e) = z(d_a) + s (d_e - d_a) */
         ze = z + s * (de - d0);
         if (ze >= target) {
-            double d = d0 + (target - z) / s; /* s > 0: z rose from below target */
+            const double d = d0 + (target - z) / s; /* s > 0: z rose from below target */
             *d_out = d < de ? d : de;
-            return 1;
+            hit = 1;
+            break;
         }
         z = ze;
         d0 = de;
-        s += dse;
+        /* hi + lo += ds */
+        t = hi + ev[2 * i + 1];
+        bp = t - hi;
+        lo += (hi - (t - bp)) + (ev[2 * i + 1] - bp);
+        hi = t;
+        s = hi + lo;
     }
-    z_end = z + s * (span - d0);
-    if (z_end >= target) {
-        double d = d0 + (target - z) / s;
-        *d_out = d < span ? d : span;
-        return 1;
+    if (!hit) {
+        z_end = z + s * (span - d0);
+        if (z_end >= target) {
+            const double d = d0 + (target - z) / s;
+            *d_out = d < span ? d : span;
+            hit = 1;
+        } else {
+            *d_out = span;
+        }
     }
-    return 0;
+    *next = i;
+    slope[0] = hi;
+    slope[1] = lo;
+    return hit;
+}
+
+/* Merge the sorted lists a (na) and b (nb) into out. */
+static void merge_events(const double *a, size_t na, const double *b, size_t nb, double *out)
+{
+    size_t i = 0, j = 0, n = 0;
+    while (i < na || j < nb) {
+        if (i < na && (j >= nb || a[2 * i] <= b[2 * j])) {
+            out[2 * n] = a[2 * i]; out[2 * n + 1] = a[2 * i + 1]; ++i;
+        } else {
+            out[2 * n] = b[2 * j]; out[2 * n + 1] = b[2 * j + 1]; ++j;
+        }
+        ++n;
+    }
 }
 
 /* ------------------------------------------------------------------ collection */
@@ -296,7 +318,9 @@ static void collect_pwl_up(const double *x, const double *y, size_t n, double w,
     for (q = seg + 1; q + 1 < n; ++q) { /* interior breakpoints beyond */
         const double d = x[q] - u_p;
         if (!(d < span)) break;
-        push(e->a, &e->na, d, w * (seg_slope(x, y, q) - seg_slope(x, y, q - 1)));
+        /* slope change as two events, + new and - old, summed exactly by the walk */
+        push(e->a, &e->na, d, w * seg_slope(x, y, q));
+        push(e->a, &e->na, d, -w * seg_slope(x, y, q - 1));
     }
 }
 
@@ -332,7 +356,8 @@ static void collect_pwl_down(const double *x, const double *y, size_t n, double 
     for (q = seg; q >= 1; --q) { /* interior breakpoints below */
         const double d = u_p - x[q];
         if (!(d < span)) break;
-        push(e->a, &e->na, d, w * (seg_slope(x, y, q - 1) - seg_slope(x, y, q)));
+        push(e->a, &e->na, d, w * seg_slope(x, y, q - 1));
+        push(e->a, &e->na, d, -w * seg_slope(x, y, q));
     }
 }
 
@@ -359,15 +384,17 @@ static void collect_pwl(const pihyst_model *m, int up, double u_p, double span, 
     }
 }
 
-/* The distance d in (0, span] at which |y - y_p| first reaches target, or 0 if the
- * window ends first. */
-static int solve(pihyst_compensator *c, int up, double u_p, double span, double target,
-                 double *d)
+/* Collect and sort the events of direction `up` from u_p over the whole distance to
+ * the voltage limit, and keep them (with the slope at u_p) for the following samples. */
+static void rebuild(pihyst_compensator *c, int up, double u_p)
 {
     const size_t K = c->model->n_ops;
+    const double span = up ? c->u_max - u_p : u_p - c->u_min;
+    double *merged;
     events e;
     e.a = c->scratch + 2 * K;
     e.b = e.a + 2 * c->events_cap;
+    merged = e.b + 2 * K;
     switch (c->model->family) {
     case PIHYST_CLASSICAL:
         collect_classical(c->model, up, u_p, span, &e);
@@ -381,7 +408,28 @@ static int solve(pihyst_compensator *c, int up, double u_p, double span, double 
     }
     sort_events(e.a, e.na);
     sort_events(e.b, e.nb);
-    return walk(e.a, e.na, e.b, e.nb, e.s0, target, span, d);
+    if (e.nb) {
+        merge_events(e.a, e.na, e.b, e.nb, merged);
+        c->events = merged;
+    } else {
+        c->events = e.a;
+    }
+    c->dir = up ? 1 : -1;
+    c->base = u_p;
+    c->next = 0;
+    c->count = e.na + e.nb;
+    c->slope[0] = e.s0;
+    c->slope[1] = 0.0;
+}
+
+/* The distance d in (0, span] at which |y - y_p| first reaches target (returns 1), or
+ * d = span if the window ends first (returns 0). */
+static int solve(pihyst_compensator *c, int up, double u_p, double span, double target,
+                 double *d)
+{
+    if (c->dir != (up ? 1 : -1)) rebuild(c, up, u_p);
+    return walk(c->events, c->count, &c->next, c->slope,
+                up ? u_p - c->base : c->base - u_p, target, span, d);
 }
 
 /* ------------------------------------------------------------------ public API */
@@ -397,8 +445,17 @@ static size_t pwl_points(const pihyst_model *m)
 
 size_t pihyst_compensator_scratch_len(const pihyst_model *m)
 {
-    /* kinks 2K | first list (K + points) pairs | second list K pairs */
-    return 6 * m->n_ops + 2 * pwl_points(m);
+    /* kinks 2K | first list (K + 2 points) pairs | second list K pairs |
+     * merged list (2K + 2 points) pairs */
+    return 10 * m->n_ops + 8 * pwl_points(m);
+}
+
+static void forget_events(pihyst_compensator *c)
+{
+    c->dir = 0;
+    c->events = c->scratch;
+    c->count = c->next = 0;
+    c->slope[0] = c->slope[1] = c->base = 0.0;
 }
 
 static void apply(pihyst_compensator *c, double u)
@@ -431,7 +488,7 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, do
     c->max_step = max_step;
     c->scratch = scratch;
     c->scratch_len = scratch_len;
-    c->events_cap = K + pwl_points(m);
+    c->events_cap = K + 2 * pwl_points(m); /* pwl: two events per breakpoint */
 
     /* Output scale |offset| + sum_k w_k max|envelopes at the limits| bounds the terms
      * of (2) for every state consistent with a voltage in the limits; the rounding of
@@ -461,6 +518,7 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, do
             scratch[K + k] = m->coef[2 * K + k] / ba;
         }
     }
+    forget_events(c);
     apply(c, u_initial);
     return PIHYST_OK;
 }
@@ -476,6 +534,7 @@ pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const double *stat
         for (k = 0; k < c->model->n_ops; ++k)
             if (!isfinite(state[k])) return PIHYST_ENONFINITE;
     pihyst_model_reset(c->model, state);
+    forget_events(c);
     apply(c, u_last);
     return PIHYST_OK;
 }

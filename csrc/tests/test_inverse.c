@@ -8,6 +8,7 @@
 #include <string.h>
 
 #define N_WALK 4000
+#define LEN(a) (sizeof(a) / sizeof *(a))
 
 static const pihyst_shape paper_shape = {150.0, 0.8, 1.2, 0.5};
 
@@ -76,10 +77,10 @@ static void test_round_trip_paper_models(void)
     pihyst_model m;
     CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 4, rc, wc, 0.0, 0.0, 150.0, NULL, NULL, coef,
                             state, NULL) == PIHYST_OK);
-    CHECK(round_trip(&m, scratch, sizeof scratch / sizeof *scratch) <= 1e-9);
+    CHECK(round_trip(&m, scratch, LEN(scratch)) <= 1e-9);
     CHECK(pihyst_model_init(&m, PIHYST_MULTISLOPE, 4, rm, wm, 1.5, 0.0, 150.0, &paper_shape, NULL,
                             coef, state, NULL) == PIHYST_OK);
-    round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+    round_trip(&m, scratch, LEN(scratch));
 }
 
 static void test_round_trip_many_operators(void)
@@ -97,7 +98,7 @@ static void test_round_trip_many_operators(void)
         w[0] = 0.3;
         CHECK(pihyst_model_init(&m, (pihyst_family)fam, K, r, w, -2.0, fam ? 0.0 : -10.0, 150.0,
                                 &paper_shape, NULL, coef, state, NULL) == PIHYST_OK);
-        round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+        round_trip(&m, scratch, LEN(scratch));
     }
 }
 
@@ -124,15 +125,15 @@ static void test_round_trip_pwl(void)
     p.fall_start = fs; p.fall_x = fx; p.fall_y = fy;
     CHECK(pihyst_model_init(&m, PIHYST_PWL, 3, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
                             NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_scratch_len(&m) == 6 * 3 + 2 * 8);
-    round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+    CHECK(pihyst_compensator_scratch_len(&m) == 10 * 3 + 8 * 8);
+    round_trip(&m, scratch, LEN(scratch));
     /* two operators: the pwl inverse equals the classical inverse */
     CHECK(pihyst_model_init(&m, PIHYST_PWL, 2, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
                             NULL) == PIHYST_OK);
     CHECK(pihyst_model_init(&mc, PIHYST_CLASSICAL, 2, r, w, 0.0, 0.0, 150.0, NULL, NULL, coef_c,
                             state_c, NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, 22) == PIHYST_OK);
-    CHECK(pihyst_compensator_init(&cc, &mc, NAN, NAN, INFINITY, 0.0, scratch_c, 12) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, LEN(scratch)) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&cc, &mc, NAN, NAN, INFINITY, 0.0, scratch_c, LEN(scratch_c)) == PIHYST_OK);
     for (i = 0; i < 200; ++i) y[i] = 12.0 * sin(0.05 * i) * sin(0.011 * i) + 9.0;
     pihyst_compensator_run(&c, y, u_p, NULL, NULL, 200);
     pihyst_compensator_run(&cc, y, u_c, u, NULL, 200);
@@ -167,7 +168,29 @@ static void test_unsorted_pwl(void)
     p.fall_start = fs; p.fall_x = fx; p.fall_y = fy;
     CHECK(pihyst_model_init(&m, PIHYST_PWL, K, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
                             NULL) == PIHYST_OK);
-    round_trip(&m, scratch, sizeof scratch / sizeof *scratch);
+    round_trip(&m, scratch, LEN(scratch));
+}
+
+/* A near-vertical polyline segment (one ulp wide, slope 4.5e15) joined and left on the
+ * way up: the walk's slope sum must come back to the small slopes exactly. */
+static void test_steep_pwl(void)
+{
+    const size_t start[2] = {0, 6};
+    const double x[6] = {0.0, 1.0, 1.0000000000000002, 4.0, 5.0, 150.0};
+    const double y[6] = {-20.0, -20.0, -19.0, -18.0, -18.0, -18.0};
+    const double w[1] = {1.0};
+    double coef[PIHYST_COEF_LEN(1)], state[1], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(1, 12)];
+    pihyst_pwl p;
+    pihyst_model m;
+    pihyst_compensator c;
+    p.rise_start = start; p.rise_x = x; p.rise_y = y;
+    p.fall_start = start; p.fall_x = x; p.fall_y = y;
+    CHECK(pihyst_model_init(&m, PIHYST_PWL, 1, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
+                            NULL) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, LEN(scratch)) ==
+          PIHYST_OK);
+    CHECK_NEAR(pihyst_compensator_step(&c, -18.0 - 1.0 / 3.0, NULL), 3.0, 1e-12);
+    CHECK_NEAR(c.y_last, -18.0 - 1.0 / 3.0, 1e-12);
 }
 
 /* Multislope with thresholds > 0 only: after the top at 150 V the output holds while
@@ -187,7 +210,7 @@ static void test_flat_hold(void)
     pihyst_model_run(&m, u, yd, 190);
     for (i = 151; i < 190; ++i) CHECK(yd[i] == yd[150]); /* the model is flat there */
     pihyst_model_reset(&m, NULL);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, 18) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, LEN(scratch)) == PIHYST_OK);
     pihyst_compensator_run(&c, yd, uc, yc, NULL, 190);
     CHECK_NEAR(uc[150], 150.0, 1e-9);
     for (i = 151; i < 190; ++i) CHECK(uc[i] == uc[150]);
@@ -213,7 +236,7 @@ static void test_limits_and_slew(void)
     int i, pass;
     CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 4, r, w, 0.0, 0.0, 150.0, NULL, NULL, coef,
                             state, NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, INFINITY, 10.0, scratch, 24) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, INFINITY, 10.0, scratch, LEN(scratch)) == PIHYST_OK);
     CHECK(pihyst_compensator_step(&c, INFINITY, &fl) == 120.0 && fl == PIHYST_COMP_SAT_HIGH);
     CHECK(pihyst_compensator_step(&c, 1e300, &fl) == 120.0 && fl == PIHYST_COMP_SAT_HIGH);
     CHECK(pihyst_compensator_step(&c, NAN, &fl) == 120.0 && fl == PIHYST_COMP_NAN);
@@ -221,7 +244,7 @@ static void test_limits_and_slew(void)
     CHECK(pihyst_compensator_step(&c, -INFINITY, &fl) == 10.0 && fl == PIHYST_COMP_SAT_LOW);
     for (pass = 0; pass < 2; ++pass) {
         double prev, step = pass ? 0.1 : 3.7;
-        CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, step, 10.0, scratch, 24) ==
+        CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, step, 10.0, scratch, LEN(scratch)) ==
               PIHYST_OK);
         prev = c.u_last;
         for (i = 0; i < 3000; ++i) {
@@ -259,7 +282,7 @@ static void test_identities(void)
         }
         CHECK(pihyst_model_init(&m, (pihyst_family)fam, K, r, w, 0.0, 0.0, 150.0, &paper_shape,
                                 NULL, coef, state, NULL) == PIHYST_OK);
-        CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, 2.5, 0.0, scratch, 6 * K) == PIHYST_OK);
+        CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, 2.5, 0.0, scratch, LEN(scratch)) == PIHYST_OK);
         n1 = pihyst_compensator_run(&c, yd, u_run, y_run, f_run, N);
         CHECK(n1 >= 2);
         CHECK(pihyst_compensator_reset(&c, NULL, 0.0) == PIHYST_OK);
@@ -288,22 +311,22 @@ static void test_validation_and_reset(void)
     pihyst_compensator c;
     CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 3, r, wneg, 0, 0, 150, NULL, NULL, coef, state,
                             NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, 18) ==
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, LEN(scratch)) ==
           PIHYST_ENEGATIVE_WEIGHT);
     CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 3, r, w, 0, 0, 150, NULL, NULL, coef, state,
                             NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, 17) == PIHYST_ESIZE);
-    CHECK(pihyst_compensator_init(&c, &m, -1, NAN, INFINITY, 0, scratch, 18) == PIHYST_ELIMITS);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, 151, INFINITY, 0, scratch, 18) == PIHYST_ELIMITS);
-    CHECK(pihyst_compensator_init(&c, &m, 50, 50, INFINITY, 50, scratch, 18) == PIHYST_ELIMITS);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, 0.0, 0, scratch, 18) == PIHYST_ELIMITS);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, NAN, 0, scratch, 18) == PIHYST_ELIMITS);
-    CHECK(pihyst_compensator_init(&c, &m, 10, NAN, INFINITY, 0, scratch, 18) == PIHYST_ELIMITS);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, NAN, scratch, 18) ==
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, LEN(scratch) - 1) == PIHYST_ESIZE);
+    CHECK(pihyst_compensator_init(&c, &m, -1, NAN, INFINITY, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, 151, INFINITY, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, 50, 50, INFINITY, 50, scratch, LEN(scratch)) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, 0.0, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, NAN, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, 10, NAN, INFINITY, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, NAN, scratch, LEN(scratch)) ==
           PIHYST_ENONFINITE);
-    CHECK(pihyst_compensator_init(NULL, &m, NAN, NAN, INFINITY, 0, scratch, 18) == PIHYST_ENULL);
+    CHECK(pihyst_compensator_init(NULL, &m, NAN, NAN, INFINITY, 0, scratch, LEN(scratch)) == PIHYST_ENULL);
     CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, NULL, 18) == PIHYST_ENULL);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 30, scratch, 18) == PIHYST_OK);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 30, scratch, LEN(scratch)) == PIHYST_OK);
     CHECK(c.u_last == 30.0 && c.u_min == 0.0 && c.u_max == 150.0);
     /* the model state has had 30 V applied: 30, 20, 10 */
     CHECK(state[0] == 30.0 && state[1] == 20.0 && state[2] == 10.0);
@@ -325,6 +348,7 @@ void run_inverse_tests(void)
     test_round_trip_many_operators();
     test_round_trip_pwl();
     test_unsorted_pwl();
+    test_steep_pwl();
     test_flat_hold();
     test_limits_and_slew();
     test_identities();
