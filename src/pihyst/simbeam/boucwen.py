@@ -22,6 +22,8 @@ remanent displacement y = -h > 0 at u = 0.
 
 import numpy as np
 
+from pihyst.simbeam.runs import checked_input, monotone_runs
+
 
 class BoucWen:
     """Bouc-Wen hysteresis; see the module docstring.
@@ -95,26 +97,12 @@ class BoucWen:
     def run(self, u):
         """Displacement (um) for inputs ``u`` (V, within [0, u_max]), continuing from the
         current state."""
-        u = np.asarray(u, dtype=float)
-        if u.ndim != 1:
-            raise ValueError("input must be one-dimensional")
-        if u.size and not np.all((u >= 0) & (u <= self.u_max)):
-            bad = np.flatnonzero(~((u >= 0) & (u <= self.u_max)))[0]
-            raise ValueError(f"sample {bad}: input {u[bad]:g} V is outside [0, {self.u_max:g}] V")
+        u = checked_input(u, self.u_max)
         n = u.size
         h = np.empty(n)
         if n == 0:
             return h
-        step = np.sign(np.diff(np.concatenate(([self._u], u))))
-        signs = np.concatenate(([self._dir], step))
-        idx = np.where(signs != 0, np.arange(n + 1), 0)
-        direction = signs[np.maximum.accumulate(idx)][1:]
-        starts = np.flatnonzero(np.diff(np.concatenate(([self._dir], direction))))
-        bounds = np.concatenate(([0], starts, [n]))
-        for i0, i1 in zip(bounds[:-1], bounds[1:]):
-            if i1 <= i0:
-                continue
-            s = int(direction[i0])
+        for i0, i1, s in monotone_runs(u, self._u, self._dir):
             h[i0:i1] = self._advance(self._u, self._h, u[i0:i1], s)
             self._u, self._h, self._dir = float(u[i1 - 1]), float(h[i1 - 1]), s
         return self._output(u, h)

@@ -26,6 +26,8 @@ Rest state: u = 0 after a full 0 -> u_max -> 0 cycle, which switches every relay
 import numpy as np
 from scipy.special import exprel
 
+from pihyst.simbeam.runs import checked_input, monotone_runs
+
 
 def _ramp_integral(c, d):
     """E(c, d) = integral_0^d exp(c s) ds = d exprel(c d) (exact also for c = 0)."""
@@ -137,12 +139,7 @@ class Preisach:
     def run(self, u):
         """Hysteretic output H (um) for the inputs ``u`` (V, within [0, u_max]),
         continuing from the current state."""
-        u = np.asarray(u, dtype=float)
-        if u.ndim != 1:
-            raise ValueError("input must be one-dimensional")
-        if u.size and not np.all((u >= 0) & (u <= self.u_max)):
-            bad = np.flatnonzero(~((u >= 0) & (u <= self.u_max)))[0]
-            raise ValueError(f"sample {bad}: input {u[bad]:g} V is outside [0, {self.u_max:g}] V")
+        u = checked_input(u, self.u_max)
         x = u / self.u_max
         v = self._warped(x)
         return self._reversible(x) + self._preisach(v)
@@ -152,17 +149,7 @@ class Preisach:
         y = np.empty(n)
         if n == 0:
             return y
-        # direction of each sample (sign of the change; no change keeps the last direction)
-        step = np.sign(np.diff(np.concatenate(([self._v], v))))
-        signs = np.concatenate(([self._dir], step))
-        idx = np.where(signs != 0, np.arange(n + 1), 0)
-        direction = signs[np.maximum.accumulate(idx)][1:]
-        starts = np.flatnonzero(np.diff(np.concatenate(([self._dir], direction))))
-        bounds = np.concatenate(([0], starts, [n]))
-        for i0, i1 in zip(bounds[:-1], bounds[1:]):
-            if i1 <= i0:
-                continue
-            s = int(direction[i0])
+        for i0, i1, s in monotone_runs(v, self._v, self._dir):
             if s != self._dir:                        # reversal: push the turning point
                 self._ext.append(self._v)
                 self._out.append(self._p)
