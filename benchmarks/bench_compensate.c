@@ -4,7 +4,9 @@
  *   bench_compensate FAMILY K N REPEATS [TRAJECTORY]
  *       FAMILY: 0 classical, 1 multislope
  *       TRAJECTORY: 0 (default) a walk of random steps up to 0.5 V with reversals at
- *                   random levels; 1 ramps between random levels at 0.25 V per sample
+ *                   random levels; 1 ramps between random levels at 0.25 V per sample;
+ *                   2 a random voltage every sample (a reversal every other sample:
+ *                   the worst case, every sample sorts its breakpoints afresh)
  *
  * Desired trajectory: the model's own output for that voltage signal with minor loops
  * (so every sample is reachable). Prints one line:
@@ -127,7 +129,7 @@ int main(int argc, char **argv)
         if (kind ? v == target : uniform() < 0.01) target = 150.0 * uniform();
         v = v < target ? (v + step < target ? v + step : target)
                        : (v - step > target ? v - step : target);
-        u[t] = v;
+        u[t] = kind == 2 ? 150.0 * uniform() : v;
     }
     pihyst_model_run(&m, u, yd, n);
     scratch_len = pihyst_compensator_scratch_len(&m);
