@@ -35,7 +35,7 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def _max_step(slew_rate, t, path, lines):
+def max_step_per_sample(slew_rate, t, path, lines):
     """Volts per sample from volts per second: rate x the smallest time step, so that no
     interval of the file sees a faster change."""
     if t is None:
@@ -62,7 +62,7 @@ def run(args):
     t = columns.get("time_s")
     max_step = None
     if args.slew_rate is not None:
-        max_step = _max_step(args.slew_rate, t, args.desired, lines)
+        max_step = max_step_per_sample(args.slew_rate, t, args.desired, lines)
     note = []
     if t is None:
         t = np.arange(y_desired.size, dtype=float)

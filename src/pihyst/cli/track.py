@@ -1,0 +1,101 @@
+"""pihyst track MODEL.json DESIRED.csv --plant NAME -o OUT.csv
+
+Feedforward tracking on a simulated beam: desired displacement -> compensator (the exact
+inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
+"""
+
+import numpy as np
+
+from pihyst import __version__
+from pihyst.cli.compensate import max_step_per_sample
+from pihyst.cli.errors import UsageError
+from pihyst.compensate import Compensator
+from pihyst.csvio import CSVError, column_number, read_columns, write_columns
+from pihyst.io import load_model
+from pihyst.plant import PLANT_NAMES, make_plant
+
+
+def register(sub):
+    p = sub.add_parser(
+        "track", help="track a desired displacement on a simulated beam by feedforward",
+        description="Compensate the desired displacement_um of DESIRED.csv with the exact "
+                    "inverse of MODEL.json, drive a simulated beam with the voltages and "
+                    "write time_s, desired_um, voltage_V, the measured displacement_um, "
+                    "the model's predicted_um, error_um (measured - desired) and "
+                    "saturated. Prints the tracking errors. The beam and the compensator "
+                    "start at rest at 0 V (the beam after a full 0 -> max -> 0 V cycle).",
+        epilog="example: pihyst simulate --signal decaying-triangles -o rec.csv && "
+               "pihyst fit rec.csv -o model.json && pihyst track model.json desired.csv "
+               "--plant paper-beam -o tracked.csv")
+    p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
+    p.add_argument("desired", metavar="DESIRED.csv",
+                   help="CSV with time_s and displacement_um (the desired trajectory)")
+    p.add_argument("--plant", choices=PLANT_NAMES, default="paper-beam",
+                   help="simulated beam (default: paper-beam, calibrated to the paper)")
+    p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
+    p.add_argument("--u-min", type=float, default=None, metavar="V",
+                   help="lowest voltage (default: the model's and the beam's range)")
+    p.add_argument("--u-max", type=float, default=None, metavar="V",
+                   help="highest voltage (default: the model's and the beam's range)")
+    p.add_argument("--slew-rate", type=float, default=None, metavar="V/S",
+                   help="largest voltage rate in volts per second")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="seed of the beam's sensor noise (default 0)")
+    p.add_argument("--no-noise", action="store_true", help="no sensor noise")
+    p.add_argument("--no-creep", action="store_true", help="no creep")
+    p.add_argument("--no-quantisation", action="store_true",
+                   help="no 10 mV supply quantisation")
+    p.add_argument("--dynamics", action="store_true",
+                   help="add the beam's second-order dynamics (54 Hz resonance)")
+    p.set_defaults(run=run)
+
+
+def _limits(args, model, plant):
+    """Voltage limits: the user's, else the overlap of the model's and the beam's range."""
+    lo = max(model.input_range[0], plant.u_min) if args.u_min is None else args.u_min
+    hi = min(model.input_range[1], plant.u_max) if args.u_max is None else args.u_max
+    if not (plant.u_min <= lo < hi <= plant.u_max):
+        raise UsageError(f"voltage limits [{lo:g}, {hi:g}] V must lie in the beam's drive "
+                         f"range [{plant.u_min:g}, {plant.u_max:g}] V with u_min < u_max")
+    return lo, hi
+
+
+def run(args):
+    model = load_model(args.model)
+    columns, lines = read_columns(args.desired, ["time_s", "displacement_um"])
+    t, y_d = columns["time_s"], columns["displacement_um"]
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        i = back[0] + 1
+        raise CSVError(args.desired, int(lines[i]), column_number(args.desired, "time_s"),
+                       f"time_s = {t[i]:g} goes back in time (previous {t[i - 1]:g})")
+    plant = make_plant(args.plant, seed=args.seed, noise=not args.no_noise,
+                       creep=not args.no_creep, quantisation=not args.no_quantisation,
+                       dynamics=args.dynamics)
+    u_min, u_max = _limits(args, model, plant)
+    max_step = None
+    if args.slew_rate is not None:
+        max_step = max_step_per_sample(args.slew_rate, t, args.desired, lines)
+    try:
+        compensator = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
+    except ValueError as err:
+        raise UsageError(f"{args.model}: {err}") from None
+    result = compensator.run(y_d)
+    measured = plant.run(result.voltage, t)
+    error = measured - y_d
+    write_columns(args.output, {
+        "time_s": t, "desired_um": y_d, "voltage_V": result.voltage,
+        "displacement_um": measured, "predicted_um": result.displacement, "error_um": error,
+        "saturated": result.saturated.astype(float)},
+        comments=[f"pihyst {__version__} track {args.model} {args.desired} --plant "
+                  f"{args.plant} --seed {args.seed}", plant.describe()])
+    span = float(y_d.max() - y_d.min())
+    mae = float(np.mean(np.abs(error)))
+    rms = float(np.sqrt(np.mean(error ** 2)))
+    share = f" = {100 * mae / span:.2f} % of the desired range {span:.4g} um" if span > 0 else ""
+    print(f"wrote {y_d.size} samples to {args.output}: {args.plant} driven by the inverse of "
+          f"{args.model} (voltage {result.voltage.min():.4g} .. {result.voltage.max():.4g} V)")
+    print(f"tracking error (measured - desired): mean absolute {mae:.4g} um{share}; "
+          f"RMS {rms:.4g} um; largest {float(np.max(np.abs(error))):.4g} um")
+    print(f"saturated: {result.n_saturated} of {y_d.size} samples"
+          + ("" if max_step is None else f"; slew-limited: {result.n_slew_limited}"))
