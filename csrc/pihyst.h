@@ -158,7 +158,11 @@ const char *pihyst_status_text(pihyst_status status);
  * (where an envelope crosses its f_k, and the envelopes' own kinks) are walked in
  * order of distance from u_p, accumulating value and slope, and the linear equation
  * of the segment that brackets y_d is solved. No iteration, no tolerance. Where y is
- * flat the voltage nearest u_p is chosen (hold, don't jump).
+ * flat the voltage nearest u_p is chosen (hold, don't jump). The sorted breakpoints
+ * are kept while the direction of motion holds, so a tracking step costs O(1 + the
+ * breakpoints it passes) plus one model step; a reversal collects and sorts them
+ * again, O(K) for the nearly sorted lists of reachable states. (A compensator reset to
+ * another's (state, u_last) therefore continues it to rounding, not bit for bit.)
  *
  * Limits: every output lies in [u_min, u_max] and, with a slew limit, within
  * max_step of the previous output (checked in floating point: |u[t] - u[t-1]| <=

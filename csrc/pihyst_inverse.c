@@ -41,12 +41,14 @@
  *               (f_k - c2_k)/b); kink at (c1_k - c2_k)/(b - a), slope a -> b.
  *               F_k(u) = min(b u, a u + c3_k): c_k = max(f_k/b, (f_k - c3_k)/a);
  *               kink at c3_k/(b - a), slope (going down) a -> b.
- *               Kinks go in a second list (sorted in k for the paper's shapes) that is
- *               merged with the crossings during the walk.
+ *               Kinks go in a second list (sorted in k for the paper's shapes),
+ *               merged with the sorted crossings into the one list the walk follows.
  *   pwl:        the crossing by binary search on the polyline's values, then every
  *               interior breakpoint beyond it with its slope change, as two events
  *               (+ new slope, - old slope) that the walk sums exactly.
- * Events at or beyond the voltage limit are not collected.
+ * Events at or beyond the voltage limit are not collected. The walk keeps its slope as
+ * a compensated sum (hi + lo), so that a near-vertical segment joining and leaving
+ * (+huge, then -huge) does not wipe out the small slopes around it.
  */
 #include "pihyst.h"
 
