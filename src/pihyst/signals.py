@@ -159,5 +159,7 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     if down:
         k = np.concatenate((k, k[-2::-1]))
     per_step = max(1, int(round(step_s / dt)))
-    u = np.repeat(u_min + (u_max - u_min) * k / n_steps, per_step)
+    # clip: u_min + span * k / n can round one ulp past u_max
+    levels = np.minimum(u_min + (u_max - u_min) * k / n_steps, u_max)
+    u = np.repeat(levels, per_step)
     return np.arange(u.size) * dt, u
