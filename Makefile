@@ -6,7 +6,7 @@ PYTHON ?= python3
 VENV = .venv
 BIN = $(VENV)/bin
 
-.PHONY: demo test install ctest pytest bench clean
+.PHONY: demo test install ctest lint pytest bench clean
 $(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*.pyx)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
@@ -21,11 +21,14 @@ demo: install
 ctest:
 	$(MAKE) -C csrc test
 
+lint: install
+	$(BIN)/ruff check src tests benchmarks
+
 pytest: install
 	$(BIN)/python -m pytest
 	$(BIN)/python -m pytest -q --doctest-modules src/pihyst --ignore=src/pihyst/__main__.py -p no:cacheprovider
 
-test: ctest pytest
+test: ctest lint pytest
 
 bench: install
 	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done

@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 import pihyst
 from pihyst import Compensator, compensate
 from pihyst.compensate import FLAG_NAN, FLAG_SATURATED_HIGH, FLAG_SATURATED_LOW, FLAG_SLEW
+
 from strategies import U, classical_models, multislope_models, pwl_models, random_walk
 
 PAPER_CLASSICAL = pihyst.load_model("examples/paper_table1_classical.json")

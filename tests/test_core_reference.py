@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from pihyst import _core, _reference
+
 from strategies import U, random_walk, triangles
 
 SIGNALS = {

@@ -5,8 +5,16 @@ import json
 import numpy as np
 import pytest
 
-from pihyst.experiment import (CLASSICAL_THRESHOLDS, MULTISLOPE_THRESHOLDS, PAPER, Record,
-                               fit_paper_models, loop_study, paper_study, signed_extremes)
+from pihyst.experiment import (
+    CLASSICAL_THRESHOLDS,
+    MULTISLOPE_THRESHOLDS,
+    PAPER,
+    Record,
+    fit_paper_models,
+    loop_study,
+    paper_study,
+    signed_extremes,
+)
 from pihyst.model import ClassicalPI, MultislopePI
 from pihyst.plant import make_plant
 from pihyst.signals import decaying_triangles, triangle

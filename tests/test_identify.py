@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import pihyst
-from pihyst import ClassicalPI, FitError, MultislopePI, PiecewiseLinearPI, fit
+from pihyst import ClassicalPI, FitError, MultislopePI, fit
 from pihyst.exceptions import IllConditionedWarning, InfeasibleConstraintsError
 from pihyst.identify import cycled_state
 

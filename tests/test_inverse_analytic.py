@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 import pihyst
 from pihyst import ClassicalPI, InputRangeError, InvalidModelError, compensate
 from pihyst.inverse import classical_inverse, reachable_output_range
+
 from strategies import U, random_walk
 
 PAPER = pihyst.load_model("examples/paper_table1_classical.json")

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from pihyst import _core, _reference
+
 from strategies import U
 
 N = 250

@@ -274,7 +274,7 @@ def test_preisach_triangle_mass_is_the_density_integral():
     for a, b in [(1.0, 0.0), (0.7, 0.2), (0.31, 0.3), (0.5, 0.5)]:
         exact, _ = dblquad(lambda al, be: sum(A * np.exp(p * al + q * be)
                                               for A, p, q in h.terms),
-                           b, a, lambda be: be, lambda be: a)
+                           b, a, lambda be: be, lambda be, a=a: a)
         assert float(h.triangle_mass(a, b)) == pytest.approx(exact, rel=1e-9, abs=1e-13)
 
 

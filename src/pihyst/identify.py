@@ -23,8 +23,14 @@ import warnings
 
 from pihyst import __version__
 from pihyst.exceptions import FitError, PihystWarning
-from pihyst.families import (FAMILY_NAMES, Classical, KrasnoselskiiPokrovskii, ModifiedPI,
-                             Multislope, MultislopeIdentified)
+from pihyst.families import (
+    FAMILY_NAMES,
+    Classical,
+    KrasnoselskiiPokrovskii,
+    ModifiedPI,
+    Multislope,
+    MultislopeIdentified,
+)
 from pihyst.fit_report import FitReport, FitResult
 from pihyst.fitting import INITIAL_STATES, FamilyFitter, Record, cycled_state
 from pihyst.thresholds import DEFAULT_MAX_EXHAUSTIVE, SubsetProblem

@@ -1,7 +1,6 @@
 """pihyst simulate --plant NAME --signal KIND [options] -o DATA.csv"""
 
-from pihyst import __version__
-from pihyst import signals
+from pihyst import __version__, signals
 from pihyst.cli.errors import UsageError
 from pihyst.csvio import write_columns
 from pihyst.plant import PLANT_NAMES, make_plant
