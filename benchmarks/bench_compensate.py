@@ -27,6 +27,7 @@ import tempfile
 import time
 
 import numpy as np
+from timing import best_time
 
 import pihyst
 from pihyst import _core, _reference
@@ -36,15 +37,6 @@ ROOT = HERE.parent
 N = 1_000_000
 N_REFERENCE = 300
 U = 150.0
-
-
-def best_time(fn, repeats=5):
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def model_for(family, k, seed=0):
@@ -128,7 +120,7 @@ def binding_and_api():
                 return comp.run(y_d)
 
             t_run = best_time(core_run, 3)
-            t_api = best_time(lambda: pihyst.compensate(model, y_d), 3)  # noqa: B023
+            t_api = best_time(lambda: pihyst.compensate(model, y_d), 3)
             result = pihyst.compensate(model, y_d)
             err = np.max(np.abs(result.displacement - y_d))
             args = dict(family=family, thresholds=model.thresholds, weights=model.weights,

@@ -13,21 +13,13 @@ Run: python benchmarks/bench_core.py
 import time
 
 import numpy as np
+from timing import best_time
 
 import pihyst
 
 N = 1_000_000
 N_REFERENCE = 100_000
 U = 150.0
-
-
-def best_time(fn, repeats=15):
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def numpy_classical(r, w, u):
@@ -72,7 +64,7 @@ def main():
                 r = np.linspace(0, 50, k)
                 model = pihyst.MultislopePI(r, w)
                 ref = numpy_multislope
-            t_fast = best_time(lambda: model.predict(u))  # noqa: B023
+            t_fast = best_time(lambda: model.predict(u), 15)
             t0 = time.perf_counter()
             y_ref = ref(r, w, u[:N_REFERENCE])
             t_ref = (time.perf_counter() - t0) * N / N_REFERENCE

@@ -16,6 +16,8 @@ affine change of variable:
   whose polylines are exactly the multislope envelopes (and the shape is in the metadata).
 """
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 from pihyst.model import ClassicalPI, MultislopePI, PiecewiseLinearPI
@@ -67,28 +69,27 @@ def _shift(polylines, lo):
     return [(x + lo, y.copy()) for x, y in polylines]
 
 
-class Family:
+class Family(ABC):
     """One model family: how to build its operators and map them to the raw input."""
 
     name = None
     title = None
-    subset_search = True   # thresholds chosen by subset search over candidates
+    # thresholds chosen by subset search over ``candidates(S, n_candidates)``, which
+    # such families define
+    subset_search = True
     n_fixed = 0            # operator columns always present after the thresholds'
-
-    def candidates(self, S, n_candidates):
-        raise NotImplementedError
 
     def max_threshold(self, S):
         return np.inf
 
+    @abstractmethod
     def template(self, thresholds, S):
         """Model of v on [0, S] with unit weights; columns = thresholds' operators, then
         the fixed ones."""
-        raise NotImplementedError
 
+    @abstractmethod
     def final_model(self, thresholds, weights, offset, state_v, lo, S):
         """The fitted model of the raw input u (see the module docstring)."""
-        raise NotImplementedError
 
     def raw_state(self, state_v, lo):
         """Operator state in the raw frame (u) from the v frame."""
@@ -180,7 +181,26 @@ class MultislopeIdentified(Multislope):
     title = "multislope PI (identified shape)"
 
 
-class ModifiedPI(Family):
+class PolylineFamily(Family):
+    """A family whose operators are polylines (``_polylines``): its models are
+    PiecewiseLinearPI, moved by lo along the input axis in the raw frame."""
+
+    @abstractmethod
+    def _polylines(self, thresholds, S):
+        """(rising, falling) polylines of the operators on [0, S]."""
+
+    def template(self, thresholds, S):
+        rising, falling = self._polylines(thresholds, S)
+        return PiecewiseLinearPI(rising, falling, np.ones(len(rising)), input_range=(0.0, S))
+
+    def final_model(self, thresholds, weights, offset, state_v, lo, S):
+        rising, falling = self._polylines(thresholds, S)
+        return PiecewiseLinearPI(_shift(rising, lo), _shift(falling, lo), weights,
+                                 offset=offset, input_range=(lo, lo + S),
+                                 initial_state=state_v)
+
+
+class ModifiedPI(PolylineFamily):
     """Classical play operators plus a monotone input function p(v) = sum_j c_j g_j(v),
     g_j(v) = clamp(v, s_j, s_{j+1}) - s_j on ``n_segments`` equal segments of [0, S]
     (operators with R = F = g_j, i.e. without memory). With c_j >= 0, p is non-decreasing,
@@ -214,21 +234,12 @@ class ModifiedPI(Family):
             falling.append(g)
         return rising, falling
 
-    def template(self, thresholds, S):
-        rising, falling = self._polylines(thresholds, S)
-        return PiecewiseLinearPI(rising, falling, np.ones(len(rising)), input_range=(0.0, S))
-
-    def final_model(self, thresholds, weights, offset, state_v, lo, S):
-        rising, falling = self._polylines(thresholds, S)
-        return PiecewiseLinearPI(_shift(rising, lo), _shift(falling, lo), weights,
-                                 offset=offset, input_range=(lo, lo + S),
-                                 initial_state=state_v)
 
     def describe(self):
         return {"input_function_segments": self.n_segments}
 
 
-class KrasnoselskiiPokrovskii(Family):
+class KrasnoselskiiPokrovskii(PolylineFamily):
     """Krasnosel'skii-Pokrovskii kernels (DESIGN.md section 3): ramp-smoothed relays
     R(v) = sat((v - c_j)/w + 1/2), F(v) = sat((v - c_i)/w + 1/2), c_i <= c_j on a grid of
     ``n_grid`` centres over [0, S], width w = S/(n_grid - 1); sat clamps to [0, 1]. A
@@ -253,15 +264,6 @@ class KrasnoselskiiPokrovskii(Family):
         falling = [_ramp(centres[i] - w / 2, w, 1.0) for i, _ in pairs]
         return rising, falling
 
-    def template(self, pairs, S):
-        rising, falling = self._polylines(pairs, S)
-        return PiecewiseLinearPI(rising, falling, np.ones(len(pairs)), input_range=(0.0, S))
-
-    def final_model(self, pairs, weights, offset, state_v, lo, S):
-        rising, falling = self._polylines(pairs, S)
-        return PiecewiseLinearPI(_shift(rising, lo), _shift(falling, lo), weights,
-                                 offset=offset, input_range=(lo, lo + S),
-                                 initial_state=state_v)
 
     def penalty(self, pairs):
         """D^T D for D the differences of the weights of kernels (i, j) and (i+1, j+1):

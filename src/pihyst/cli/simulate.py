@@ -2,8 +2,8 @@
 
 from pihyst import __version__, signals
 from pihyst.cli.errors import UsageError
+from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.csvio import write_columns
-from pihyst.plant import PLANT_NAMES, make_plant
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
@@ -18,8 +18,6 @@ def register(sub):
         epilog="examples: pihyst simulate -o loop.csv  (the paper's 0-150 V, 300 s triangle "
                "on the paper-beam);  pihyst simulate --plant remanent --signal random-ramps "
                "--ramps 30 --seed 2 -o ramps.csv")
-    p.add_argument("--plant", choices=PLANT_NAMES, default="paper-beam",
-                   help="simulated beam (default: paper-beam, calibrated to the paper)")
     p.add_argument("--signal", choices=SIGNALS, default="triangle",
                    help="drive signal (default: triangle)")
     p.add_argument("--min", type=float, default=0.0, metavar="V", dest="u_min",
@@ -46,15 +44,9 @@ def register(sub):
                    help="staircase: steps up (and as many down) (default 10)")
     p.add_argument("--step-time", type=float, default=10.0, metavar="S",
                    help="staircase: time per step (default 10 s)")
-    p.add_argument("--seed", type=int, default=0, metavar="N",
-                   help="seed of the sensor noise and of random-ramps' levels (default 0)")
-    p.add_argument("--no-noise", action="store_true", help="no sensor noise")
-    p.add_argument("--no-creep", action="store_true", help="no creep")
-    p.add_argument("--no-quantisation", action="store_true",
-                   help="no 10 mV supply quantisation")
-    p.add_argument("--dynamics", action="store_true",
-                   help="add the beam's second-order dynamics (54 Hz resonance)")
     p.add_argument("-o", "--output", metavar="DATA.csv", required=True, help="output CSV")
+    add_plant_options(p, seed_help="seed of the sensor noise and of random-ramps' levels "
+                                   "(default 0)")
     p.set_defaults(run=run)
 
 
@@ -79,9 +71,7 @@ def make_signal(args, u_max):
 
 
 def run(args):
-    plant = make_plant(args.plant, seed=args.seed, noise=not args.no_noise,
-                       creep=not args.no_creep, quantisation=not args.no_quantisation,
-                       dynamics=args.dynamics)
+    plant = plant_from_options(args)
     u_max = plant.u_max if args.u_max is None else args.u_max
     if not (plant.u_min <= args.u_min and u_max <= plant.u_max):
         raise UsageError(f"--min/--max must lie in the beam's drive range "

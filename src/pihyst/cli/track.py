@@ -9,10 +9,10 @@ import numpy as np
 from pihyst import __version__
 from pihyst.cli.compensate import max_step_per_sample
 from pihyst.cli.errors import UsageError
+from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.compensate import Compensator
 from pihyst.csvio import CSVError, column_number, read_columns, write_columns
 from pihyst.io import load_model
-from pihyst.plant import PLANT_NAMES, make_plant
 
 
 def register(sub):
@@ -30,8 +30,6 @@ def register(sub):
     p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
     p.add_argument("desired", metavar="DESIRED.csv",
                    help="CSV with time_s and displacement_um (the desired trajectory)")
-    p.add_argument("--plant", choices=PLANT_NAMES, default="paper-beam",
-                   help="simulated beam (default: paper-beam, calibrated to the paper)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     p.add_argument("--u-min", type=float, default=None, metavar="V",
                    help="lowest voltage (default: the model's and the beam's range)")
@@ -39,14 +37,7 @@ def register(sub):
                    help="highest voltage (default: the model's and the beam's range)")
     p.add_argument("--slew-rate", type=float, default=None, metavar="V/S",
                    help="largest voltage rate in volts per second")
-    p.add_argument("--seed", type=int, default=0, metavar="N",
-                   help="seed of the beam's sensor noise (default 0)")
-    p.add_argument("--no-noise", action="store_true", help="no sensor noise")
-    p.add_argument("--no-creep", action="store_true", help="no creep")
-    p.add_argument("--no-quantisation", action="store_true",
-                   help="no 10 mV supply quantisation")
-    p.add_argument("--dynamics", action="store_true",
-                   help="add the beam's second-order dynamics (54 Hz resonance)")
+    add_plant_options(p, seed_help="seed of the beam's sensor noise (default 0)")
     p.set_defaults(run=run)
 
 
@@ -69,9 +60,7 @@ def run(args):
         i = back[0] + 1
         raise CSVError(args.desired, int(lines[i]), column_number(args.desired, "time_s"),
                        f"time_s = {t[i]:g} goes back in time (previous {t[i - 1]:g})")
-    plant = make_plant(args.plant, seed=args.seed, noise=not args.no_noise,
-                       creep=not args.no_creep, quantisation=not args.no_quantisation,
-                       dynamics=args.dynamics)
+    plant = plant_from_options(args)
     u_min, u_max = _limits(args, model, plant)
     max_step = None
     if args.slew_rate is not None:
