@@ -31,7 +31,7 @@ extern "C" {
 
 #define PIHYST_VERSION_MAJOR 0
 #define PIHYST_VERSION_MINOR 1
-#define PIHYST_ABI_VERSION 1 /* bump on any struct layout or signature change */
+#define PIHYST_ABI_VERSION 2 /* bump on any struct layout or signature change */
 
 typedef enum {
     PIHYST_OK = 0,
@@ -158,11 +158,14 @@ const char *pihyst_status_text(pihyst_status status);
  * (where an envelope crosses its f_k, and the envelopes' own kinks) are walked in
  * order of distance from u_p, accumulating value and slope, and the linear equation
  * of the segment that brackets y_d is solved. No iteration, no tolerance. Where y is
- * flat the voltage nearest u_p is chosen (hold, don't jump). The sorted breakpoints
- * are kept while the direction of motion holds, so a tracking step costs O(1 + the
- * breakpoints it passes) plus one model step; a reversal collects and sorts them
- * again, O(K) for the nearly sorted lists of reachable states. (A compensator reset to
- * another's (state, u_last) therefore continues it to rounding, not bit for bit.)
+ * flat the voltage nearest u_p is chosen (hold, don't jump). The breakpoints are kept
+ * while the direction of motion holds, so a tracking step costs O(1 + the breakpoints
+ * it passes) plus one model step. At a reversal the breakpoints of reachable states
+ * come in operator order: a classical compensator reads them from the state as it
+ * walks (O(1 + breakpoints passed), no list), a multislope one collects them in two
+ * vectorized passes and checks the order (O(K)); anything out of order is sorted.
+ * (A compensator reset to another's (state, u_last) therefore continues it to
+ * rounding, not bit for bit.)
  *
  * Limits: every output lies in [u_min, u_max] and, with a slew limit, within
  * max_step of the previous output (checked in floating point: |u[t] - u[t-1]| <=
@@ -180,10 +183,10 @@ enum {
     PIHYST_COMP_SLEW = 8      /**< not reached within the slew limit: voltage moved by max_step */
 };
 
-/** Scratch a compensator needs, in doubles, for K = n_ops operators and a model with
- *  n_points polyline breakpoints in total (rising plus falling; 0 for classical and
+/** Scratch a compensator needs at most, in doubles, for K = n_ops operators and a model
+ *  with n_points polyline breakpoints in total (rising plus falling; 0 for classical and
  *  multislope). pihyst_compensator_scratch_len gives the exact figure for a model. */
-#define PIHYST_COMPENSATOR_SCRATCH_LEN(n_ops, n_points) (10 * (n_ops) + 8 * (n_points))
+#define PIHYST_COMPENSATOR_SCRATCH_LEN(n_ops, n_points) (10 * (n_ops) + 8 * (n_points) + 12)
 
 /** Compensator: an exact inverse of a model with w >= 0, with limits.
  *  Transparent for static allocation; fill it with pihyst_compensator_init. The model's
@@ -199,13 +202,17 @@ typedef struct {
     double tol;          /**< equality band of |y_d - y_last| (rounding of the output) */
     double *scratch;     /**< caller-owned, scratch_len doubles: kinks, event lists */
     size_t scratch_len;  /**< >= pihyst_compensator_scratch_len(model) */
-    size_t events_cap;   /**< capacity of the first event list (pairs) */
-    /* events kept between samples while the direction stays the same (internal): */
+    size_t events_cap;   /**< capacity of the crossing list (events, sentinel excluded) */
+    /* breakpoints kept between samples while the direction holds (internal): */
     int dir;             /**< +1 up, -1 down, 0 none (collect at the next sample) */
+    unsigned in_order;   /**< bits 0, 1: rising, falling kinks sorted by distance (multislope);
+                              bit 2: classical state 1-Lipschitz in r (crossings in order) */
     double base;         /**< voltage the event distances are measured from */
-    const double *events; /**< count sorted (distance, slope change) pairs in scratch */
-    size_t count, next;  /**< events, and the first one not yet passed */
+    size_t next[2];      /**< first crossing and first kink not yet passed */
     double slope[2];     /**< slope |dy/du| just beyond u_last in direction dir (hi + lo) */
+    double ahead;        /**< classical, in order: distance of crossing next[0] from base */
+    double *work;        /**< the state worked on: the model's array if it is aligned to a
+                              cache line, else an aligned copy in scratch */
 } pihyst_compensator;
 
 /** Scratch length (doubles) that pihyst_compensator_init needs for this model. */

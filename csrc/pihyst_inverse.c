@@ -11,144 +11,200 @@
  *      non-negative slope; its slope changes at events (d_e, ds_e):
  *        - operator k joins when its envelope reaches f_k (the crossing), adding
  *          w_k times the envelope's slope there; an operator already on its envelope
- *          at u_p contributes from d = 0;
+ *          at u_p joins at d = 0;
  *        - each envelope kink beyond the crossing changes the slope by
  *          w_k (slope after - slope before).
- *   3. Sort the events by distance, walk them accumulating z and the slope s, and in
+ *   3. Take the events in order of distance, accumulating z and the slope s, and in
  *      the first segment [d_a, d_e] with z(d_e) >= target solve
  *          z(d_a) + s (d - d_a) = target  ->  d = d_a + (target - z(d_a)) / s,
- *      s > 0 there because z rises across the segment. That d is the smallest
- *      solution: the voltage nearest u_p (flat stretches before it are passed over,
- *      never entered). If no segment reaches the target, the window's end is taken
- *      and flagged (limit, or slew limit if that end is the slew bound), unless the
- *      model's output there meets y_d to rounding after all.
+ *      s > 0 there because z rises across the segment (the division is done as a
+ *      multiplication by 1/s, which does not wait for the target: rounding only).
+ *      That d is the smallest solution: the voltage nearest u_p (flat stretches before
+ *      it are passed over, never entered). If no segment reaches the target, the
+ *      window's end is taken and flagged (limit, or slew limit if that end is the slew
+ *      bound), unless the model's output there meets y_d to rounding after all.
  *   4. Apply the voltage to the model, which gives the new state and y_last.
  *
- * The sorted events are kept for the next sample while the direction stays the same:
- * an operator not yet on its envelope keeps its f_k (so its crossing stays where it
- * was), one on its envelope stays on it, and the kinks are fixed. The next sample in
- * the same direction continues the walk from the first event not yet passed, with the
- * slope reached there; only a reversal (or a reset) collects and sorts again, over the
- * whole distance to the voltage limit. A tracking step thus costs O(1 + events passed)
- * plus the model step, a reversal O(K) (O(K log K) for badly unsorted events).
+ * The events of a direction are kept for the next sample while the direction stays the
+ * same: an operator not yet on its envelope keeps its f_k (so its crossing stays where
+ * it was), one on its envelope stays on it, and the kinks are fixed. The next sample in
+ * the same direction continues from the first event not yet passed, with the slope
+ * reached there; a reversal (or a reset) starts again from u_p. A tracking step thus
+ * costs O(1 + events passed) plus the model step.
  *
  * Events per family, going up (R_k, crossing c_k = least u >= u_p with R_k(u) >= f_k)
  * and going down (F_k, crossing c_k = greatest u <= u_p with F_k(u) <= f_k):
  *   classical:  up   c_k = f_k + r_k, slope 1;   down  c_k = f_k - r_k, slope 1.
- *               Reachable states satisfy |f_k - f_j| <= |r_k - r_j|, so the crossings
- *               arrive sorted in k and insertion sort is O(K).
+ *               For a state 1-Lipschitz in r (reachable states are, see walk_classical)
+ *               the crossings come in operator order, so a reversal needs no list: the
+ *               walk reads them from the state as it goes, O(1 + events passed).
  *   multislope: R_k(u) = max(a u + c1_k, b u + c2_k): c_k = min((f_k - c1_k)/a,
  *               (f_k - c2_k)/b); kink at (c1_k - c2_k)/(b - a), slope a -> b.
  *               F_k(u) = min(b u, a u + c3_k): c_k = max(f_k/b, (f_k - c3_k)/a);
  *               kink at c3_k/(b - a), slope (going down) a -> b.
- *               Kinks go in a second list (sorted in k for the paper's shapes),
- *               merged with the sorted crossings into the one list the walk follows.
+ *               Two lists in operator order, crossings and kinks (collect_multislope),
+ *               built by vectorized loops without a comparison that picks anything,
+ *               and checked to be sorted (they are for reachable states of the paper's
+ *               shapes); the walk merges them as it goes. O(K) per reversal.
  *   pwl:        the crossing by binary search on the polyline's values, then every
  *               interior breakpoint beyond it with its slope change, as two events
  *               (+ new slope, - old slope) that the walk sums exactly.
- * Events at or beyond the voltage limit are not collected. The walk keeps its slope as
- * a compensated sum (hi + lo), so that a near-vertical segment joining and leaving
- * (+huge, then -huge) does not wipe out the small slopes around it.
+ * Lists out of order (a state set by reset, an unusual multislope shape, pwl) are
+ * sorted: insertion sort, O(K log K) at worst. For pwl the walk keeps its slope as a
+ * compensated sum (hi + lo), so that a near-vertical segment joining and leaving
+ * (+huge, then -huge) does not wipe out the small slopes around it; the other families
+ * only add slope.
  */
 #include "pihyst.h"
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* The O(K) loops of a reversal are compiled for several instruction sets and the best
+ * one is picked at load time (function multiversioning), as in pihyst_model.c. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && \
+    !defined(PIHYST_NO_MULTIVERSION)
+#define PIHYST_HOT __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
+#else
+#define PIHYST_HOT
+#endif
+
+/* The per-sample path (step -> solve -> walk) is compiled in one piece, the collection
+ * of a reversal out of it. */
+#if defined(__GNUC__)
+#define PIHYST_INLINE __attribute__((always_inline)) inline
+#define PIHYST_NOINLINE __attribute__((noinline))
+#else
+#define PIHYST_INLINE
+#define PIHYST_NOINLINE
+#endif
+
+/* alignment of the working state (a cache line, as in pihyst_model.c) */
+#define PIHYST_ALIGN 64
 
 /* ------------------------------------------------------------------ event lists */
 
-/* Events are (distance, slope change) pairs stored interleaved: ev[2i], ev[2i + 1]. */
+/* An event list is two arrays: distances d[i] and slope changes s[i]. */
 
-static void heap_sift(double *ev, size_t root, size_t n)
+static void swap_events(double *d, double *s, size_t i, size_t j)
+{
+    const double td = d[i], ts = s[i];
+    d[i] = d[j];
+    s[i] = s[j];
+    d[j] = td;
+    s[j] = ts;
+}
+
+static void heap_sift(double *d, double *s, size_t root, size_t n)
 {
     for (;;) {
         size_t child = 2 * root + 1;
-        double d, s;
         if (child >= n) return;
-        if (child + 1 < n && ev[2 * (child + 1)] > ev[2 * child]) ++child;
-        if (!(ev[2 * child] > ev[2 * root])) return;
-        d = ev[2 * root]; s = ev[2 * root + 1];
-        ev[2 * root] = ev[2 * child]; ev[2 * root + 1] = ev[2 * child + 1];
-        ev[2 * child] = d; ev[2 * child + 1] = s;
+        if (child + 1 < n && d[child + 1] > d[child]) ++child;
+        if (!(d[child] > d[root])) return;
+        swap_events(d, s, root, child);
         root = child;
     }
 }
 
-static void heap_sort(double *ev, size_t n)
+static void heap_sort(double *d, double *s, size_t n)
 {
     size_t i;
     if (n < 2) return;
-    for (i = n / 2; i-- > 0;) heap_sift(ev, i, n);
+    for (i = n / 2; i-- > 0;) heap_sift(d, s, i, n);
     for (i = n - 1; i > 0; --i) {
-        double d = ev[0], s = ev[1];
-        ev[0] = ev[2 * i]; ev[1] = ev[2 * i + 1];
-        ev[2 * i] = d; ev[2 * i + 1] = s;
-        heap_sift(ev, 0, i);
+        swap_events(d, s, 0, i);
+        heap_sift(d, s, 0, i);
     }
 }
 
-/* Sort by distance: insertion sort, O(n) on the nearly sorted lists of reachable
- * states; if it has moved more than 4n + 8 elements the list is far from sorted and
- * heapsort finishes the job, so the worst case stays O(n log n). */
-static void sort_events(double *ev, size_t n)
+/* Sort by distance: insertion sort, O(n) on nearly sorted lists; if it has moved more
+ * than 4n + 8 elements the list is far from sorted and heapsort finishes the job, so
+ * the worst case stays O(n log n). */
+static void sort_events(double *d, double *s, size_t n)
 {
     size_t i, moves = 0;
     const size_t budget = 4 * n + 8;
     for (i = 1; i < n; ++i) {
-        const double d = ev[2 * i], s = ev[2 * i + 1];
+        const double di = d[i], si = s[i];
         size_t j = i;
-        while (j > 0 && ev[2 * (j - 1)] > d) {
-            ev[2 * j] = ev[2 * (j - 1)];
-            ev[2 * j + 1] = ev[2 * (j - 1) + 1];
+        while (j > 0 && d[j - 1] > di) {
+            d[j] = d[j - 1];
+            s[j] = s[j - 1];
             --j;
             ++moves;
         }
-        ev[2 * j] = d;
-        ev[2 * j + 1] = s;
+        d[j] = di;
+        s[j] = si;
         if (moves > budget) {
-            heap_sort(ev, n);
+            heap_sort(d, s, n);
             return;
         }
     }
 }
 
-/* Walk the sorted cached events ev[*next ..] (distances from the base voltage; q_p is
- * u_p's distance from it, so an event lies d_e = ev - q_p beyond u_p) with slope *slope
- * at u_p and z(0) = 0, up to distance span. Returns 1 and the smallest d with
- * z(d) = target (0 < target) if z(span) >= target, else 0 with d = span. Events passed
- * are consumed: *next and *slope then describe the voltage u_p + d. */
-static int walk(const double *ev, size_t n, size_t *next, double slope[2], double q_p,
-                double target, double span, double *d_out)
+/* 1 if the n distances d are not in non-decreasing order */
+static int out_of_order(const double *d, size_t n)
 {
-    /* the slope is a compensated sum hi + lo (Knuth's TwoSum), so that a steep polyline
-     * segment joining and leaving (+huge, then -huge) leaves the small slopes intact */
-    double z = 0.0, d0 = 0.0, hi = slope[0], lo = slope[1], s = hi + lo, z_end;
     size_t i;
+    int bad = 0;
+    for (i = 1; i < n; ++i) bad |= d[i] < d[i - 1];
+    return bad;
+}
+
+/* ------------------------------------------------------------------ walks */
+
+/* Walk the two sorted event lists a (crossings) and b (kinks), each ended by a +inf
+ * sentinel, in merged order (a first on equal distances) from a[next[0]], b[next[1]].
+ * Distances are from the base voltage; q_p is u_p's distance from it, so an event lies
+ * d_e = ev - q_p beyond u_p. slope is the slope at u_p and z(0) = 0; the walk goes up to
+ * distance span. Returns 1 and the smallest d with z(d) = target (0 < target) if
+ * z(span) >= target, else 0 with d = span. Events passed are consumed: next and slope
+ * then describe the voltage u_p + d. With `compensated` the slope is the sum hi + lo
+ * (Knuth's TwoSum), for pwl slope changes that cancel; else slope[0] alone. */
+static PIHYST_INLINE int walk(const double *ad, const double *as, const double *bd,
+                              const double *bs, size_t next[2], double slope[2], double q_p,
+                              double target, double span, int compensated, double *d_out)
+{
+    double z = 0.0, d0 = 0.0, hi = slope[0], lo = slope[1], s = hi + lo;
+    size_t i = next[0], j = next[1];
     int hit = 0;
-    for (i = *next; i < n; ++i) {
-        double de = ev[2 * i] - q_p, ze, t, bp;
+    for (;;) {
+        double de, ds, ze;
+        const int from_b = bd[j] < ad[i];
+        if (from_b) {
+            de = bd[j] - q_p;
+            ds = bs[j];
+        } else {
+            de = ad[i] - q_p;
+            ds = as[i];
+        }
         if (de < d0) de = d0; /* passed already, to rounding */
         if (!(de < span)) break;
-        /* z(d_e) = z(d_a) + s (d_e - d_a) */
-        ze = z + s * (de - d0);
+        ze = z + s * (de - d0); /* z(d_e) = z(d_a) + s (d_e - d_a) */
         if (ze >= target) {
-            const double d = d0 + (target - z) / s; /* s > 0: z rose from below target */
+            const double d = d0 + (target - z) * (1.0 / s); /* s > 0: z rose below target */
             *d_out = d < de ? d : de;
             hit = 1;
             break;
         }
         z = ze;
         d0 = de;
-        /* hi + lo += ds */
-        t = hi + ev[2 * i + 1];
-        bp = t - hi;
-        lo += (hi - (t - bp)) + (ev[2 * i + 1] - bp);
-        hi = t;
-        s = hi + lo;
+        if (compensated) { /* hi + lo += ds */
+            const double t = hi + ds, bp = t - hi;
+            lo += (hi - (t - bp)) + (ds - bp);
+            hi = t;
+            s = hi + lo;
+        } else {
+            hi += ds;
+            s = hi;
+        }
+        if (from_b) ++j; else ++i;
     }
     if (!hit) {
-        z_end = z + s * (span - d0);
-        if (z_end >= target) {
+        if (z + s * (span - d0) >= target) {
             const double d = d0 + (target - z) / s;
             *d_out = d < span ? d : span;
             hit = 1;
@@ -156,108 +212,194 @@ static int walk(const double *ev, size_t n, size_t *next, double slope[2], doubl
             *d_out = span;
         }
     }
-    *next = i;
+    next[0] = i;
+    next[1] = j;
     slope[0] = hi;
     slope[1] = lo;
     return hit;
 }
 
-/* Merge the sorted lists a (na) and b (nb) into out. */
-static void merge_events(const double *a, size_t na, const double *b, size_t nb, double *out)
+/* Classical models with an ordered state walk their crossings straight from the state,
+ * in operator order, without lists: operator k's crossing lies at c_k = f_k + r_k going
+ * up, f_k - r_k going down, at the distance max(+-(c_k - base), 0) from the base. The
+ * order holds for every state 1-Lipschitz in r,
+ *     |f_k - f_j| <= r_k - r_j     (j < k):
+ * then c_k - c_j = (f_k - f_j) +- (r_k - r_j) has the sign of +-1 or is 0. A model step
+ * keeps the property: f_k <- max(u - r_k, min(u + r_k, f_k)) is a max and a min of
+ * 1-Lipschitz functions of r. In floating point each f_k is the initial value or
+ * u - r_k, u + r_k rounded once, so the state stays within an ulp of an exactly
+ * Lipschitz one and the crossings in order to a few ulps; a crossing met that much late
+ * shifts z by its slope times that much (rounding, below tol). The compensator checks
+ * the property whenever its state is set (init, reset) and at the reversals while it
+ * fails; until then it collects and sorts, as for the other families. Same contract as
+ * walk (slope[0] only); *ahead is the distance of crossing next[0] from the base, kept
+ * from the sample before (that operator has not moved since), so that a tracking step
+ * does not wait for the state the model has just written. */
+static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, double base,
+                                        size_t next[2], double *ahead, double slope[2],
+                                        double q_p, double target, double span, double *d_out)
 {
-    size_t i = 0, j = 0, n = 0;
-    while (i < na || j < nb) {
-        if (i < na && (j >= nb || a[2 * i] <= b[2 * j])) {
-            out[2 * n] = a[2 * i]; out[2 * n + 1] = a[2 * i + 1]; ++i;
-        } else {
-            out[2 * n] = b[2 * j]; out[2 * n + 1] = b[2 * j + 1]; ++j;
+    const size_t K = m->n_ops;
+    const double *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
+    const double sign = up ? 1.0 : -1.0, v = sign * base;
+    double z = 0.0, d0 = 0.0, s = slope[0], e = *ahead;
+    size_t k = next[0];
+    int hit = 0;
+    while (k < K) {
+        double de = e - q_p, ze;
+        if (de < d0) de = d0; /* passed already, to rounding */
+        if (!(de < span)) break;
+        ze = z + s * (de - d0);
+        if (ze >= target) {
+            const double d = d0 + (target - z) * (1.0 / s); /* s > 0: z rose below target */
+            *d_out = d < de ? d : de;
+            hit = 1;
+            break;
         }
-        ++n;
+        z = ze;
+        d0 = de;
+        s += w[k];
+        if (++k < K) {
+            /* up: (f + r) - base;  down: base - (f - r) = (r - f) + base */
+            const double x = sign * f[k] + r[k] - v;
+            e = x > 0.0 ? x : 0.0;
+        } else {
+            e = INFINITY;
+        }
     }
+    if (!hit) {
+        if (z + s * (span - d0) >= target) {
+            const double d = d0 + (target - z) / s;
+            *d_out = d < span ? d : span;
+            hit = 1;
+        } else {
+            *d_out = span;
+        }
+    }
+    next[0] = k;
+    *ahead = e;
+    slope[0] = s;
+    return hit;
+}
+
+/* 1 if the classical state is 1-Lipschitz in r (see walk_classical) to a few ulps of
+ * the largest |voltage| + r: |f_k - f_{k-1}| <= r_k - r_{k-1} + tol */
+static int lipschitz(const pihyst_compensator *c)
+{
+    const pihyst_model *m = c->model;
+    const size_t K = m->n_ops;
+    const double *r = m->coef + K, *f = m->state;
+    const double u_big = fabs(c->u_min) > fabs(c->u_max) ? fabs(c->u_min) : fabs(c->u_max);
+    const double tol = 8.0 * DBL_EPSILON * (u_big + r[K - 1]);
+    size_t k;
+    int bad = 0;
+    for (k = 1; k < K; ++k) bad |= fabs(f[k] - f[k - 1]) > (r[k] - r[k - 1]) + tol;
+    return !bad;
 }
 
 /* ------------------------------------------------------------------ collection */
 
+/* Scratch: kinks (2K, multislope) | crossing list a: distances, slope changes
+ * (events_cap + 1 each, the last a +inf sentinel) | kink list b likewise (K + 1 each). */
 typedef struct {
-    double *a;   /* crossings (and pwl breakpoints) */
+    double *ad, *as; /* crossings (and pwl breakpoints) */
     size_t na;
-    double *b;   /* multislope kinks */
+    double *bd, *bs; /* multislope kinks */
     size_t nb;
-    double s0;   /* slope at distance 0+ */
+    double s0;       /* slope at distance 0+ (pwl; the others list it as events at 0) */
 } events;
 
-static void push(double *ev, size_t *n, double d, double ds)
+static void lists(const pihyst_compensator *c, events *e)
 {
-    ev[2 * *n] = d;
-    ev[2 * *n + 1] = ds;
-    ++*n;
+    const size_t K = c->model->n_ops, cap = c->events_cap;
+    e->ad = c->scratch + 2 * K;
+    e->as = e->ad + (cap + 1);
+    e->bd = e->as + (cap + 1);
+    e->bs = e->bd + (K + 1);
 }
 
-/* classical, (3a): c_k = f_k + r_k;  (3b): c_k = f_k - r_k; slope w_k from c_k on */
-static void collect_classical(const pihyst_model *m, int up, double u_p, double span,
-                              events *e)
+static void push(events *e, double d, double ds)
+{
+    e->ad[e->na] = d;
+    e->as[e->na] = ds;
+    ++e->na;
+}
+
+/* classical, (3a): c_k = f_k + r_k;  (3b): c_k = f_k - r_k; slope w_k from c_k on.
+ * Every crossing goes into a in operator order, as its distance from u_p clamped at 0
+ * (an operator on its envelope at u_p joins at distance 0). Returns 1 if out of order. */
+PIHYST_HOT
+static int collect_classical(const pihyst_model *m, int up, double u_p, events *e)
 {
     const size_t K = m->n_ops;
     const double *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
-    double *restrict a = e->a;
-    double s = 0.0;
-    size_t k, n = 0;
-    for (k = 0; k < K; ++k) {
-        const double d = up ? (f[k] + r[k]) - u_p : u_p - (f[k] - r[k]);
-        if (d <= 0.0) {
-            s += w[k];
-        } else if (d < span) {
-            a[2 * n] = d;
-            a[2 * n + 1] = w[k];
-            ++n;
+    double *restrict ad = e->ad, *restrict as = e->as;
+    size_t k;
+    if (up) {
+        for (k = 0; k < K; ++k) {
+            const double d = (f[k] + r[k]) - u_p;
+            ad[k] = d > 0.0 ? d : 0.0;
+        }
+    } else {
+        for (k = 0; k < K; ++k) {
+            const double d = u_p - (f[k] - r[k]);
+            ad[k] = d > 0.0 ? d : 0.0;
         }
     }
-    e->na = n;
+    for (k = 0; k < K; ++k) as[k] = w[k];
+    e->na = K;
     e->nb = 0;
-    e->s0 = s;
+    e->s0 = 0.0;
+    return out_of_order(ad, K);
 }
 
-/* multislope, see the header comment of this file for c_k and the kinks */
-static void collect_multislope(const pihyst_model *m, const double *kinks, int up, double u_p,
-                               double span, events *e)
+/* multislope, see the header comment of this file for c_k and the kinks. Going up from
+ * its crossing c_k (clamped to u_p) operator k contributes
+ *     w_k (R_k(u) - f_k) = w_k a (u - c_k) + w_k (b - a) (u - max(kink_k, c_k))+,
+ * the kink counting from the crossing on if it lies before it; going down likewise,
+ * with min. So the crossing goes into a with slope change w_k a and max(kink_k, c_k)
+ * into b with w_k (b - a), both in operator order: b is sorted whenever a is (the kinks
+ * are, checked at init, and the max of two non-decreasing sequences is non-decreasing).
+ * No comparison picks anything, so the loops vectorize and noise data mispredicts
+ * nothing. Returns 1 if the crossings are out of order. */
+PIHYST_HOT
+static int collect_multislope(const pihyst_model *m, const double *kinks, int up,
+                              double u_p, events *e)
 {
     const size_t K = m->n_ops;
-    const double a_ = m->shape.a, b_ = m->shape.b, ia = 1.0 / a_, ib = 1.0 / b_;
+    const double a_ = m->shape.a, ba = m->shape.b - m->shape.a;
+    const double ia = 1.0 / a_, ib = 1.0 / m->shape.b;
     const double *restrict w = m->weights, *restrict f = m->state, *restrict c = m->coef;
-    double s = 0.0;
-    size_t k, na = 0, nb = 0;
+    double *restrict ad = e->ad, *restrict as = e->as, *restrict bd = e->bd,
+                     *restrict bs = e->bs;
+    size_t k;
     if (up) {
-        const double *kr = kinks;
+        const double *restrict kr = kinks;
         for (k = 0; k < K; ++k) {
             /* R(u) = max(a u + c1, b u + c2) >= f  <=>  u >= min((f - c1)/a, (f - c2)/b) */
             const double x1 = (f[k] - c[k]) * ia, x2 = (f[k] - c[K + k]) * ib;
-            const double cross = x1 < x2 ? x1 : x2, d = cross - u_p, dk = kr[k] - u_p;
-            if (d <= 0.0) {
-                s += w[k] * (u_p < kr[k] ? a_ : b_);
-                if (dk > 0.0 && dk < span) push(e->b, &nb, dk, w[k] * (b_ - a_));
-            } else if (d < span) {
-                push(e->a, &na, d, w[k] * (cross < kr[k] ? a_ : b_));
-                if (kr[k] > cross && dk < span) push(e->b, &nb, dk, w[k] * (b_ - a_));
-            }
+            const double x = x1 < x2 ? x1 : x2, xt = x > u_p ? x : u_p;
+            ad[k] = xt - u_p;
+            bd[k] = (kr[k] > xt ? kr[k] : xt) - u_p;
         }
     } else {
-        const double *kf = kinks + K;
+        const double *restrict kf = kinks + K;
         for (k = 0; k < K; ++k) {
             /* F(u) = min(b u, a u + c3) <= f  <=>  u <= max(f/b, (f - c3)/a) */
             const double x1 = f[k] * ib, x2 = (f[k] - c[2 * K + k]) * ia;
-            const double cross = x1 > x2 ? x1 : x2, d = u_p - cross, dk = u_p - kf[k];
-            if (d <= 0.0) {
-                s += w[k] * (u_p > kf[k] ? a_ : b_);
-                if (dk > 0.0 && dk < span) push(e->b, &nb, dk, w[k] * (b_ - a_));
-            } else if (d < span) {
-                push(e->a, &na, d, w[k] * (cross > kf[k] ? a_ : b_));
-                if (kf[k] < cross && dk < span) push(e->b, &nb, dk, w[k] * (b_ - a_));
-            }
+            const double x = x1 > x2 ? x1 : x2, xt = x < u_p ? x : u_p;
+            ad[k] = u_p - xt;
+            bd[k] = u_p - (kf[k] < xt ? kf[k] : xt);
         }
     }
-    e->na = na;
-    e->nb = nb;
-    e->s0 = s;
+    for (k = 0; k < K; ++k) {
+        as[k] = w[k] * a_;
+        bs[k] = w[k] * ba;
+    }
+    e->na = K;
+    e->nb = K;
+    e->s0 = 0.0;
+    return out_of_order(ad, K);
 }
 
 /* first index i in [0, n] with v[i] >= x (v non-decreasing) */
@@ -315,14 +457,14 @@ static void collect_pwl_up(const double *x, const double *y, size_t n, double w,
     } else {
         const double d = cross - u_p;
         if (!(d < span)) return;
-        push(e->a, &e->na, d, w * seg_slope(x, y, seg));
+        push(e, d, w * seg_slope(x, y, seg));
     }
     for (q = seg + 1; q + 1 < n; ++q) { /* interior breakpoints beyond */
         const double d = x[q] - u_p;
         if (!(d < span)) break;
         /* slope change as two events, + new and - old, summed exactly by the walk */
-        push(e->a, &e->na, d, w * seg_slope(x, y, q));
-        push(e->a, &e->na, d, -w * seg_slope(x, y, q - 1));
+        push(e, d, w * seg_slope(x, y, q));
+        push(e, d, -w * seg_slope(x, y, q - 1));
     }
 }
 
@@ -353,13 +495,13 @@ static void collect_pwl_down(const double *x, const double *y, size_t n, double 
     } else {
         const double d = u_p - cross;
         if (!(d < span)) return;
-        push(e->a, &e->na, d, w * seg_slope(x, y, seg));
+        push(e, d, w * seg_slope(x, y, seg));
     }
     for (q = seg; q >= 1; --q) { /* interior breakpoints below */
         const double d = u_p - x[q];
         if (!(d < span)) break;
-        push(e->a, &e->na, d, w * seg_slope(x, y, q - 1));
-        push(e->a, &e->na, d, -w * seg_slope(x, y, q));
+        push(e, d, w * seg_slope(x, y, q - 1));
+        push(e, d, -w * seg_slope(x, y, q));
     }
 }
 
@@ -386,52 +528,69 @@ static void collect_pwl(const pihyst_model *m, int up, double u_p, double span, 
     }
 }
 
-/* Collect and sort the events of direction `up` from u_p over the whole distance to
- * the voltage limit, and keep them (with the slope at u_p) for the following samples. */
-static void rebuild(pihyst_compensator *c, int up, double u_p)
+/* ------------------------------------------------------------------ reversal */
+
+/* A reversal (or the first sample) on the lists: collect the events of direction `up`
+ * from u_p into a and b, sorted by distance, to be walked from u_p and kept for the
+ * following samples. Classical and multislope lists arrive sorted for reachable states
+ * (checked, in O(K)); others are sorted. */
+static PIHYST_NOINLINE void reverse(pihyst_compensator *c, int up, double u_p)
 {
-    const size_t K = c->model->n_ops;
-    const double span = up ? c->u_max - u_p : u_p - c->u_min;
-    double *merged;
+    const pihyst_model *m = c->model;
     events e;
-    e.a = c->scratch + 2 * K;
-    e.b = e.a + 2 * c->events_cap;
-    merged = e.b + 2 * K;
-    switch (c->model->family) {
+    int sorted = 0;
+    lists(c, &e);
+    switch (m->family) {
     case PIHYST_CLASSICAL:
-        collect_classical(c->model, up, u_p, span, &e);
+        sorted = !collect_classical(m, up, u_p, &e);
         break;
     case PIHYST_MULTISLOPE:
-        collect_multislope(c->model, c->scratch, up, u_p, span, &e);
+        sorted = !collect_multislope(m, c->scratch, up, u_p, &e) &&
+                 (c->in_order & (up ? 1u : 2u));
         break;
     default:
-        collect_pwl(c->model, up, u_p, span, &e);
+        collect_pwl(m, up, u_p, up ? c->u_max - u_p : u_p - c->u_min, &e);
         break;
     }
-    sort_events(e.a, e.na);
-    sort_events(e.b, e.nb);
-    if (e.nb) {
-        merge_events(e.a, e.na, e.b, e.nb, merged);
-        c->events = merged;
-    } else {
-        c->events = e.a;
+    if (!sorted) {
+        sort_events(e.ad, e.as, e.na);
+        sort_events(e.bd, e.bs, e.nb);
     }
-    c->dir = up ? 1 : -1;
-    c->base = u_p;
-    c->next = 0;
-    c->count = e.na + e.nb;
+    e.ad[e.na] = e.bd[e.nb] = INFINITY; /* sentinels */
+    e.as[e.na] = e.bs[e.nb] = 0.0;
+    c->next[0] = c->next[1] = 0;
     c->slope[0] = e.s0;
     c->slope[1] = 0.0;
 }
 
 /* The distance d in (0, span] at which |y - y_p| first reaches target (returns 1), or
  * d = span if the window ends first (returns 0). */
-static int solve(pihyst_compensator *c, int up, double u_p, double span, double target,
-                 double *d)
+static PIHYST_INLINE int solve(pihyst_compensator *c, int up, double u_p, double span,
+                               double target, double *d)
 {
-    if (c->dir != (up ? 1 : -1)) rebuild(c, up, u_p);
-    return walk(c->events, c->count, &c->next, c->slope,
-                up ? u_p - c->base : c->base - u_p, target, span, d);
+    const pihyst_model *m = c->model;
+    events e;
+    if (c->dir != (up ? 1 : -1)) { /* a reversal: start again from u_p */
+        c->dir = up ? 1 : -1;
+        c->base = u_p;
+        if (m->family == PIHYST_CLASSICAL && !(c->in_order & 4u) && lipschitz(c))
+            c->in_order |= 4u;
+        if (c->in_order & 4u) {
+            const double x = up ? (m->state[0] + m->coef[m->n_ops]) - u_p
+                                : u_p - (m->state[0] - m->coef[m->n_ops]);
+            c->next[0] = c->next[1] = 0;
+            c->slope[0] = c->slope[1] = 0.0;
+            c->ahead = x > 0.0 ? x : 0.0;
+        } else {
+            reverse(c, up, u_p);
+        }
+    }
+    if (c->in_order & 4u)
+        return walk_classical(m, up, c->base, c->next, &c->ahead, c->slope,
+                              up ? u_p - c->base : c->base - u_p, target, span, d);
+    lists(c, &e);
+    return walk(e.ad, e.as, e.bd, e.bs, c->next, c->slope, up ? u_p - c->base : c->base - u_p,
+                target, span, m->family == PIHYST_PWL, d);
 }
 
 /* ------------------------------------------------------------------ public API */
@@ -447,19 +606,43 @@ static size_t pwl_points(const pihyst_model *m)
 
 size_t pihyst_compensator_scratch_len(const pihyst_model *m)
 {
-    /* kinks 2K | first list (K + 2 points) pairs | second list K pairs |
-     * merged list (2K + 2 points) pairs */
-    return 10 * m->n_ops + 8 * pwl_points(m);
+    /* kinks 2K | crossing list 2 (K + 2 points + 1) | kink list 2 (K + 1) | working
+     * state K on a cache line (+ 8) */
+    const size_t K = m->n_ops;
+    return 7 * K + 4 * pwl_points(m) + 4 + PIHYST_ALIGN / sizeof(double);
 }
 
+/* Forget the kept events (the state was set): the next sample collects afresh, and a
+ * classical state is checked for order again (walk_classical). */
 static void forget_events(pihyst_compensator *c)
 {
     c->dir = 0;
-    c->events = c->scratch;
-    c->count = c->next = 0;
-    c->slope[0] = c->slope[1] = c->base = 0.0;
+    c->in_order &= ~4u;
+    c->next[0] = c->next[1] = 0;
+    c->slope[0] = c->slope[1] = c->base = c->ahead = 0.0;
 }
 
+/* The state the compensator works on is c->work: the model's own array if that is
+ * aligned to a cache line, else an aligned copy in the scratch. pihyst_model_run works
+ * on a misaligned state through an aligned copy of its own (see pihyst_model.c), which
+ * costs two copies per step, and the next sample reads the state right after them. So
+ * while a compensator function runs, the model points at c->work (swap_in), and the
+ * caller's array receives a copy when it returns (swap_out): the caller's alignment
+ * does not matter, and between calls the model's state is the caller's array, current. */
+static double *swap_in(pihyst_compensator *c)
+{
+    double *own = c->model->state;
+    c->model->state = c->work;
+    return own;
+}
+
+static void swap_out(pihyst_compensator *c, double *own, int changed)
+{
+    if (changed && own != c->work) memcpy(own, c->work, c->model->n_ops * sizeof *own);
+    c->model->state = own;
+}
+
+/* apply u to the state (the model points at c->work) */
 static void apply(pihyst_compensator *c, double u)
 {
     c->y_last = pihyst_model_step(c->model, u);
@@ -520,8 +703,28 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, do
             scratch[K + k] = m->coef[2 * K + k] / ba;
         }
     }
+    /* kinks in operator order by distance: rising ones increasing, falling ones
+     * decreasing (a < 1 for both, and a h < 1 for the falling ones) */
+    c->in_order = 3u;
+    for (k = 1; k < K && m->family == PIHYST_MULTISLOPE; ++k) {
+        if (scratch[k] < scratch[k - 1]) c->in_order &= ~1u;
+        if (scratch[K + k] > scratch[K + k - 1]) c->in_order &= ~2u;
+    }
+    if ((uintptr_t)m->state % PIHYST_ALIGN == 0) {
+        c->work = m->state;
+    } else { /* an aligned copy at the end of the scratch */
+        uintptr_t at = (uintptr_t)(scratch + pihyst_compensator_scratch_len(m) - K -
+                                   PIHYST_ALIGN / sizeof(double));
+        at = (at + PIHYST_ALIGN - 1) / PIHYST_ALIGN * PIHYST_ALIGN;
+        c->work = (double *)at;
+        memcpy(c->work, m->state, K * sizeof *c->work);
+    }
     forget_events(c);
-    apply(c, u_initial);
+    {
+        double *own = swap_in(c);
+        apply(c, u_initial);
+        swap_out(c, own, 1);
+    }
     return PIHYST_OK;
 }
 
@@ -536,8 +739,14 @@ pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const double *stat
         for (k = 0; k < c->model->n_ops; ++k)
             if (!isfinite(state[k])) return PIHYST_ENONFINITE;
     pihyst_model_reset(c->model, state);
+    if (c->work != c->model->state)
+        memcpy(c->work, c->model->state, c->model->n_ops * sizeof *c->work);
     forget_events(c);
-    apply(c, u_last);
+    {
+        double *own = swap_in(c);
+        apply(c, u_last);
+        swap_out(c, own, 1);
+    }
     return PIHYST_OK;
 }
 
@@ -559,7 +768,8 @@ static double window_lo(const pihyst_compensator *c, double u_p, int *slew)
     return *slew ? l : c->u_min;
 }
 
-double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned *flags)
+/* One sample, with the model pointing at c->work. Returns the flags. */
+static PIHYST_INLINE unsigned step(pihyst_compensator *c, double y_desired)
 {
     const double u_p = c->u_last, y_p = c->y_last;
     unsigned fl = 0;
@@ -589,6 +799,15 @@ double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned
         /* at the window's end the model may meet y_d after all, to rounding: not a miss */
         if (fl && fabs(y_desired - c->y_last) <= c->tol) fl = 0;
     }
+    return fl;
+}
+
+double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned *flags)
+{
+    const double u_p = c->u_last;
+    double *const own = swap_in(c);
+    const unsigned fl = step(c, y_desired);
+    swap_out(c, own, c->u_last != u_p);
     if (flags) *flags = fl;
     return c->u_last;
 }
@@ -597,12 +816,14 @@ size_t pihyst_compensator_run(pihyst_compensator *c, const double *y_desired, do
                               double *y, unsigned char *flags, size_t n)
 {
     size_t t, count = 0;
+    double *const own = swap_in(c);
     for (t = 0; t < n; ++t) {
-        unsigned fl;
-        u[t] = pihyst_compensator_step(c, y_desired[t], &fl);
+        const unsigned fl = step(c, y_desired[t]);
+        u[t] = c->u_last;
         if (y) y[t] = c->y_last;
         if (flags) flags[t] = (unsigned char)fl;
         count += fl != 0;
     }
+    swap_out(c, own, n > 0);
     return count;
 }

@@ -80,6 +80,36 @@ def test_round_trip_pwl(model, u):
     assert_round_trip(model, u)
 
 
+@SETTINGS
+@given(st.one_of(classical_models(), multislope_models(), pwl_models()), voltage_walks(),
+       st.data())
+def test_round_trip_from_any_state(model, u, data):
+    """From an arbitrary operator state (set, not reached from rest): its breakpoints
+    arrive out of operator order, are sorted, and the inverse is exact all the same."""
+    k = model.n_operators
+    state = np.array(data.draw(st.lists(st.floats(-60, 220), min_size=k, max_size=k)))
+    u0 = data.draw(st.floats(0.0, U))
+    y_d = model.predict(np.r_[u0, u], initial_state=state)[1:]
+    result = compensate(model, y_d, initial_state=state, initial_voltage=u0)
+    conditioning = 64 * np.finfo(float).eps * steepness(model) * U
+    np.testing.assert_allclose(result.displacement, y_d, rtol=0, atol=1e-9 + conditioning)
+    assert np.all(np.isin(result.voltage[result.flags != 0], [0.0, U]))
+
+
+@pytest.mark.parametrize("family", ["classical", "multislope"])
+def test_noise_long_run(family):
+    """A random voltage every sample (a reversal nearly every time), many operators."""
+    rng = np.random.default_rng(5)
+    k = 48
+    w = rng.uniform(0.0, 0.05, k)
+    if family == "classical":
+        model = pihyst.ClassicalPI(np.sort(rng.uniform(0, U, k)), w)
+    else:
+        model = pihyst.MultislopePI(np.sort(rng.uniform(0, 50, k)), w)
+    u = rng.uniform(0, U, 4000)
+    assert_round_trip(model, u)
+
+
 @pytest.mark.parametrize("model", [PAPER_CLASSICAL, PAPER_MULTISLOPE], ids=["classical",
                                                                              "multislope"])
 def test_round_trip_paper_models_long_walk(model):

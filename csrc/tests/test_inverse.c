@@ -1,10 +1,14 @@
 /* Tests of pihyst_compensator_*: exact round trip on reachable trajectories with minor
- * loops (classical, multislope, pwl), hold on flat stretches, limits and slew limit
- * under any input (NaN, infinities, 1e300), step == run, chunked == whole, validation. */
+ * loops (classical, multislope, pwl) and on noise (a reversal nearly every sample:
+ * crossings read in operator order, the multislope crossing and kink lists, their
+ * sorted fallback for unusual shapes and unordered states), hold on flat stretches,
+ * limits and slew limit under any input (NaN, infinities, 1e300), step == run,
+ * chunked == whole, any alignment of the state array, validation. */
 #include "pihyst.h"
 #include "test_util.h"
 
 #include <float.h>
+#include <stdint.h>
 #include <string.h>
 
 #define N_WALK 4000
@@ -125,7 +129,8 @@ static void test_round_trip_pwl(void)
     p.fall_start = fs; p.fall_x = fx; p.fall_y = fy;
     CHECK(pihyst_model_init(&m, PIHYST_PWL, 3, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
                             NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_scratch_len(&m) == 10 * 3 + 8 * 8);
+    CHECK(pihyst_compensator_scratch_len(&m) == 7 * 3 + 4 * 8 + 12);
+    CHECK(pihyst_compensator_scratch_len(&m) <= PIHYST_COMPENSATOR_SCRATCH_LEN(3, 15));
     round_trip(&m, scratch, LEN(scratch));
     /* two operators: the pwl inverse equals the classical inverse */
     CHECK(pihyst_model_init(&m, PIHYST_PWL, 2, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
@@ -315,7 +320,8 @@ static void test_validation_and_reset(void)
           PIHYST_ENEGATIVE_WEIGHT);
     CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 3, r, w, 0, 0, 150, NULL, NULL, coef, state,
                             NULL) == PIHYST_OK);
-    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch, LEN(scratch) - 1) == PIHYST_ESIZE);
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0, scratch,
+                                  pihyst_compensator_scratch_len(&m) - 1) == PIHYST_ESIZE);
     CHECK(pihyst_compensator_init(&c, &m, -1, NAN, INFINITY, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
     CHECK(pihyst_compensator_init(&c, &m, NAN, 151, INFINITY, 0, scratch, LEN(scratch)) == PIHYST_ELIMITS);
     CHECK(pihyst_compensator_init(&c, &m, 50, 50, INFINITY, 50, scratch, LEN(scratch)) == PIHYST_ELIMITS);
@@ -342,6 +348,207 @@ static void test_validation_and_reset(void)
     CHECK(strlen(pihyst_status_text(PIHYST_ELIMITS)) > 0);
 }
 
+
+/* Desired = the model's output for a random voltage every sample (a reversal nearly
+ * every time) from the compensator's start; compensated, predict(u) == y_d to 1e-9 and
+ * step == run bit for bit. The model's state is reset to `start` (NULL = zeros) and
+ * u_start applied before each run. */
+#define N_NOISE 3000
+static void noise_round_trip(pihyst_model *m, double *scratch, size_t scratch_len,
+                             const double *start, double u_start)
+{
+    static double u[N_NOISE], yd[N_NOISE], uc[N_NOISE], yc[N_NOISE], us[N_NOISE];
+    pihyst_compensator c;
+    double err = 0.0;
+    int i;
+    for (i = 0; i < N_NOISE; ++i) u[i] = m->u_min + (m->u_max - m->u_min) * uniform();
+    pihyst_model_reset(m, start);
+    pihyst_model_step(m, u_start);
+    pihyst_model_run(m, u, yd, N_NOISE);
+    pihyst_model_reset(m, start);
+    CHECK(pihyst_compensator_init(&c, m, NAN, NAN, INFINITY, u_start, scratch, scratch_len) ==
+          PIHYST_OK);
+    pihyst_compensator_run(&c, yd, uc, yc, NULL, N_NOISE);
+    for (i = 0; i < N_NOISE; ++i) {
+        if (fabs(yc[i] - yd[i]) > err) err = fabs(yc[i] - yd[i]);
+        CHECK(uc[i] >= m->u_min && uc[i] <= m->u_max);
+    }
+    CHECK(err <= 1e-9);
+    /* step by step from the same start: the same bits */
+    pihyst_model_reset(m, start);
+    CHECK(pihyst_compensator_init(&c, m, NAN, NAN, INFINITY, u_start, scratch, scratch_len) ==
+          PIHYST_OK);
+    for (i = 0; i < N_NOISE; ++i) us[i] = pihyst_compensator_step(&c, yd[i], NULL);
+    for (i = 0; i < N_NOISE && us[i] == uc[i]; ++i) continue;
+    CHECK(i == N_NOISE);
+}
+
+/* Noise on classical and multislope banks of every size, random thresholds (some close
+ * together) and some zero weights. */
+static void test_noise(void)
+{
+    enum { KMAX = 64 };
+    static const int sizes[] = {1, 2, 4, 16, 64};
+    double r[KMAX], w[KMAX], coef[PIHYST_COEF_LEN(KMAX)], state[KMAX];
+    double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 0)];
+    pihyst_model m;
+    int fam, i, k;
+    for (fam = 0; fam < 2; ++fam) {
+        for (i = 0; i < (int)LEN(sizes); ++i) {
+            const int K = sizes[i];
+            for (k = 0; k < K; ++k) {
+                r[k] = (fam ? 46.0 : 150.0) * (k + (k % 3 == 1 ? 0.999 * uniform() : 0.0)) / K;
+                w[k] = k % 5 == 2 ? 0.0 : 0.02 + 0.1 * uniform();
+            }
+            CHECK(pihyst_model_init(&m, (pihyst_family)fam, (size_t)K, r, w, 0.5, 0.0, 150.0,
+                                    &paper_shape, NULL, coef, state, NULL) == PIHYST_OK);
+            noise_round_trip(&m, scratch, LEN(scratch), NULL, 0.0);
+        }
+    }
+}
+
+/* Multislope shapes other than the paper's: random (a, b, h), whose crossings now and
+ * then arrive out of operator order (sorted then), and one with a close to b and h = 1. */
+static void test_noise_multislope_shapes(void)
+{
+    enum { K = 12 };
+    double r[K], w[K], coef[PIHYST_COEF_LEN(K)], state[K];
+    double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(K, 0)];
+    pihyst_model m;
+    pihyst_shape shape = {150.0, 0.95, 1.05, 1.0};
+    int trial, k;
+    for (trial = 0; trial < 12; ++trial) {
+        double r_max;
+        if (trial > 0) {
+            shape.a = 0.5 + 0.45 * uniform();
+            shape.b = 1.05 + 0.55 * uniform();
+            shape.h = uniform();
+        }
+        r_max = (1.0 - shape.a) * shape.U / (1.0 - shape.a * shape.h);
+        for (k = 0; k < K; ++k) {
+            r[k] = r_max * (k + 0.9 * uniform()) / K;
+            w[k] = 0.02 + 0.1 * uniform();
+        }
+        CHECK(pihyst_model_init(&m, PIHYST_MULTISLOPE, K, r, w, 0.0, 0.0, 150.0, &shape, NULL,
+                                coef, state, NULL) == PIHYST_OK);
+        noise_round_trip(&m, scratch, LEN(scratch), NULL, 0.0);
+    }
+}
+
+/* A classical state that is not 1-Lipschitz in r (set by reset, not reachable from
+ * rest): its crossings are out of operator order, so they are collected and sorted,
+ * and exact; a large excursion wipes the memory out and the crossings are read in
+ * order again. */
+static void test_classical_unordered_state(void)
+{
+    enum { K = 6 };
+    const double r[K] = {0.0, 5.0, 50.0, 60.0, 61.0, 90.0};
+    const double w[K] = {0.3, 0.1, 0.2, 0.05, 0.15, 0.1};
+    const double start[K] = {75.0, 75.0, 110.0, 20.0, 130.0, 0.0}; /* 110 vs 20: |df| > dr */
+    double coef[PIHYST_COEF_LEN(K)], state[K], scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(K, 0)];
+    double yd[3];
+    pihyst_model m;
+    pihyst_compensator c;
+    int i;
+    CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, K, r, w, 0.0, 0.0, 150.0, NULL, NULL, coef,
+                            state, NULL) == PIHYST_OK);
+    noise_round_trip(&m, scratch, LEN(scratch), start, 75.0);
+    /* from that state, up to 150 and down to 0: every operator on an envelope of those */
+    CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch, LEN(scratch)) ==
+          PIHYST_OK);
+    CHECK(pihyst_compensator_reset(&c, start, 75.0) == PIHYST_OK);
+    CHECK(state[2] == 110.0 && state[3] == 20.0);
+    pihyst_model_reset(&m, start);
+    pihyst_model_step(&m, 75.0);
+    yd[0] = pihyst_model_step(&m, 150.0);
+    yd[1] = pihyst_model_step(&m, 0.0);
+    yd[2] = pihyst_model_step(&m, 40.0);
+    pihyst_model_reset(&m, start);
+    pihyst_model_step(&m, 75.0);
+    CHECK(pihyst_compensator_reset(&c, start, 75.0) == PIHYST_OK);
+    CHECK(!(c.in_order & 4u)); /* out of order: lists */
+    for (i = 0; i < 3; ++i) {
+        pihyst_compensator_step(&c, yd[i], NULL);
+        CHECK_NEAR(c.y_last, yd[i], 1e-9);
+    }
+    CHECK(c.in_order & 4u); /* ordered again: read from the state */
+}
+
+/* The state array at any alignment (8-byte steps across a cache line): the same
+ * voltages bit for bit, the caller's array current after every call, and the model
+ * pointing at it between calls. */
+static void test_state_alignment(void)
+{
+    enum { K = 16, N = 600, PAD = 8 };
+    static double buf[K + 2 * PAD], yd[N], u0[N], u1[N];
+    double r[K], w[K], coef[PIHYST_COEF_LEN(K)], ref_state[K];
+    double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(K, 0)];
+    double *base = (double *)(((uintptr_t)buf + 63) / 64 * 64);
+    pihyst_model m;
+    pihyst_compensator c;
+    int fam, off, i, k;
+    for (fam = 0; fam < 2; ++fam) {
+        for (k = 0; k < K; ++k) {
+            r[k] = (fam ? 46.0 : 150.0) * k / K;
+            w[k] = 0.05 + 0.05 * uniform();
+        }
+        for (off = 0; off < PAD; ++off) {
+            double *state = base + off;
+            CHECK(pihyst_model_init(&m, (pihyst_family)fam, K, r, w, 0.0, 0.0, 150.0,
+                                    &paper_shape, NULL, coef, state, NULL) == PIHYST_OK);
+            if (off == 0) {
+                double u[N];
+                for (i = 0; i < N; ++i) u[i] = 150.0 * uniform();
+                pihyst_model_run(&m, u, yd, N);
+                pihyst_model_reset(&m, NULL);
+            }
+            CHECK(pihyst_compensator_init(&c, &m, NAN, NAN, INFINITY, 0.0, scratch,
+                                          LEN(scratch)) == PIHYST_OK);
+            CHECK(m.state == state);
+            for (i = 0; i < N; ++i) {
+                (off == 0 ? u0 : u1)[i] = pihyst_compensator_step(&c, yd[i], NULL);
+                CHECK(m.state == state);
+                CHECK_NEAR(c.y_last, yd[i], 1e-9);
+            }
+            if (off == 0) {
+                memcpy(ref_state, state, sizeof ref_state);
+            } else {
+                CHECK(memcmp(u0, u1, sizeof u0) == 0);
+                CHECK(memcmp(ref_state, state, sizeof ref_state) == 0);
+            }
+            /* the block run leaves the same state in the caller's array */
+            CHECK(pihyst_compensator_reset(&c, NULL, 0.0) == PIHYST_OK);
+            pihyst_compensator_run(&c, yd, u1, NULL, NULL, N);
+            CHECK(memcmp(u0, u1, sizeof u0) == 0);
+            CHECK(memcmp(ref_state, state, sizeof ref_state) == 0);
+        }
+    }
+}
+
+/* pihyst_compensator_scratch_len never exceeds the macro */
+static void test_scratch_len(void)
+{
+    const size_t start[3] = {0, 5, 9};
+    const double x[9] = {0, 1, 2, 3, 4, 0, 1, 2, 3}, y[9] = {0, 1, 2, 3, 4, 0, 1, 2, 3};
+    double r[64], w[64], coef[PIHYST_COEF_LEN(64)], state[64];
+    pihyst_pwl p;
+    pihyst_model m;
+    size_t k;
+    for (k = 0; k < 64; ++k) {
+        r[k] = (double)k;
+        w[k] = 1.0;
+        CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, k + 1, r, w, 0.0, 0.0, 150.0, NULL, NULL,
+                                coef, state, NULL) == PIHYST_OK);
+        CHECK(pihyst_compensator_scratch_len(&m) <= PIHYST_COMPENSATOR_SCRATCH_LEN(k + 1, 0));
+    }
+    p.rise_start = start; p.rise_x = x; p.rise_y = y;
+    p.fall_start = start; p.fall_x = x; p.fall_y = y;
+    k = pihyst_model_init(&m, PIHYST_PWL, 2, NULL, w, 0.0, 0.0, 3.0, NULL, &p, coef, state,
+                          NULL) == PIHYST_OK;
+    CHECK(k);
+    if (k) CHECK(pihyst_compensator_scratch_len(&m) <= PIHYST_COMPENSATOR_SCRATCH_LEN(2, 18));
+}
+
 void run_inverse_tests(void)
 {
     test_round_trip_paper_models();
@@ -353,4 +560,9 @@ void run_inverse_tests(void)
     test_limits_and_slew();
     test_identities();
     test_validation_and_reset();
+    test_noise();
+    test_noise_multislope_shapes();
+    test_classical_unordered_state();
+    test_state_alignment();
+    test_scratch_len();
 }
