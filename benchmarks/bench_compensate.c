@@ -1,12 +1,15 @@
 /* Timing harness for the C compensator, compiled and run by bench_compensate.py
  * (gcc -O3 with the core's sources). Not part of the library.
  *
- *   bench_compensate FAMILY K N REPEATS [TRAJECTORY]
+ *   bench_compensate FAMILY K N REPEATS [TRAJECTORY [STATE_OFFSET]]
  *       FAMILY: 0 classical, 1 multislope
  *       TRAJECTORY: 0 (default) a walk of random steps up to 0.5 V with reversals at
  *                   random levels; 1 ramps between random levels at 0.25 V per sample;
- *                   2 a random voltage every sample (a reversal every other sample:
- *                   the worst case, every sample sorts its breakpoints afresh)
+ *                   2 a random voltage every sample (a reversal two samples in three,
+ *                   each far from the last voltage: the worst case)
+ *       STATE_OFFSET: -1 (default) the operator state in its own malloc block, as a
+ *                   user allocates it (16-byte aligned here, not on a cache line);
+ *                   0..7: that many doubles past a 64-byte boundary
  *
  * Desired trajectory: the model's own output for that voltage signal with minor loops
  * (so every sample is reachable). Prints one line:
@@ -18,6 +21,7 @@
 #include "pihyst.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -87,20 +91,21 @@ static void bisection_run(pihyst_model *m, const double *yd, double *u, double *
 
 int main(int argc, char **argv)
 {
-    int family, K, k, rep, reps, kind;
+    int family, K, k, rep, reps, kind, offset;
     size_t n, t;
-    double *r, *w, *coef, *state, *scratch, *u, *yd, *uc, *yc;
+    double *r, *w, *coef, *state, *state_block, *scratch, *u, *yd, *uc, *yc;
     double v = 0.0, target = 150.0, best_exact = 1e30, best_bisect = 1e30;
     double err_exact = 0.0, err_bisect = 0.0;
     const pihyst_shape shape = {150.0, 0.8, 1.2, 0.5};
     pihyst_model m;
     pihyst_compensator c;
     size_t scratch_len;
-    if (argc != 5 && argc != 6) {
-        fprintf(stderr, "usage: %s FAMILY K N REPEATS [TRAJECTORY]\n", argv[0]);
+    if (argc < 5 || argc > 7) {
+        fprintf(stderr, "usage: %s FAMILY K N REPEATS [TRAJECTORY [STATE_OFFSET]]\n", argv[0]);
         return 2;
     }
-    kind = argc == 6 ? atoi(argv[5]) : 0;
+    kind = argc >= 6 ? atoi(argv[5]) : 0;
+    offset = argc == 7 ? atoi(argv[6]) : -1;
     family = atoi(argv[1]);
     K = atoi(argv[2]);
     n = (size_t)atol(argv[3]);
@@ -108,13 +113,15 @@ int main(int argc, char **argv)
     r = malloc(K * sizeof *r);
     w = malloc(K * sizeof *w);
     coef = malloc(PIHYST_COEF_LEN(K) * sizeof *coef);
-    state = malloc(K * sizeof *state);
+    state_block = malloc((K + 16) * sizeof *state_block);
+    state = offset < 0 ? state_block
+                       : (double *)(((uintptr_t)state_block + 63) / 64 * 64) + (offset & 7);
     scratch = malloc(PIHYST_COMPENSATOR_SCRATCH_LEN(K, 0) * sizeof *scratch);
     u = malloc(n * sizeof *u);
     yd = malloc(n * sizeof *yd);
     uc = malloc(n * sizeof *uc);
     yc = malloc(n * sizeof *yc);
-    if (!r || !w || !coef || !state || !scratch || !u || !yd || !uc || !yc) return 1;
+    if (!r || !w || !coef || !state_block || !scratch || !u || !yd || !uc || !yc) return 1;
     for (k = 0; k < K; ++k) {
         r[k] = (family ? 50.0 : 150.0) * k / K;
         w[k] = (k == 0 ? 0.2 : 0.0) + 0.1 * uniform();
@@ -164,7 +171,7 @@ int main(int argc, char **argv)
     }
     printf("%.3f %.3f %.3g %.3g\n", 1e9 * best_exact / (double)n, 1e9 * best_bisect / (double)n,
            err_exact, err_bisect);
-    free(r); free(w); free(coef); free(state); free(scratch);
+    free(r); free(w); free(coef); free(state_block); free(scratch);
     free(u); free(yd); free(uc); free(yc);
     return 0;
 }

@@ -5,9 +5,12 @@ pihyst.compensate, against a bisection baseline and the NumPy reference, same ru
    this file) is compiled with gcc -O3 together with csrc/pihyst_*.c and times
    pihyst_compensator_step over 10^6 samples of reachable trajectories with minor loops
    (best of 3), and a bisection to 1e-12 V on the same model and trajectory. Three
-   trajectories: a walk and ramps (tracking: the compensator keeps its sorted breakpoints
-   while the direction holds) and noise (a reversal every other sample: every sample
-   collects and sorts afresh, the worst case).
+   trajectories: a walk and ramps (tracking: the compensator keeps its breakpoints while
+   the direction holds) and noise (a random voltage every sample: a reversal two samples
+   in three, far from the last voltage, the worst case). The operator state is allocated
+   as a user would (its own malloc block); a second table repeats the noise at K = 16
+   with the state at several offsets from a cache line (the compensator works on an
+   aligned copy, so the offset should not matter).
 2. The block run through the binding (_core.Compensator.run) over 10^6 samples.
 3. pihyst.compensate on 10^6 samples (the Python API, everything included).
 4. The NumPy reference (pihyst._reference.Compensator) on a few hundred samples, per
@@ -82,7 +85,7 @@ def c_latency(folder):
           "best of 3; bisection to 1e-12 V on 10^5 samples, scaled). Desired = the model's "
           "output for: walk = random steps <= 0.5 V, reversals at random levels (1 %); "
           "ramps = 0.25 V per sample between random levels; noise = a random voltage every "
-          "sample (worst case: a reversal every other sample)")
+          "sample (worst case: a reversal two samples in three)")
     if exe is None:
         print("   gcc not found: skipped")
         return {}
@@ -99,6 +102,16 @@ def c_latency(folder):
                 target = "  (target <= 50 ns)" if k == 16 else ""
                 print(f"   {family:<11} {k:>3} {name:<10} {exact:>7.1f} {bisect:>10.1f} "
                       f"{bisect / exact:>6.1f}x {err_exact:>17.2g} {err_bisect:>10.2g}{target}")
+    print("\n   noise, K = 16, ns per sample by where the operator state lies: its own malloc "
+          "block (as above), or 0/1/4 doubles past a 64-byte boundary")
+    print(f"   {'family':<11} {'malloc':>7} {'+0':>7} {'+1':>7} {'+4':>7}")
+    for fam_id, family in enumerate(("classical", "multislope")):
+        times = []
+        for offset in (-1, 0, 1, 4):
+            out = subprocess.run([str(exe), str(fam_id), "16", str(N), "3", "2", str(offset)],
+                                 check=True, capture_output=True, text=True).stdout.split()
+            times.append(float(out[0]))
+        print(f"   {family:<11} " + " ".join(f"{t:>7.1f}" for t in times))
     return figures
 
 

@@ -162,10 +162,12 @@ const char *pihyst_status_text(pihyst_status status);
  * while the direction of motion holds, so a tracking step costs O(1 + the breakpoints
  * it passes) plus one model step. At a reversal the breakpoints of reachable states
  * come in operator order: a classical compensator reads them from the state as it
- * walks (O(1 + breakpoints passed), no list), a multislope one collects them in two
- * vectorized passes and checks the order (O(K)); anything out of order is sorted.
- * (A compensator reset to another's (state, u_last) therefore continues it to
- * rounding, not bit for bit.)
+ * walks (O(1 + breakpoints passed), no list), a multislope one lists crossings and
+ * kinks in one vectorized pass and checks the order (O(K)); anything out of order is
+ * sorted. (A compensator reset to another's (state, u_last) therefore continues it to
+ * rounding, not bit for bit.) The compensator works on a cache-line-aligned copy of
+ * the operator state, so the alignment of the caller's array does not matter: during
+ * a call the model points at that copy, between calls at the caller's array, current.
  *
  * Limits: every output lies in [u_min, u_max] and, with a slew limit, within
  * max_step of the previous output (checked in floating point: |u[t] - u[t-1]| <=
@@ -191,7 +193,8 @@ enum {
 /** Compensator: an exact inverse of a model with w >= 0, with limits.
  *  Transparent for static allocation; fill it with pihyst_compensator_init. The model's
  *  state must change only through the compensator (step, run, reset) while it is in
- *  use: the compensator keeps the sorted breakpoints between samples. */
+ *  use: the compensator keeps the breakpoints and a working copy of the state between
+ *  samples. */
 typedef struct {
     pihyst_model *model; /**< initialised model (caller-owned); its state is advanced
                               with every voltage the compensator chooses */
@@ -200,7 +203,8 @@ typedef struct {
     double u_last;       /**< last voltage (applied to the model state) */
     double y_last;       /**< model output at u_last with the current state */
     double tol;          /**< equality band of |y_d - y_last| (rounding of the output) */
-    double *scratch;     /**< caller-owned, scratch_len doubles: kinks, event lists */
+    double *scratch;     /**< caller-owned, scratch_len doubles: kinks, event lists, the
+                              aligned working state */
     size_t scratch_len;  /**< >= pihyst_compensator_scratch_len(model) */
     size_t events_cap;   /**< capacity of the crossing list (events, sentinel excluded) */
     /* breakpoints kept between samples while the direction holds (internal): */
