@@ -56,20 +56,14 @@
  * only add slope.
  */
 #include "pihyst.h"
+#include "pihyst_internal.h"
 
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-/* The O(K) loops of a reversal are compiled for several instruction sets and the best
- * one is picked at load time (function multiversioning), as in pihyst_model.c. */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && \
-    !defined(PIHYST_NO_MULTIVERSION)
-#define PIHYST_HOT __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
-#else
-#define PIHYST_HOT
-#endif
+/* The O(K) loops of a reversal are multiversioned (PIHYST_HOT, pihyst_internal.h). */
 
 /* The per-sample path (step -> solve -> walk) is compiled in one piece, the collection
  * of a reversal out of it. */
@@ -80,9 +74,6 @@
 #define PIHYST_INLINE
 #define PIHYST_NOINLINE
 #endif
-
-/* alignment of the working state (a cache line, as in pihyst_model.c) */
-#define PIHYST_ALIGN 64
 
 /* ------------------------------------------------------------------ event lists */
 

@@ -1,20 +1,11 @@
 /* pihyst_model.c - operator banks and PI-type models: init, reset, step, run,
  * operator matrix, Gram matrix. See pihyst.h for the equations and ownership. */
 #include "pihyst.h"
+#include "pihyst_internal.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
-
-/* Hot loops are compiled for several instruction sets and the best one is picked
- * at load time (function multiversioning), so a distributed build stays portable
- * without -march=native. */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && \
-    !defined(PIHYST_NO_MULTIVERSION)
-#define PIHYST_HOT __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
-#else
-#define PIHYST_HOT
-#endif
 
 /* Operators are processed in lanes of PIHYST_LANES partial sums, which lets the
  * compiler vectorize the weighted sum without reassociating it (no fast-math). */
@@ -369,11 +360,8 @@ static void run_pwl(pihyst_model *m, const double *u, double *y, size_t n)
     }
 }
 
-/* The hot loops store the state and load it back one sample later. When the state
- * array is not aligned to a cache line, its vector stores straddle two lines and the
- * store-to-load forwarding fails: the loop runs twice as slowly (measured). So a
- * misaligned state is worked on in an aligned local copy. */
-#define PIHYST_ALIGN 64
+/* A state not on a cache line (see PIHYST_ALIGN) is worked on in an aligned local copy
+ * when it has at most PIHYST_LOCAL_OPS operators. */
 #define PIHYST_LOCAL_OPS 64
 
 static double *align_up(double *p)
