@@ -1,8 +1,8 @@
 /* pihyst.h - Prandtl-Ishlinskii hysteresis core.
  *
  * C99, no malloc, no globals, no I/O, reentrant. Every array is owned by the
- * caller; its length is written next to it. A firmware project copies the csrc .c files
- * and this header as they are.
+ * caller; its length is written next to it. A firmware project copies the .c and .h
+ * files of csrc (this header, pihyst_internal.h, pihyst_*.c) as they are.
  *
  * Model (DESIGN.md sections 2-3): a bank of K generalized play operators
  *
