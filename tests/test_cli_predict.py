@@ -96,3 +96,16 @@ def test_missing_output_folder_is_a_one_line_error(tmp_path, capsys):
     assert run("predict", MODEL, "examples/triangle_0_150V.csv", "-o", str(out)) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "No such file or directory" in err
+
+
+def test_excel_style_files(tmp_path, capsys):
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbftime_s,voltage_V\r\n0,0\r\n7,150\r\n")
+    out = tmp_path / "out.csv"
+    assert run("predict", MODEL, str(bom), "-o", str(out)) == 0
+    cols, _ = read_columns(out, ["time_s", "displacement_um"])
+    np.testing.assert_array_equal(cols["time_s"], [0, 7])  # BOM not part of "time_s"
+    semi = tmp_path / "semi.csv"
+    semi.write_text("time_s;voltage_V\n0;0\n")
+    assert run("predict", MODEL, str(semi), "-o", str(out)) == 2
+    assert "separated by commas" in capsys.readouterr().err

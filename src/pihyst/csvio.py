@@ -33,7 +33,8 @@ def read_columns(path, names, optional=()):
     """
     path = os.fspath(path)
     try:
-        with open(path, encoding="utf-8", newline="") as f:
+        # utf-8-sig: a byte-order mark (Excel writes one) is not part of the first name
+        with open(path, encoding="utf-8-sig", newline="") as f:
             text = f.read()
     except OSError as err:
         raise CSVError(path, 0, 0, f"cannot read file: {err.strerror}") from None
@@ -49,8 +50,10 @@ def read_columns(path, names, optional=()):
     index = {}
     for name in names:
         if name not in header:
+            hint = ("; columns must be separated by commas"
+                    if len(header) == 1 and any(c in header[0] for c in ";\t") else "")
             raise CSVError(path, header_line, 0, f"missing column {name!r} in header "
-                           f"({', '.join(header)})")
+                           f"({', '.join(header)}){hint}")
         index[name] = header.index(name)
     for name in optional:
         if name in header:
@@ -92,7 +95,7 @@ def write_columns(path, columns, comments=()):
 def column_number(path, name):
     """1-based position of column ``name`` in the header of ``path``, 0 if absent
     (for error messages that name a column)."""
-    with open(path, encoding="utf-8", newline="") as f:
+    with open(path, encoding="utf-8-sig", newline="") as f:
         for row in csv.reader(f):
             if row and not row[0].lstrip().startswith("#") and any(c.strip() for c in row):
                 fields = [h.strip() for h in row]
