@@ -74,3 +74,10 @@ def test_saved_files_get_the_usual_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_model_file_with_byte_order_mark(tmp_path):
+    p = tmp_path / "bom.json"
+    p.write_bytes(b"\xef\xbb\xbf" + json.dumps({"family": "classical", "thresholds": [0],
+                                                   "weights": [1]}).encode())
+    assert pihyst.load_model(p).n_operators == 1

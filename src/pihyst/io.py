@@ -111,7 +111,7 @@ def load_model(path_or_dict):
         return model_from_dict(path_or_dict)
     path = os.fspath(path_or_dict)
     try:
-        with open(path, encoding="utf-8") as f:
+        with open(path, encoding="utf-8-sig") as f:  # tolerate a byte-order mark
             d = json.load(f)
     except OSError as err:
         raise InvalidModelError(f"{path}: cannot read model: {err.strerror}") from None
