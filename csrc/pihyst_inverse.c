@@ -147,6 +147,20 @@ static int out_of_order(const double *d, size_t n)
 
 /* ------------------------------------------------------------------ walks */
 
+/* End of a walk past its last event: z(d) = z + s (d - d0) up to d = span. Returns 1 and
+ * the d with z(d) = target if z(span) >= target, else 0 and d = span. */
+static PIHYST_INLINE int walk_last_segment(double z, double s, double d0, double target,
+                                           double span, double *d_out)
+{
+    if (z + s * (span - d0) >= target) {
+        const double d = d0 + (target - z) / s;
+        *d_out = d < span ? d : span;
+        return 1;
+    }
+    *d_out = span;
+    return 0;
+}
+
 /* Walk the two sorted event lists a (crossings) and b (kinks), each ended by a +inf
  * sentinel, in merged order (a first on equal distances) from a[next[0]], b[next[1]].
  * Distances are from the base voltage; q_p is u_p's distance from it, so an event lies
@@ -194,15 +208,7 @@ static PIHYST_INLINE int walk(const double *ad, const double *as, const double *
         }
         if (from_b) ++j; else ++i;
     }
-    if (!hit) {
-        if (z + s * (span - d0) >= target) {
-            const double d = d0 + (target - z) / s;
-            *d_out = d < span ? d : span;
-            hit = 1;
-        } else {
-            *d_out = span;
-        }
-    }
+    if (!hit) hit = walk_last_segment(z, s, d0, target, span, d_out);
     next[0] = i;
     next[1] = j;
     slope[0] = hi;
@@ -258,15 +264,7 @@ static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, double ba
             e = INFINITY;
         }
     }
-    if (!hit) {
-        if (z + s * (span - d0) >= target) {
-            const double d = d0 + (target - z) / s;
-            *d_out = d < span ? d : span;
-            hit = 1;
-        } else {
-            *d_out = span;
-        }
-    }
+    if (!hit) hit = walk_last_segment(z, s, d0, target, span, d_out);
     next[0] = k;
     *ahead = e;
     slope[0] = s;

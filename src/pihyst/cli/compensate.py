@@ -25,14 +25,19 @@ def register(sub):
     p.add_argument("desired", metavar="DESIRED.csv", help="CSV with a displacement_um column "
                    "(time_s copied if present)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
+    add_limit_options(p, default_range="the model's input range")
+    p.set_defaults(run=run)
+
+
+def add_limit_options(p, default_range):
+    """--u-min, --u-max and --slew-rate (shared with pihyst track)."""
     p.add_argument("--u-min", type=float, default=None, metavar="V",
-                   help="lowest voltage (default: the model's input range)")
+                   help=f"lowest voltage (default: {default_range})")
     p.add_argument("--u-max", type=float, default=None, metavar="V",
-                   help="highest voltage (default: the model's input range)")
+                   help=f"highest voltage (default: {default_range})")
     p.add_argument("--slew-rate", type=float, default=None, metavar="V/S",
                    help="largest voltage rate in volts per second; needs time_s (applied as "
                         "rate x the smallest time step, per sample)")
-    p.set_defaults(run=run)
 
 
 def max_step_per_sample(slew_rate, t, path, lines):

@@ -7,7 +7,7 @@ inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
 import numpy as np
 
 from pihyst import __version__
-from pihyst.cli.compensate import max_step_per_sample
+from pihyst.cli.compensate import add_limit_options, max_step_per_sample
 from pihyst.cli.errors import UsageError
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.compensate import Compensator
@@ -31,12 +31,7 @@ def register(sub):
     p.add_argument("desired", metavar="DESIRED.csv",
                    help="CSV with time_s and displacement_um (the desired trajectory)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
-    p.add_argument("--u-min", type=float, default=None, metavar="V",
-                   help="lowest voltage (default: the model's and the beam's range)")
-    p.add_argument("--u-max", type=float, default=None, metavar="V",
-                   help="highest voltage (default: the model's and the beam's range)")
-    p.add_argument("--slew-rate", type=float, default=None, metavar="V/S",
-                   help="largest voltage rate in volts per second")
+    add_limit_options(p, default_range="the model's and the beam's range")
     add_plant_options(p, seed_help="seed of the beam's sensor noise (default 0)")
     p.set_defaults(run=run)
 
