@@ -3,7 +3,7 @@
 1. Measured sets (../shared/data or $PIHYST_DATA; skipped if absent): first cycle settles
    the operators, fit on the first half, judge on the second (held-back RMS); every
    family, plus classical PIs with 10 and 20 equally spaced thresholds for reference.
-2. Simulated beams (pihyst.plant): fitted on a full triangle + decaying triangles, judged
+2. Simulated beams (pihyst.sim): fitted on a full triangle + decaying triangles, judged
    on 20 runs of ramps between random levels (mean absolute error, % of range); four
    operators each: multislope (identified shape) against classical.
 3. Speed: exhaustive 4-of-16 threshold search on 10^5 samples, against a NumPy/SciPy
@@ -19,15 +19,16 @@ import warnings
 import numpy as np
 from scipy.optimize import nnls
 
-from pihyst import ClassicalPI, datasets, fit
+from pihyst import ClassicalPI, fit
 from pihyst.exceptions import PihystWarning
-from pihyst.gram import accumulate
 from pihyst.identify import cycled_state
+from pihyst.identify._cycles import layout
+from pihyst.identify._gram import accumulate
+from pihyst.identify._subsets import SubsetProblem
+from pihyst.io import datasets
 from pihyst.metrics import mean_abs_error
-from pihyst.plant import PLANT_NAMES, make_plant
-from pihyst.records import layout
-from pihyst.signals import decaying_triangles, random_ramps, triangle
-from pihyst.thresholds import SubsetProblem
+from pihyst.sim import PLANT_NAMES, make_plant
+from pihyst.sim.signals import decaying_triangles, random_ramps, triangle
 
 
 def measured():

@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from pihyst.plant import PLANT_NAMES, make_plant
-from pihyst.signals import random_ramps, triangle
+from pihyst.sim import PLANT_NAMES, make_plant
+from pihyst.sim.signals import random_ramps, triangle
 
 
 def rate(fn, n_samples, repeat=3):

@@ -4,7 +4,7 @@
  * caller; its length is written next to it. A firmware project copies the .c and .h
  * files of csrc (this header, pihyst_internal.h, pihyst_*.c) as they are.
  *
- * Model (DESIGN.md sections 2-3): a bank of K generalized play operators
+ * Model (docs/theory/operators.md-3): a bank of K generalized play operators
  *
  *     f_k[t] = max(R_k(u[t]), min(F_k(u[t]), f_k[t-1]))          (1)
  *     y[t]   = offset + sum_k w_k f_k[t]                           (2)
@@ -142,7 +142,7 @@ void pihyst_model_envelopes(const pihyst_model *m, double u, double *rise, doubl
 const char *pihyst_status_text(pihyst_status status);
 
 /* ======================================================================
- * Inverse / compensator (DESIGN.md section 4): desired displacement -> voltage.
+ * Inverse / compensator (docs/theory/inverse.md): desired displacement -> voltage.
  * ======================================================================
  *
  * For a fixed operator state f (the state after the last voltage u_p was applied,

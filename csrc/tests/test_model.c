@@ -1,4 +1,4 @@
-/* Tests of pihyst_model_*: the paper's checks (DESIGN.md section 7), validation,
+/* Tests of pihyst_model_*: the paper's checks (docs/paper.md), validation,
  * and the identities step == run, chunked == whole, gram == operators^T operators. */
 #include "pihyst.h"
 #include "test_util.h"

@@ -1,29 +1,43 @@
 """pihyst: Prandtl-Ishlinskii hysteresis models, identification and feedforward
-compensation for piezoelectric actuators (Xu, Zhang, Rong and Ni 2020, and beyond)."""
+compensation for piezoelectric actuators (Xu, Zhang, Rong and Ni 2020, and beyond).
 
-__version__ = "0.1.0"
+The package is laid out as the pipeline (docs/architecture.md):
 
-from pihyst.compensate import CompensationResult, Compensator, compensate  # noqa: E402
-from pihyst.exceptions import (  # noqa: E402
+- :mod:`pihyst.model`: models as values over the C core (operators, classes, JSON form);
+- :mod:`pihyst.io`: model files and records;
+- :mod:`pihyst.inverse`: the exact compensator and the analytic inverse;
+- :mod:`pihyst.identify`: fitting models to records;
+- :mod:`pihyst.sim`: simulated beams and test signals;
+- :mod:`pihyst.study`: the paper's study and its report;
+- :mod:`pihyst.cli`: the ``pihyst`` command.
+
+The names below are the public API of the README.
+"""
+
+from pihyst._version import __version__
+from pihyst.exceptions import (
+    CSVError,
     FitError,
     IllConditionedWarning,
     InfeasibleConstraintsError,
-    PihystWarning,
-)
-from pihyst.fit_report import FitReport, FitResult  # noqa: E402
-from pihyst.identify import fit  # noqa: E402
-from pihyst.io import load_model, save_model  # noqa: E402
-from pihyst.model import (  # noqa: E402
-    ClassicalPI,
     InputRangeError,
     InvalidModelError,
+    PihystWarning,
+)
+from pihyst.identify import FitReport, FitResult, fit
+from pihyst.inverse import CompensationResult, Compensator, compensate
+from pihyst.io import load_model, save_model
+from pihyst.model import (
+    ClassicalPI,
     MultislopePI,
     PiecewiseLinearPI,
     PIModel,
     Response,
+    Stepper,
 )
 
 __all__ = [
+    "CSVError",
     "ClassicalPI",
     "CompensationResult",
     "Compensator",
@@ -39,6 +53,8 @@ __all__ = [
     "PiecewiseLinearPI",
     "PihystWarning",
     "Response",
+    "Stepper",
+    "__version__",
     "compensate",
     "fit",
     "load_model",

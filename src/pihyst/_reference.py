@@ -1,7 +1,7 @@
 """Pure-NumPy twin of :mod:`pihyst._core`: same class, same methods, no C.
 
 A test oracle, written for clarity rather than speed: the tests run both on the
-same signals and compare. Formulas are DESIGN.md section 2.
+same signals and compare. Formulas are docs/theory/operators.md.
 """
 
 import numpy as np
@@ -60,7 +60,7 @@ class Bank:
                        else np.array(initial_state, dtype=float))
 
     def envelopes(self, u):
-        """R_k(u), F_k(u) for every operator (DESIGN.md section 2)."""
+        """R_k(u), F_k(u) for every operator (docs/theory/operators.md)."""
         if self.family == "classical":
             # R(u) = u - r,  F(u) = u + r
             return u - self.thresholds, u + self.thresholds

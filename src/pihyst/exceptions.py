@@ -1,7 +1,12 @@
-"""Errors and warnings of pihyst's identification (``pihyst.fit``).
+"""Every exception and warning pihyst raises, in one place (the lowest layer).
 
-Model construction errors live in :mod:`pihyst.model` (``InvalidModelError``,
-``InputRangeError``); this module holds what fitting adds.
+- :class:`InvalidModelError`: parameters that do not describe a valid model;
+- :class:`InputRangeError`: an input sample outside a model's input range;
+- :class:`CSVError`: a data file that cannot be used (file, line and column named);
+- :class:`FitError`, :class:`InfeasibleConstraintsError`: data that cannot be fitted as asked;
+- :class:`PihystWarning`, :class:`IllConditionedWarning`: warnings.
+
+Each is a ``ValueError`` (or a ``UserWarning``), so ``except ValueError`` still catches them.
 """
 
 
@@ -30,3 +35,26 @@ class FitError(ValueError):
 
 class InfeasibleConstraintsError(FitError):
     """No weights satisfy the constraints (bounds and equality constraints together)."""
+
+
+class InvalidModelError(ValueError):
+    """The parameters do not describe a valid model; the message says which and why."""
+
+
+class InputRangeError(ValueError):
+    """An input sample lies outside the model's input range."""
+
+    def __init__(self, index, value, input_range):
+        self.index = index
+        self.value = value
+        super().__init__(f"sample {index}: input {value:g} is outside the model's input range "
+                         f"[{input_range[0]:g}, {input_range[1]:g}]")
+
+
+class CSVError(ValueError):
+    """A CSV file could not be used; the message names file, line and column."""
+
+    def __init__(self, path, line, column, message):
+        self.path, self.line, self.column = path, line, column
+        where = f"{path}:{line}:{column}" if column else f"{path}:{line}"
+        super().__init__(f"{where}: {message}")

@@ -9,7 +9,7 @@ partial output file: it raises one of ``USER_ERRORS`` and ``main`` reports it.
 import argparse
 import sys
 
-from pihyst import __version__
+from pihyst._version import __version__
 from pihyst.cli import compensate, demo, fit, predict, report, simulate, track
 from pihyst.cli.errors import USER_ERRORS
 

@@ -2,11 +2,10 @@
 
 import numpy as np
 
-from pihyst import __version__
+from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
-from pihyst.compensate import Compensator
-from pihyst.csvio import CSVError, column_number, read_columns, write_columns
-from pihyst.io import load_model
+from pihyst.inverse import Compensator
+from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
 
 
 def register(sub):

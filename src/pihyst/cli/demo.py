@@ -4,7 +4,7 @@ import os
 import time
 
 from pihyst.cli.errors import UsageError
-from pihyst.plant import PLANT_NAMES
+from pihyst.sim import PLANT_NAMES
 
 DEFAULT_OUT = "pihyst-demo"
 
@@ -39,11 +39,11 @@ def _printer(prefix):
 
 def run(args):
     try:
-        from pihyst.report import write_report
+        from pihyst.study import write_report
     except ImportError as err:                       # matplotlib is an optional dependency
         raise UsageError(f"pihyst demo needs matplotlib to draw the report ({err}); "
                          "install it with: pip install 'pihyst[plot]'") from None
-    from pihyst.experiment import paper_study
+    from pihyst.study import paper_study
 
     if os.path.exists(args.out) and not os.path.isdir(args.out):
         raise UsageError(f"--out {args.out}: exists and is not a folder")

@@ -1,6 +1,6 @@
 """Errors a command reports as one line with exit status 2."""
 
-from pihyst.csvio import CSVError
+from pihyst.io import CSVError
 from pihyst.model import InputRangeError, InvalidModelError
 
 

@@ -4,13 +4,12 @@
 import sys
 import warnings
 
-from pihyst import __version__
+from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
-from pihyst.csvio import CSVError, column_number, read_columns
 from pihyst.exceptions import FitError, PihystWarning
-from pihyst.families import FAMILY_NAMES
 from pihyst.identify import INITIAL_STATES, fit
-from pihyst.io import save_model
+from pihyst.identify._families import FAMILY_NAMES
+from pihyst.io import CSVError, column_number, read_columns, save_model
 
 _COLUMNS = {"input": "voltage_V", "output": "displacement_um"}
 
@@ -113,8 +112,9 @@ def run(args):
                          offset=not args.no_offset)
         except FitError as err:
             raise _error(err, args.data, lines) from None
-    model = result.model
-    model.metadata["source"] = {"data": args.data, "command": f"pihyst {__version__} fit"}
+    model = result.model.replace(metadata={
+        **result.model.metadata,
+        "source": {"data": args.data, "command": f"pihyst {__version__} fit"}})
     save_model(model, args.output)
     for w in caught:
         print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)

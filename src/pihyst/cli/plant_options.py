@@ -1,6 +1,6 @@
 """Options that choose and configure a simulated beam, shared by simulate and track."""
 
-from pihyst.plant import PLANT_NAMES, make_plant
+from pihyst.sim import PLANT_NAMES, make_plant
 
 
 def add_plant_options(p, seed_help):

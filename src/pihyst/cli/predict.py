@@ -2,9 +2,8 @@
 
 import numpy as np
 
-from pihyst import __version__
-from pihyst.csvio import CSVError, column_number, read_columns, write_columns
-from pihyst.io import load_model
+from pihyst._version import __version__
+from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
 
 
 def register(sub):

@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from pihyst.cli.errors import UsageError
-from pihyst.csvio import CSVError, read_columns
+from pihyst.io import CSVError, read_columns
 
 
 def register(sub):
@@ -28,12 +28,12 @@ def register(sub):
 
 def run(args):
     try:
-        from pihyst.report import write_report
+        from pihyst.study import write_report
     except ImportError as err:
         raise UsageError(f"pihyst report needs matplotlib to draw the report ({err}); "
                          "install it with: pip install 'pihyst[plot]'") from None
     from pihyst.exceptions import FitError
-    from pihyst.experiment import loop_study
+    from pihyst.study import loop_study
 
     cols, _ = read_columns(args.data, ["voltage_V", "displacement_um"], optional=["time_s"])
     u, y = cols["voltage_V"], cols["displacement_um"]

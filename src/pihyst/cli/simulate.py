@@ -1,9 +1,10 @@
 """pihyst simulate --plant NAME --signal KIND [options] -o DATA.csv"""
 
-from pihyst import __version__, signals
+from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
-from pihyst.csvio import write_columns
+from pihyst.io import write_columns
+from pihyst.sim import signals
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 

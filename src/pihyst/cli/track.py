@@ -6,13 +6,12 @@ inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
 
 import numpy as np
 
-from pihyst import __version__
+from pihyst._version import __version__
 from pihyst.cli.compensate import add_limit_options, max_step_per_sample
 from pihyst.cli.errors import UsageError
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
-from pihyst.compensate import Compensator
-from pihyst.csvio import CSVError, column_number, read_columns, write_columns
-from pihyst.io import load_model
+from pihyst.inverse import Compensator
+from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
 
 
 def register(sub):

@@ -1,0 +1,230 @@
+"""The result of :func:`pihyst.fit`: the model and a report of how it was chosen.
+
+The report is a plain JSON-ready dict (``report.to_dict()``, ``report.to_json()``) and
+prints as a table (``print(report)``).
+"""
+
+import copy
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pihyst.identify._families import KrasnoselskiiPokrovskii, Multislope
+
+_STATE_TEXT = {
+    "cycled": "at rest at the bottom of the range after a full cycle (docs/interfaces.md)",
+    "settle": "unknown; settled by the first full sweep of the input range (not fitted)",
+    "zero": "all operator outputs zero",
+    "explicit": "given",
+}
+
+
+@dataclass
+class FitResult:
+    """What :func:`pihyst.fit` returns.
+
+    Attributes
+    ----------
+    model : PIModel
+        The most accurate model (weights refitted on all cycles unless ``refit=False``).
+    report : FitReport
+        Errors, the comparison of families, the threshold choice and its reasons.
+    models : dict
+        Every fitted family's model by family name.
+    """
+
+    model: object
+    report: "FitReport"
+    models: dict = field(default_factory=dict)
+
+
+def _num(x):
+    if x is None:
+        return None
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [_num(v) for v in x]
+    if isinstance(x, dict):
+        return {k: _num(v) for k, v in x.items()}
+    if isinstance(x, (bool, str)):
+        return x
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    v = float(x)
+    return v if np.isfinite(v) else None
+
+
+class FitReport:
+    """Report of a fit; ``to_dict()`` gives the data, ``str()`` a table."""
+
+    def __init__(self, data):
+        self._data = data
+
+    @classmethod
+    def build(cls, rec, results, skipped, chosen, criterion, *, refit, final_errors):
+        lay = rec.layout
+        units = dict(results[0]["model"].units)
+        data = {
+            "n_samples": int(rec.u.size),
+            "input_range": [rec.lo, rec.lo + rec.S],
+            "output_range": [float(rec.y.min()), float(rec.y.max())],
+            "measured_range": rec.measured_range,
+            "units": units,
+            "initial_state": rec.state_mode,
+            "settle_samples": int(lay.settle_end),
+            "cycles": lay.n_cycles,
+            "minor_cycles": lay.n_minor,
+            "holdout": lay.holdout,
+            "fit_samples": lay.count("fit"),
+            "fit_cycles": lay.cycles("fit"),
+            "held_back_samples": lay.count("held_back"),
+            "held_back_cycles": lay.cycles("held_back"),
+            "offset": "fitted" if rec.fit_offset else f"fixed at {rec.fixed_offset:g}",
+            "through": list(rec.through),
+        }
+        families = [cls._family_entry(r, r["family"] == chosen) for r in results]
+        out = {"data": data, "families": families, "skipped": skipped, "chosen": chosen,
+               "criterion": criterion,
+               "final": {"refit": refit, "errors": final_errors}}
+        return cls(_num(out))
+
+    @staticmethod
+    def _family_entry(r, is_chosen):
+        fam = r["fam"]
+        entry = {"family": r["family"], "title": r["title"], "chosen": is_chosen,
+                 "n_operators": r["n_operators"]}
+        if isinstance(fam, KrasnoselskiiPokrovskii):
+            entry["kernels"] = [list(p) for p in r["operators"]]
+            entry["regularization"] = r["regularization"]
+        else:
+            entry["thresholds"] = [float(t) for t in r["operators"]]
+        if isinstance(fam, Multislope):
+            entry["shape"] = {k: float(v) for k, v in fam.shape(r["fitter"].rec.S).items()}
+        entry.update({k: v for k, v in fam.describe().items() if k != "shape"})
+        entry["weights"] = [float(w) for w in r["weights"]]
+        entry["offset"] = r["offset"]
+        entry["errors"] = r["errors"]
+        entry["threshold_choice"] = r["choice"]
+        entry["notes"] = r["notes"]
+        entry["warnings"] = r["warnings"]
+        return entry
+
+    # ------------------------------------------------------------------ access
+    def to_dict(self):
+        """The report as a JSON-ready dict (a copy)."""
+        return copy.deepcopy(self._data)
+
+    def to_json(self, indent=2):
+        return json.dumps(self._data, indent=indent)
+
+    @property
+    def chosen(self):
+        """Name of the family returned."""
+        return self._data["chosen"]
+
+    @property
+    def families(self):
+        """Per-family entries, as dicts."""
+        return copy.deepcopy(self._data["families"])
+
+    def family(self, name):
+        for f in self._data["families"]:
+            if f["family"] == name:
+                return copy.deepcopy(f)
+        raise KeyError(name)
+
+    def model_summary(self):
+        """What a saved model records about its fit (``model.metadata["fit"]``)."""
+        best = self.family(self.chosen)
+        keep = ("family", "title", "n_operators", "thresholds", "kernels", "shape",
+                "input_function_segments", "regularization", "errors", "threshold_choice",
+                "notes")
+        summary = {k: best[k] for k in keep if k in best}
+        if summary.get("threshold_choice"):
+            summary["threshold_choice"] = {k: v for k, v in best["threshold_choice"].items()
+                                           if k != "sizes"}
+        summary["data"] = self._data["data"]
+        summary["criterion"] = self._data["criterion"]
+        summary["final"] = self._data["final"]
+        summary["compared"] = {f["family"]: (f["errors"]["held_back"] or f["errors"]["fit"])
+                               ["rms"] for f in self._data["families"]}
+        summary["threshold_frame"] = ("thresholds are measured from the bottom of the "
+                                      "input range (input_range[0])")
+        return summary
+
+    # ------------------------------------------------------------------ text
+    def __str__(self):
+        d = self._data["data"]
+        uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
+        lines = [
+            f"pihyst fit: {d['n_samples']} samples, input {d['input_range'][0]:.6g} .. "
+            f"{d['input_range'][1]:.6g} {uin}, output {d['output_range'][0]:.6g} .. "
+            f"{d['output_range'][1]:.6g} {uout} (range {d['measured_range']:.4g} {uout})",
+            f"initial state: {_STATE_TEXT.get(d['initial_state'], d['initial_state'])}"
+            + (f" ({d['settle_samples']} samples)" if d["settle_samples"] else ""),
+            f"{d['cycles']} cycles ({d['minor_cycles']} with reversals inside the range); "
+            f"fitted: {d['fit_cycles']} cycles, {d['fit_samples']} samples; held back: "
+            + (f"{d['held_back_cycles']} cycles, {d['held_back_samples']} samples "
+               f"({d['holdout']})" if d["held_back_samples"] else "none") +
+            f"; offset {d['offset']}",
+            "",
+        ]
+        held = d["held_back_samples"] > 0
+        head = (f"  {'family':<24}{'ops':>5}{'fit RMS':>10}"
+                + (f"{'held-back RMS':>15}{'mean |e|':>10}{'max |e|':>10}{'% range':>9}"
+                   if held else f"{'mean |e|':>10}{'max |e|':>10}{'% range':>9}"))
+        judged = "judged on held-back cycles" if held else "on the fitted data"
+        lines += [f"errors in {uout} ({judged}):", head]
+        for f in self._data["families"]:
+            e = f["errors"]
+            j = e["held_back"] if held else e["fit"]
+            mark = "*" if f["chosen"] else " "
+            row = f"{mark} {f['family']:<24}{f['n_operators']:>5}{e['fit']['rms']:>10.4g}"
+            if held:
+                row += f"{j['rms']:>15.4g}"
+            row += f"{j['mean_abs']:>10.4g}{j['max_abs']:>10.4g}{j['rms_pct']:>8.3g}%"
+            lines.append(row)
+        for s in self._data["skipped"]:
+            lines.append(f"  {s['family']:<24} skipped: {s['reason']}")
+        best = self.family(self.chosen)
+        lines += ["", f"chosen: {best['family']} ({best['title']}), {self._data['criterion']}"]
+        fin = self._data["final"]
+        if fin["refit"]:
+            ef = fin["errors"]
+            lines.append(f"weights refitted on all used cycles: RMS {ef['fit']['rms']:.4g} "
+                         f"(fitted cycles), {ef['held_back']['rms']:.4g} (held-back cycles) "
+                         f"{uout}")
+        if "shape" in best:
+            s = best["shape"]
+            lines.append(f"shape: U = {s['U']:.6g} {uin}, a = {s['a']:.4g}, b = {s['b']:.4g}, "
+                         f"h = {s['h']:.4g}")
+        if "thresholds" in best:
+            lines.append(f"thresholds ({uin}, from the bottom of the range): "
+                         + ", ".join(f"{t:.4g}" for t in best["thresholds"]))
+        if "regularization" in best:
+            reg = best["regularization"]
+            lines.append(f"{reg['kernels']} kernels on a grid, {best['n_operators']} with "
+                         f"non-zero weight; regularized towards a width-only density, lambda = "
+                         f"{reg['lambda']:.3g} ({reg['rule']})")
+        ch = best.get("threshold_choice")
+        if ch:
+            where = "held-back" if ch["judged_on"] == "held_back" else "fitted"
+            lines.append(f"chosen from {len(ch['candidates'])} candidates "
+                         f"({ch['candidates'][0]:.4g} .. {ch['candidates'][-1]:.4g}), "
+                         f"{ch['search']} ({ch['subsets_evaluated']} subsets fitted and "
+                         f"judged on the {where} data); size: {ch['size_rule']}")
+            if len(ch["sizes"]) > 1:
+                n_best = best["n_operators"]
+                lines.append(f"{where} RMS of the best set of each size: " + ", ".join(
+                    f"{s['n_operators']}: {s['rms']:.4g}" + ("*" if s["n_operators"] == n_best
+                                                             else "")
+                    for s in ch["sizes"]))
+            lines.append("why each threshold:")
+            lines += [f"  {r['text']}" for r in ch["reasons"]]
+            if ch.get("note"):
+                lines.append(f"  ({ch['note']})")
+        for n in best["notes"]:
+            lines.append(f"note: {n}")
+        for w in best["warnings"]:
+            lines.append(f"warning: {w}")
+        return "\n".join(lines)

@@ -1,0 +1,21 @@
+"""Inversion: the exact feedforward compensator of any PI model with non-negative weights,
+and the analytic inverse of the classical PI (theory: docs/theory/inverse.md).
+
+Voltage limits and a slew limit hold for every output of the compensator, whatever its
+input.
+"""
+
+from pihyst.inverse._compensator import (
+    FLAG_NAN,
+    FLAG_SATURATED_HIGH,
+    FLAG_SATURATED_LOW,
+    FLAG_SLEW,
+    CompensationResult,
+    Compensator,
+    compensate,
+)
+from pihyst.model import classical_inverse, reachable_output_range
+
+__all__ = ["FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW", "FLAG_SLEW",
+           "CompensationResult", "Compensator", "classical_inverse", "compensate",
+           "reachable_output_range"]

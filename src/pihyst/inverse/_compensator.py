@@ -1,0 +1,294 @@
+"""Feedforward compensation: the voltage that makes a model produce a desired displacement.
+
+For a model with non-negative weights the output for the next voltage u, from the
+current operator state f, is
+
+    y(u) = offset + sum_k w_k max(R_k(u), min(F_k(u), f_k)),
+
+continuous, piecewise linear and non-decreasing in u. Each sample is solved exactly in
+the C core (no iteration, no tolerance) by walking the breakpoints of y(u) away from the
+last voltage and solving the linear equation of the segment that holds the desired
+value; where y(u) is flat the voltage nearest the last one is kept (docs/theory/inverse.md).
+Voltage limits and a slew limit hold for every output, whatever the input:
+a desired value out of reach saturates at the limit and is flagged, NaN holds the last
+voltage and is flagged.
+
+:func:`compensate` does a whole trajectory; :class:`Compensator` does it sample by sample
+with explicit state, like the models' ``step``/``reset``/``state``.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pihyst import _core
+from pihyst.model import InvalidModelError, PIModel
+from pihyst.model._models import _finite_vector
+
+__all__ = ["CompensationResult", "Compensator", "compensate", "FLAG_SATURATED_LOW",
+           "FLAG_SATURATED_HIGH", "FLAG_NAN", "FLAG_SLEW"]
+
+#: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
+FLAG_SATURATED_LOW = _core.FLAG_SATURATED_LOW    # out of reach below: voltage at u_min
+FLAG_SATURATED_HIGH = _core.FLAG_SATURATED_HIGH  # out of reach above: voltage at u_max
+FLAG_NAN = _core.FLAG_NAN                        # desired value NaN: last voltage held
+FLAG_SLEW = _core.FLAG_SLEW                      # slew limit reached before the desired value
+
+
+@dataclass(frozen=True)
+class CompensationResult:
+    """Result of :func:`compensate` and :meth:`Compensator.run`.
+
+    Attributes
+    ----------
+    desired : ndarray
+        The desired displacements, as given.
+    voltage : ndarray
+        The voltages, within the limits and the slew limit.
+    displacement : ndarray
+        The model's prediction for those voltages (equal to ``desired`` wherever the
+        desired value was reached, to rounding).
+    flags : ndarray of uint8
+        Per-sample bits ``FLAG_SATURATED_LOW | FLAG_SATURATED_HIGH | FLAG_NAN |
+        FLAG_SLEW``; 0 where the desired value was reached.
+    saturated, saturated_low, saturated_high, slew_limited, nan_held : ndarray of bool
+        The flags per sample; ``saturated`` is low or high.
+    initial_state, initial_voltage : ndarray, float
+        Where the run started (the state has the initial voltage applied).
+    final_state, final_voltage : ndarray, float
+        Where it ended: a following run from there continues exactly.
+    limits : (float, float)
+        The voltage limits.
+    slew_rate : float or None
+        The slew limit in volts per sample.
+    """
+
+    desired: np.ndarray
+    voltage: np.ndarray
+    displacement: np.ndarray
+    flags: np.ndarray
+    saturated: np.ndarray
+    saturated_low: np.ndarray
+    saturated_high: np.ndarray
+    slew_limited: np.ndarray
+    nan_held: np.ndarray
+    initial_state: np.ndarray
+    initial_voltage: float
+    final_state: np.ndarray
+    final_voltage: float
+    limits: tuple
+    slew_rate: float = None
+
+    @property
+    def n_saturated(self):
+        """Samples out of reach (voltage at a limit)."""
+        return int(np.count_nonzero(self.saturated))
+
+    @property
+    def n_slew_limited(self):
+        """Samples not reached because of the slew limit."""
+        return int(np.count_nonzero(self.slew_limited))
+
+    @property
+    def n_nan(self):
+        """Samples whose desired value was NaN (voltage held)."""
+        return int(np.count_nonzero(self.nan_held))
+
+    @property
+    def reached(self):
+        """True where the desired value was reached (no flag)."""
+        return self.flags == 0
+
+
+class Compensator:
+    """Streaming exact inverse of a model, with voltage limits and a slew limit.
+
+    Parameters
+    ----------
+    model : PIModel
+        Any model with non-negative weights (classical, multislope, piecewise-linear).
+    u_min, u_max : float, optional
+        Voltage limits, inside the model's input range (default: that range).
+    slew_rate : float, optional
+        Largest voltage change per sample, |u[t] - u[t-1]| (volts per sample); default
+        none.
+    initial_voltage : float, optional
+        The voltage before the first sample (default 0 V, or the nearer limit if 0 V
+        is outside the limits).
+    initial_state : array_like, optional
+        Operator state before the first sample (default: the model's initial state).
+        The initial voltage is applied to it (a no-op for a state the model reached
+        with that voltage).
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> model = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+    >>> comp = pihyst.Compensator(model, slew_rate=5.0)
+    >>> u = comp.step(1.0)           # the slew limit allows 5 V from 0 V
+    >>> u, comp.last_flags == pihyst.Compensator.FLAG_SLEW
+    (5.0, True)
+    >>> u = comp.step(1.0)
+    >>> round(u, 6), round(comp.displacement, 9)
+    (6.377551, 1.0)
+    """
+
+    FLAG_SATURATED_LOW = FLAG_SATURATED_LOW
+    FLAG_SATURATED_HIGH = FLAG_SATURATED_HIGH
+    FLAG_NAN = FLAG_NAN
+    FLAG_SLEW = FLAG_SLEW
+
+    def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
+                 initial_state=None):
+        if not isinstance(model, PIModel):
+            raise TypeError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
+                            f"PiecewiseLinearPI), not {type(model).__name__}")
+        negative = np.flatnonzero(model.weights < 0)
+        if negative.size:
+            k = negative[0]
+            hint = " (for a classical model, model.inverse() is its exact inverse)" \
+                if model.family == "classical" else ""
+            raise InvalidModelError(f"compensation needs non-negative weights (a monotone "
+                                    f"model); weights[{k}] = {model.weights[k]:g}{hint}")
+        self.model = model
+        lo, hi = model.input_range
+        u_min = lo if u_min is None else _number(u_min, "u_min")
+        u_max = hi if u_max is None else _number(u_max, "u_max")
+        if not lo <= u_min < u_max <= hi:
+            raise ValueError(f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min < "
+                             f"u_max inside the model's input range [{lo:g}, {hi:g}]")
+        self.limits = (u_min, u_max)
+        if slew_rate is not None:
+            slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
+            if not slew_rate > 0:
+                raise ValueError(f"slew_rate must be > 0 volts per sample, got {slew_rate:g}")
+        self.slew_rate = slew_rate
+        if initial_voltage is None:
+            initial_voltage = min(max(0.0, u_min), u_max)
+        initial_voltage = _number(initial_voltage, "initial_voltage")
+        if not u_min <= initial_voltage <= u_max:
+            raise ValueError(f"initial_voltage {initial_voltage:g} is outside the voltage "
+                             f"limits [{u_min:g}, {u_max:g}]")
+        state = (model.initial_state if initial_state is None else
+                 _finite_vector(initial_state, "initial_state", model.n_operators))
+        self._start = (np.array(state), initial_voltage)
+        self._core = _core.Compensator(model._new_bank(state), u_min, u_max,
+                                       np.inf if slew_rate is None else slew_rate,
+                                       initial_voltage)
+
+    # ---------------------------------------------------------------- state
+    @property
+    def state(self):
+        """Operator state after the last voltage (a copy)."""
+        return self._core.state
+
+    @property
+    def voltage(self):
+        """The last voltage."""
+        return self._core.voltage
+
+    @property
+    def displacement(self):
+        """The model's displacement at the last voltage."""
+        return self._core.output
+
+    @property
+    def last_flags(self):
+        """Flags of the last :meth:`step` (0: desired value reached)."""
+        return self._core.last_flags
+
+    def reset(self, state=None, voltage=None):
+        """Go back to the initial state and voltage, or to ``state`` and ``voltage``."""
+        start_state, start_voltage = self._start
+        state = start_state if state is None else _finite_vector(state, "state",
+                                                                 self.model.n_operators)
+        voltage = start_voltage if voltage is None else _number(voltage, "voltage")
+        lo, hi = self.limits
+        if not lo <= voltage <= hi:
+            raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+        self._core.reset(state, voltage)
+
+    # ---------------------------------------------------------------- compensation
+    def step(self, y_desired):
+        """The voltage for one desired displacement (applied to the state)."""
+        return self._core.step(float(y_desired))
+
+    def run(self, y_desired):
+        """Compensate a block of desired displacements, continuing from the current state.
+
+        Returns a :class:`CompensationResult`."""
+        y_desired = _desired(y_desired)
+        initial_state, initial_voltage = self.state, self.voltage
+        u, y, flags = self._core.run(y_desired)
+        low = (flags & FLAG_SATURATED_LOW) != 0
+        high = (flags & FLAG_SATURATED_HIGH) != 0
+        return CompensationResult(
+            desired=y_desired, voltage=u, displacement=y, flags=flags, saturated=low | high,
+            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
+            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
+            initial_voltage=initial_voltage, final_state=self.state,
+            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
+
+    def __repr__(self):
+        slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
+        return (f"Compensator({type(self.model).__name__}, limits=[{self.limits[0]:g}, "
+                f"{self.limits[1]:g}]{slew}, voltage={self.voltage:g})")
+
+
+def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
+               initial_voltage=None, initial_state=None):
+    """Voltages that make ``model`` follow the desired displacements ``y_desired``.
+
+    Exact inverse sample by sample (see the module notes), within the voltage limits
+    and the slew limit. Any values are accepted: out of reach saturates at a limit and
+    is flagged, NaN holds the last voltage and is flagged.
+
+    Parameters
+    ----------
+    model : PIModel
+        A model with non-negative weights.
+    y_desired : array_like
+        Desired displacements, one per sample.
+    u_min, u_max, slew_rate, initial_voltage, initial_state
+        As for :class:`Compensator`.
+
+    Returns
+    -------
+    CompensationResult
+        ``voltage``, ``displacement`` (the model's prediction for those voltages),
+        ``saturated`` per sample, the other flags and counts, and the final state.
+
+    Examples
+    --------
+    >>> import numpy as np, pihyst
+    >>> model = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+    >>> desired = 20 + 15 * np.sin(np.linspace(0, 6 * np.pi, 600)) * np.linspace(1, 0.2, 600)
+    >>> result = pihyst.compensate(model, np.r_[0.0, desired, 50.0])
+    >>> float(np.max(np.abs(result.displacement - result.desired)[:-1])) < 1e-9
+    True
+    >>> result.n_saturated, float(result.voltage[-1])   # 50 um is out of reach
+    (1, 150.0)
+    """
+    return Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                       initial_voltage=initial_voltage, initial_state=initial_state
+                       ).run(y_desired)
+
+
+def _number(value, name, allow_inf=False):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if np.isnan(v) or (np.isinf(v) and not allow_inf):
+        raise ValueError(f"{name} must be a finite number, got {v}")
+    return v
+
+
+def _desired(y_desired):
+    try:
+        y = np.array(y_desired, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("y_desired must be a sequence of numbers") from None
+    if y.ndim != 1:
+        raise ValueError(f"y_desired must be one-dimensional, got shape {y.shape}")
+    return y

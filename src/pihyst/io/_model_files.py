@@ -1,0 +1,81 @@
+"""Model files: ``load_model``, ``save_model`` (JSON).
+
+Schema (docs/interfaces.md; only ``family``, ``weights`` and, except for ``pwl``,
+``thresholds`` are required)::
+
+    {
+      "family": "classical" | "multislope" | "pwl",
+      "thresholds": [r_0, ...],                    # V, strictly increasing, >= 0
+      "weights": [w_0, ...],
+      "offset": 0.0,                               # um, added to the output
+      "U": 150.0, "a": 0.8, "b": 1.2, "h": 0.5,    # multislope shape (paper's defaults)
+      "rising":  [{"x": [...], "y": [...]}, ...],  # pwl: one polyline per operator
+      "falling": [{"x": [...], "y": [...]}, ...],
+      "input_range": [0.0, 150.0],                 # V (multislope default: [0, U])
+      "initial_state": [f_0, ...],                 # operator outputs before the first
+                                                   # sample (default: zeros)
+      "units": {"input": "V", "output": "um"},
+      "metadata": {...}                            # free-form, kept as is (fit reports...)
+    }
+
+Each model class reads and writes its own keys (``to_dict``/``from_dict``); this module
+only turns files into dicts and back, reporting a broken file as one line with its line
+and column.
+"""
+
+import json
+import os
+
+from pihyst.exceptions import InvalidModelError
+from pihyst.model import PIModel
+
+
+def load_model(path_or_dict):
+    """A model from a JSON file path or from a dict of the schema in this module.
+
+    Examples
+    --------
+    >>> m = load_model({"family": "classical", "thresholds": [0, 10, 30, 150],
+    ...                 "weights": [0.008, 0.252, 0.019, 0.582]})
+    >>> m.family, m.n_operators
+    ('classical', 4)
+    """
+    if isinstance(path_or_dict, dict):
+        return PIModel.from_dict(path_or_dict)
+    path = os.fspath(path_or_dict)
+    try:
+        with open(path, "rb") as f:
+            raw = f.read()
+    except OSError as err:
+        raise InvalidModelError(f"{path}: cannot read model: {err.strerror}") from None
+    return PIModel.from_dict(_parse_json(raw, path), source=path)
+
+
+def _parse_json(raw, path):
+    if raw.startswith(b"\xef\xbb\xbf"):  # a byte-order mark, as some editors write
+        raw = raw[3:]
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = raw.count(b"\n", 0, err.start) + 1
+        column = err.start - (raw.rfind(b"\n", 0, err.start) + 1) + 1
+        raise InvalidModelError(f"{path}:{line}:{column}: not UTF-8 text (byte "
+                                f"0x{raw[err.start]:02x})") from None
+    try:
+        return json.loads(text, parse_constant=_no_constant)
+    except json.JSONDecodeError as err:
+        raise InvalidModelError(f"{path}:{err.lineno}:{err.colno}: invalid JSON: {err.msg}") \
+            from None
+    except RecursionError:
+        raise InvalidModelError(f"{path}: invalid JSON: nested too deeply") from None
+    except ValueError as err:  # e.g. an integer with more digits than Python converts
+        raise InvalidModelError(f"{path}: invalid JSON: {err}") from None
+
+
+def _no_constant(name):
+    raise ValueError(f"{name} is not a number in JSON")
+
+
+def save_model(model, path):
+    """Write ``model`` as JSON; the file appears only once it is complete."""
+    model.save(path)

@@ -1,0 +1,576 @@
+"""PI-type hysteresis models: value objects over the C core.
+
+A model is y[t] = offset + sum_k w_k f_k[t], with f_k the generalized play operators
+f_k[t] = max(R_k(u[t]), min(F_k(u[t]), f_k[t-1])) of one family (docs/theory/operators.md):
+
+- :class:`ClassicalPI`: R(u) = u - r, F(u) = u + r (paper eq. 1);
+- :class:`MultislopePI`: the paper's multislope play (eq. 6) with shape (U, a, b, h);
+- :class:`PiecewiseLinearPI`: user-given polyline envelopes (covers both, and
+  Krasnosel'skii-Pokrovskii kernels).
+
+A model is a value: its parameters are fixed and validated at construction (an invalid
+model cannot exist), two models with the same parameters are equal, and
+:meth:`PIModel.replace` makes a changed copy. ``predict``/``simulate`` never touch the
+model; sample-by-sample work goes through a :class:`Stepper` (``model.stepper()``), which
+owns the running operator state.
+"""
+
+import json
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from pihyst import _core, paper
+from pihyst._atomic import write_atomically
+from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.model._classical_inverse import classical_inverse
+
+PAPER_SHAPE = paper.SHAPE
+DEFAULT_INPUT_RANGE = (0.0, 150.0)
+DEFAULT_UNITS = MappingProxyType({"input": "V", "output": "um"})
+SCHEMA_VERSION = 1
+_SHORT_VECTOR = 6   # repr shows at most this many values of a vector
+
+
+@dataclass(frozen=True)
+class Response:
+    """Result of :meth:`PIModel.simulate`."""
+
+    input: np.ndarray
+    output: np.ndarray
+    final_state: np.ndarray
+
+
+def _finite_vector(values, name, length=None):
+    try:
+        a = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidModelError(f"{name} must be a list of numbers") from None
+    if a.ndim != 1:
+        raise InvalidModelError(f"{name} must be a flat list of numbers")
+    if length is not None and a.size != length:
+        raise InvalidModelError(f"{name} must have {length} values (one per operator), "
+                                f"got {a.size}")
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        raise InvalidModelError(f"{name}[{bad[0]}] is {a[bad[0]]}, not a finite number")
+    a.setflags(write=False)
+    return a
+
+
+def _finite_number(value, name):
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidModelError(f"{name} must be a number, got {value!r:.40}") from None
+    if not np.isfinite(x):
+        raise InvalidModelError(f"{name} is {x}, not a finite number")
+    return x
+
+
+def _short(values):
+    """A vector for a repr: every value when short, the ends and the count when long."""
+    v = [float(x) for x in np.asarray(values).ravel()]
+    if len(v) <= _SHORT_VECTOR:
+        return repr(v)
+    ends = ", ".join(f"{x:.6g}" for x in v[:3]) + ", ..., " + ", ".join(
+        f"{x:.6g}" for x in v[-2:])
+    return f"[{ends}] ({len(v)} values)"
+
+
+class PIModel(ABC):
+    """Base of every family: weights, offset, input range, initial state, units, metadata.
+
+    Subclasses describe their operators through ``_bank_args``, their own parameters
+    through ``_own_params`` and their JSON keys through ``_own_dict``/``_own_from_dict``.
+    """
+
+    family = None
+    _registry = {}
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.family is not None:
+            PIModel._registry[cls.family] = cls
+
+    def __init__(self, weights, *, offset=0.0, input_range=None, initial_state=None,
+                 units=None, metadata=None):
+        set_ = object.__setattr__
+        set_(self, "weights", _finite_vector(weights, "weights"))
+        if self.weights.size == 0:
+            raise InvalidModelError("a model needs at least one operator (weights is empty)")
+        set_(self, "offset", _finite_number(offset, "offset"))
+        try:
+            lo, hi = DEFAULT_INPUT_RANGE if input_range is None else input_range
+        except (TypeError, ValueError):
+            raise InvalidModelError(f"input_range must be [min, max], got "
+                                    f"{input_range!r:.60}") from None
+        lo, hi = _finite_number(lo, "input_range[0]"), _finite_number(hi, "input_range[1]")
+        if not lo < hi:
+            raise InvalidModelError(f"input_range must be [min, max] with min < max, got "
+                                    f"{[lo, hi]}")
+        set_(self, "input_range", (lo, hi))
+        set_(self, "initial_state",
+             np.zeros(self.weights.size) if initial_state is None else
+             _finite_vector(initial_state, "initial_state", self.weights.size))
+        self.initial_state.setflags(write=False)
+        units = DEFAULT_UNITS if units is None else units
+        if not (isinstance(units, (dict, MappingProxyType))
+                and all(isinstance(k, str) and isinstance(v, str) for k, v in units.items())):
+            raise InvalidModelError(f"units must map names to strings, got {units!r:.60}")
+        set_(self, "units", MappingProxyType(dict(units)))
+        if metadata is not None and not isinstance(metadata, (dict, MappingProxyType)):
+            raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
+        set_(self, "metadata", MappingProxyType(dict(metadata or {})))
+        set_(self, "_bank", self._new_bank(self.initial_state))
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable: use "
+                             f"model.replace({name}=...) for a changed copy")
+
+    def __delattr__(self, name):
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    @property
+    def n_operators(self):
+        return self.weights.size
+
+    @abstractmethod
+    def _bank_args(self):
+        """Family-specific keyword arguments of :class:`pihyst._core.Bank`."""
+
+    def _new_bank(self, initial_state):
+        try:
+            return _core.Bank(self.family, weights=self.weights, offset=self.offset,
+                              u_min=self.input_range[0], u_max=self.input_range[1],
+                              initial_state=initial_state, **self._bank_args())
+        except _core.CoreError as err:
+            raise InvalidModelError(f"invalid {self.family} model: {err}") from None
+
+    # ---------------------------------------------------------------- batch
+    def _checked_input(self, u):
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        if u.ndim != 1:
+            raise ValueError(f"input must be one-dimensional, got shape {u.shape}")
+        lo, hi = self.input_range
+        # min/max first: two fast passes; NaN makes the comparison fail too
+        if u.size and not (u.min() >= lo and u.max() <= hi):
+            bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
+            raise InputRangeError(int(bad[0]), float(u[bad[0]]), self.input_range)
+        return u
+
+    def _state_or_initial(self, initial_state):
+        if initial_state is None:
+            return self.initial_state
+        return _finite_vector(initial_state, "initial_state", self.n_operators)
+
+    def simulate(self, u, *, initial_state=None):
+        """Run the model over the input ``u`` from ``initial_state`` (default: the
+        model's own). Returns a :class:`Response` with the final operator state,
+        from which a following chunk continues exactly."""
+        u = self._checked_input(u)
+        bank = self._new_bank(self._state_or_initial(initial_state))
+        y = bank.run(u)
+        return Response(input=u, output=y, final_state=bank.state)
+
+    def predict(self, u, *, initial_state=None):
+        """Displacements for the voltages ``u`` (a NumPy array of the same length)."""
+        return self.simulate(u, initial_state=initial_state).output
+
+    def operators(self, u, *, initial_state=None):
+        """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8)."""
+        u = self._checked_input(u)
+        return self._new_bank(self._state_or_initial(initial_state)).operators(u)
+
+    def envelopes(self, u):
+        """(R_k(u), F_k(u)) of every operator at one input value."""
+        return self._bank.envelopes(float(u))
+
+    def stepper(self, initial_state=None):
+        """A :class:`Stepper`: this model run sample by sample from ``initial_state``
+        (default: the model's own)."""
+        return Stepper(self, initial_state)
+
+    # ---------------------------------------------------------------- values
+    def _params(self):
+        """Every constructor argument, by name."""
+        return {**self._own_params(), "weights": self.weights, "offset": self.offset,
+                "input_range": self.input_range, "initial_state": self.initial_state,
+                "units": dict(self.units), "metadata": dict(self.metadata)}
+
+    def _own_params(self):
+        return {}
+
+    def replace(self, **changes):
+        """A copy with some constructor arguments changed (e.g. weights, offset).
+
+        Examples
+        --------
+        >>> m = ClassicalPI([0, 10], [1.0, 0.5])
+        >>> m.replace(offset=2.0)
+        ClassicalPI(thresholds=[0.0, 10.0], weights=[1.0, 0.5], offset=2)
+        """
+        params = self._params()
+        unknown = sorted(set(changes) - set(params))
+        if unknown:
+            raise InvalidModelError(f"{type(self).__name__} has no parameter {unknown[0]!r}")
+        params.update(changes)
+        return type(self)(**params)
+
+    def _key(self):
+        """What identifies the model's behaviour (metadata is not part of it)."""
+        out = [self.family]
+        for name, value in self._params().items():
+            if name == "metadata":
+                continue
+            if isinstance(value, list):  # polylines
+                value = tuple((tuple(x), tuple(y)) for x, y in value)
+            elif isinstance(value, np.ndarray):
+                value = tuple(value.tolist())
+            elif isinstance(value, dict):
+                value = tuple(sorted(value.items()))
+            out.append((name, value))
+        return tuple(out)
+
+    def __eq__(self, other):
+        """Equal models have the same family and parameters (metadata aside)."""
+        if not isinstance(other, PIModel):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def __repr__(self):
+        defaults = type(self)._defaults(self)
+        parts = []
+        for name, value in self._params().items():
+            if name == "metadata":
+                continue
+            if name in defaults and _same(value, defaults[name]):
+                continue
+            if isinstance(value, list):
+                parts.append(f"{name}=<{len(value)} polylines>")
+            elif isinstance(value, np.ndarray):
+                parts.append(f"{name}={_short(value)}")
+            elif isinstance(value, float):
+                parts.append(f"{name}={value:.6g}")
+            else:
+                parts.append(f"{name}={value!r}")
+        return f"{type(self).__name__}({', '.join(parts)})"
+
+    @staticmethod
+    def _defaults(model):
+        return {"offset": 0.0, "input_range": DEFAULT_INPUT_RANGE,
+                "initial_state": np.zeros(model.n_operators), "units": dict(DEFAULT_UNITS)}
+
+    # ---------------------------------------------------------------- persistence
+    def to_dict(self):
+        """The model as a JSON-ready dict (the schema of docs/interfaces.md)."""
+        d = {"schema_version": SCHEMA_VERSION, "family": self.family, **self._own_dict(),
+             "weights": self.weights.tolist(), "offset": self.offset,
+             "input_range": list(self.input_range),
+             "initial_state": self.initial_state.tolist(), "units": dict(self.units)}
+        if self.metadata:
+            d["metadata"] = dict(self.metadata)
+        return d
+
+    def _own_dict(self):
+        return {}
+
+    _COMMON_KEYS = frozenset({"family", "weights", "offset", "input_range", "initial_state",
+                              "units", "metadata", "schema_version"})
+    _OWN_KEYS = frozenset()
+    _REQUIRED_KEYS = ("weights",)
+
+    @classmethod
+    def from_dict(cls, d, source="model"):
+        """A model from a dict of the JSON schema; errors name ``source`` and the key.
+
+        Called on :class:`PIModel` it picks the class by ``d["family"]``; called on a
+        family's class it accepts that family only.
+        """
+        if not isinstance(d, dict):
+            raise InvalidModelError(f"{source}: a model must be a JSON object, got "
+                                    f"{type(d).__name__}")
+        family = d.get("family")
+        if not isinstance(family, str) or family not in PIModel._registry:
+            raise InvalidModelError(f"{source}: key 'family' must be one of "
+                                    f"{', '.join(sorted(PIModel._registry))}; got "
+                                    f"{family!r:.40}")
+        target = PIModel._registry[family]
+        if cls is not PIModel and target is not cls:
+            raise InvalidModelError(f"{source}: family {family!r} is not {cls.family!r}")
+        allowed = cls._COMMON_KEYS | target._OWN_KEYS
+        for key in target._REQUIRED_KEYS:
+            if key not in d:
+                raise InvalidModelError(f"{source}: missing required key {key!r}")
+        unknown = sorted(set(d) - allowed)
+        if unknown:
+            raise InvalidModelError(f"{source}: unknown key {unknown[0]!r} for family "
+                                    f"{family!r} (allowed: {', '.join(sorted(allowed))})")
+        version = d.get("schema_version", SCHEMA_VERSION)
+        if version != SCHEMA_VERSION:
+            raise InvalidModelError(f"{source}: schema_version {version!r:.20} is not "
+                                    f"{SCHEMA_VERSION} (written by another pihyst version)")
+        common = {k: d[k] for k in ("weights", "offset", "input_range", "initial_state",
+                                    "units", "metadata") if k in d}
+        try:
+            return target(**target._own_from_dict(d), **common)
+        except InvalidModelError as err:
+            raise InvalidModelError(f"{source}: {err}") from None
+        except (TypeError, ValueError, OverflowError, ZeroDivisionError) as err:
+            raise InvalidModelError(f"{source}: {err}") from None
+
+    @classmethod
+    def _own_from_dict(cls, d):
+        return {}
+
+    def save(self, path):
+        """Write the model as JSON to ``path`` (the file appears only once complete)."""
+        write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
+
+
+def _same(a, b):
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.array_equal(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    return a == b
+
+
+class Stepper:
+    """A model run sample by sample: owns the running operator state, so the model itself
+    never changes. ``step(u)`` advances by one input sample and returns y; ``state`` is a
+    copy of the operator state; ``reset(state=None)`` goes back to a state (default: the
+    initial state it was made with).
+
+    Examples
+    --------
+    >>> m = ClassicalPI([0, 10], [1.0, 0.5])
+    >>> s = m.stepper()
+    >>> [round(s.step(u), 3) for u in (0.0, 20.0, 15.0)]
+    [0.0, 25.0, 20.0]
+    """
+
+    def __init__(self, model, initial_state=None):
+        self.model = model
+        self._initial = model._state_or_initial(initial_state)
+        self._bank = model._new_bank(self._initial)
+
+    @property
+    def state(self):
+        """The running operator state (a copy)."""
+        return self._bank.state
+
+    def reset(self, state=None):
+        """Set the running state to ``state`` (default: the initial state)."""
+        self._bank.state = self._initial if state is None else \
+            self.model._state_or_initial(state)
+
+    def step(self, u):
+        """One sample: advance the running state by the input ``u``, return y."""
+        u = float(u)
+        lo, hi = self.model.input_range
+        if not lo <= u <= hi:
+            raise InputRangeError(0, u, self.model.input_range)
+        return self._bank.step(u)
+
+
+class ClassicalPI(PIModel):
+    """Classical Prandtl-Ishlinskii model (paper eq. 1-3).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = ClassicalPI([0, 10, 30, 150], [0.008, 0.252, 0.019, 0.582])
+    >>> u = np.r_[np.arange(0, 151), np.arange(149, -1, -1)]
+    >>> y = m.predict(u)
+    >>> print(f"{y[150]:.2f} {y[-1]:.2f}")
+    38.76 3.09
+    """
+
+    family = "classical"
+
+    _OWN_KEYS = frozenset({"thresholds"})
+    _REQUIRED_KEYS = ("thresholds", "weights")
+
+    def __init__(self, thresholds, weights, **kwargs):
+        object.__setattr__(self, "thresholds", _finite_vector(thresholds, "thresholds"))
+        super().__init__(weights, **kwargs)
+
+    def _bank_args(self):
+        _check_thresholds(self.thresholds, self.weights.size)
+        return {"thresholds": self.thresholds}
+
+    def _own_params(self):
+        return {"thresholds": self.thresholds}
+
+    def _own_dict(self):
+        return {"thresholds": self.thresholds.tolist()}
+
+    @classmethod
+    def _own_from_dict(cls, d):
+        return {"thresholds": d["thresholds"]}
+
+    def inverse(self):
+        """The analytic inverse, a :class:`ClassicalPI` from displacement to voltage
+        (docs/theory/inverse.md; see :func:`pihyst.inverse.classical_inverse`)."""
+        return classical_inverse(self)
+
+
+class MultislopePI(PIModel):
+    """Multislope PI model of Xu et al. (2020), eq. 6, with shape (U, a, b, h).
+
+    R(u) = max(a(u - r), b u - r - (b - 1)U),  F(u) = min(b u, a u + (1 - a)U - (1 - a h) r).
+    Thresholds must not exceed (1 - a)U / (1 - a h) (50 V for the paper's shape).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+    >>> u = np.r_[np.arange(0, 151), np.arange(149, -1, -1)]
+    >>> y = m.predict(u)
+    >>> print(f"{y[150]:.2f} {abs(y[-1]):.1f}")
+    41.38 0.0
+    """
+
+    family = "multislope"
+
+    _OWN_KEYS = frozenset({"thresholds", "U", "a", "b", "h"})
+    _REQUIRED_KEYS = ("thresholds", "weights")
+
+    def __init__(self, thresholds, weights, *, U=PAPER_SHAPE["U"], a=PAPER_SHAPE["a"],
+                 b=PAPER_SHAPE["b"], h=PAPER_SHAPE["h"], input_range=None, **kwargs):
+        set_ = object.__setattr__
+        set_(self, "thresholds", _finite_vector(thresholds, "thresholds"))
+        for name, value in (("U", U), ("a", a), ("b", b), ("h", h)):
+            set_(self, name, _finite_number(value, f"multislope shape {name}"))
+        # a h < 1 keeps the maximum threshold (1 - a)U/(1 - a h) finite
+        if not (self.U > 0 and 0 < self.a < self.b and 0 <= self.h <= 1
+                and self.a * self.h < 1):
+            raise InvalidModelError(f"multislope shape needs U > 0, 0 < a < b, 0 <= h <= 1 "
+                                    f"and a h < 1; got U={U:g}, a={a:g}, b={b:g}, h={h:g}")
+        if input_range is None:
+            input_range = (0.0, self.U)
+        super().__init__(weights, input_range=input_range, **kwargs)
+
+    @property
+    def max_threshold(self):
+        """Largest valid threshold, (1 - a)U / (1 - a h): F's kink stays at u >= 0."""
+        return (1 - self.a) * self.U / (1 - self.a * self.h)
+
+    def _bank_args(self):
+        _check_thresholds(self.thresholds, self.weights.size)
+        r_max = self.thresholds.max(initial=0.0)
+        if r_max > self.max_threshold * (1 + 1e-12):
+            raise InvalidModelError(
+                f"multislope threshold {r_max:g} is above (1 - a)U/(1 - a h) = "
+                f"{self.max_threshold:g} for U={self.U:g}, a={self.a:g}, h={self.h:g}: "
+                f"its falling envelope would not return to the origin")
+        return {"thresholds": self.thresholds, "shape": (self.U, self.a, self.b, self.h)}
+
+    def _own_params(self):
+        return {"thresholds": self.thresholds, "U": self.U, "a": self.a, "b": self.b,
+                "h": self.h}
+
+    @staticmethod
+    def _defaults(model):
+        return {**PIModel._defaults(model), **PAPER_SHAPE, "input_range": (0.0, model.U)}
+
+    def _own_dict(self):
+        return {"thresholds": self.thresholds.tolist(), "U": self.U, "a": self.a,
+                "b": self.b, "h": self.h}
+
+    @classmethod
+    def _own_from_dict(cls, d):
+        return {"thresholds": d["thresholds"],
+                **{k: d[k] for k in ("U", "a", "b", "h") if k in d}}
+
+
+class PiecewiseLinearPI(PIModel):
+    """PI model whose operators have user-given polyline envelopes.
+
+    ``rising[k]`` and ``falling[k]`` are (x, y) breakpoint pairs of operator k, x strictly
+    increasing and y non-decreasing; beyond its ends a polyline continues with the slope
+    of its end segment. R_k <= F_k must hold on the input range.
+    """
+
+    family = "pwl"
+
+    _OWN_KEYS = frozenset({"rising", "falling"})
+    _REQUIRED_KEYS = ("rising", "falling", "weights")
+
+    def __init__(self, rising, falling, weights, **kwargs):
+        object.__setattr__(self, "rising", _polylines(rising, "rising"))
+        object.__setattr__(self, "falling", _polylines(falling, "falling"))
+        super().__init__(weights, **kwargs)
+
+    def _bank_args(self):
+        k = self.weights.size
+        if len(self.rising) != k or len(self.falling) != k:
+            raise InvalidModelError(f"pwl model needs one rising and one falling polyline per "
+                                    f"weight: {len(self.rising)} rising, {len(self.falling)} "
+                                    f"falling, {k} weights")
+        return {"thresholds": None, "rising": self.rising, "falling": self.falling}
+
+    def _own_params(self):
+        return {"rising": list(self.rising), "falling": list(self.falling)}
+
+    def _own_dict(self):
+        return {"rising": [{"x": x.tolist(), "y": y.tolist()} for x, y in self.rising],
+                "falling": [{"x": x.tolist(), "y": y.tolist()} for x, y in self.falling]}
+
+    @classmethod
+    def _own_from_dict(cls, d):
+        return {name: [_points(p, f"{name}[{i}]") for i, p in enumerate(_list(d[name], name))]
+                for name in ("rising", "falling")}
+
+
+def _check_thresholds(thresholds, n):
+    if thresholds.size != n:
+        raise InvalidModelError(f"{thresholds.size} thresholds but {n} weights")
+    if thresholds.size and thresholds.min() < 0:
+        raise InvalidModelError(f"thresholds must be >= 0, got {thresholds.min():g}")
+    steps = np.flatnonzero(np.diff(thresholds) <= 0)
+    if steps.size:
+        i = steps[0]
+        raise InvalidModelError(f"thresholds must be strictly increasing: thresholds[{i}] = "
+                                f"{thresholds[i]:g} is followed by {thresholds[i + 1]:g}")
+
+
+def _list(value, name):
+    if not isinstance(value, list):
+        raise InvalidModelError(f"{name} must be a list of polylines, got "
+                                f"{type(value).__name__}")
+    return value
+
+
+def _points(p, name):
+    if not isinstance(p, dict) or "x" not in p or "y" not in p:
+        raise InvalidModelError(f"{name} must be an object with lists 'x' and 'y'")
+    return (p["x"], p["y"])
+
+
+def _polylines(polylines, name):
+    try:
+        items = list(polylines)
+    except TypeError:
+        raise InvalidModelError(f"{name} must be a list of (x, y) polylines") from None
+    return tuple(_polyline(p, f"{name}[{k}]") for k, p in enumerate(items))
+
+
+def _polyline(points, name):
+    try:
+        x, y = points
+    except (TypeError, ValueError):
+        raise InvalidModelError(f"{name} must be a pair (x, y) of breakpoint lists") from None
+    x = _finite_vector(x, f"{name} x")
+    y = _finite_vector(y, f"{name} y", x.size)
+    if x.size == 0:
+        raise InvalidModelError(f"{name} has no breakpoints")
+    if np.any(np.diff(x) <= 0):
+        raise InvalidModelError(f"{name}: breakpoints must be strictly increasing")
+    if np.any(np.diff(y) < 0):
+        raise InvalidModelError(f"{name}: envelope values must be non-decreasing")
+    return (x, y)

@@ -1,0 +1,14 @@
+"""Simulated actuators and test signals: the stand-in for the paper's rig.
+
+- :func:`make_plant` / :data:`PLANT_NAMES`: simulated piezo beams (Preisach or Bouc-Wen
+  hysteresis, creep, supply quantisation, sensor noise, optional dynamics); none is a PI
+  model, so fitting PI models to their data proves something
+  (docs/theory/simulated-beams.md);
+- :mod:`pihyst.sim.signals`: the paper's triangle, sines, decaying triangles, random
+  ramps, staircases.
+"""
+
+from pihyst.sim import signals
+from pihyst.sim._plant import PLANT_NAMES, Plant, make_plant
+
+__all__ = ["PLANT_NAMES", "Plant", "make_plant", "signals"]

@@ -1,0 +1,167 @@
+"""Test signals: the paper's triangle, sines, decaying triangles, random ramps, staircases.
+
+Every function returns ``(t, u)``: sample times (s, from 0, step ``dt``) and values. The
+values are generic: volts when the signal drives a beam, micrometres when it is a desired
+displacement to track. ``u_min`` and ``u_max`` are the signal's lowest and highest level;
+every signal starts at ``u_min`` (a beam at rest at 0 V).
+"""
+
+import numpy as np
+
+from pihyst import paper
+
+PAPER_PERIOD_S = paper.DRIVE_PERIOD_S
+PAPER_U_MAX = paper.DRIVE_U_MAX_V
+DEFAULT_DT = 0.1
+
+
+def _check_common(u_min, u_max, dt):
+    for v, name in ((u_min, "u_min"), (u_max, "u_max"), (dt, "dt")):
+        if not np.isfinite(v):
+            raise ValueError(f"{name} must be a finite number, got {v}")
+    if not u_max > u_min:
+        raise ValueError(f"u_max must be above u_min, got u_min={u_min:g}, u_max={u_max:g}")
+    if not dt > 0:
+        raise ValueError(f"dt must be positive, got {dt:g}")
+
+
+def _positive(value, name):
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be a positive number, got {value}")
+
+
+def _count(value, name):
+    if int(value) != value or value < 1:
+        raise ValueError(f"{name} must be a whole number >= 1, got {value}")
+    return int(value)
+
+
+def _grid(duration, dt):
+    # t_i = i dt for i = 0..n, n = round(duration / dt): the end point is included
+    n = int(round(duration / dt))
+    return np.arange(n + 1) * dt
+
+
+def _piecewise_linear(times, levels, dt):
+    """Samples every dt of the polyline through (times, levels) (times on the dt grid)."""
+    t = _grid(times[-1], dt)
+    return t, np.interp(t, times, levels)
+
+
+def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
+             dt=DEFAULT_DT):
+    """Triangle wave u_min -> u_max -> u_min, ``n_cycles`` times (the paper's drive:
+    0-150 V, 300 s period).
+
+    The peaks are sampled exactly when period_s / 2 is a multiple of dt.
+
+    Examples
+    --------
+    >>> t, u = triangle(dt=1.0)
+    >>> float(t[-1]), float(u[150]), float(u[-1]), t.size
+    (300.0, 150.0, 0.0, 301)
+    """
+    _check_common(u_min, u_max, dt)
+    _positive(period_s, "period_s")
+    n_cycles = _count(n_cycles, "n_cycles")
+    t = _grid(n_cycles * period_s, dt)
+    # u = u_min + (u_max - u_min) (1 - |2 frac(t / P) - 1|)
+    phase = np.mod(t / period_s, 1.0)
+    u = u_min + (u_max - u_min) * (1.0 - np.abs(2.0 * phase - 1.0))
+    return t, np.clip(np.round(u, 12), u_min, u_max)
+
+
+def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=DEFAULT_DT):
+    """Sine between u_min and u_max starting at its minimum:
+    u = (u_min + u_max)/2 - (u_max - u_min)/2 cos(2 pi t / P).
+
+    Examples
+    --------
+    >>> t, u = sine(period_s=10.0, dt=1.0)
+    >>> float(u[0]), float(u[5])
+    (0.0, 150.0)
+    """
+    _check_common(u_min, u_max, dt)
+    _positive(period_s, "period_s")
+    n_cycles = _count(n_cycles, "n_cycles")
+    t = _grid(n_cycles * period_s, dt)
+    u = 0.5 * (u_min + u_max) - 0.5 * (u_max - u_min) * np.cos(2 * np.pi * t / period_s)
+    return t, np.clip(u, u_min, u_max)
+
+
+def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_triangles=5,
+                       ratio=0.7, dt=DEFAULT_DT):
+    """One full triangle u_min -> u_max -> u_min, then triangles back to u_min whose peaks
+    decay geometrically: peak_k = u_min + (u_max - u_min) ratio^k, k = 0..n_triangles-1
+    (minor loops inside the major one). All ramps have the full triangle's slope
+    2 (u_max - u_min) / period_s; each turning point lies on the dt grid.
+
+    Examples
+    --------
+    >>> t, u = decaying_triangles(n_triangles=3, ratio=0.5, period_s=40.0, dt=1.0)
+    >>> [float(v) for v in u[[20, 40, 50, 60, 65, 70]]]
+    [150.0, 0.0, 75.0, 0.0, 37.5, 0.0]
+    """
+    _check_common(u_min, u_max, dt)
+    _positive(period_s, "period_s")
+    n_triangles = _count(n_triangles, "n_triangles")
+    if not 0 < ratio < 1:
+        raise ValueError(f"ratio must be between 0 and 1, got {ratio:g}")
+    span = u_max - u_min
+    times, levels = [0.0], [u_min]
+    for k in range(n_triangles):
+        peak = span * ratio ** k
+        half = max(dt, dt * round(peak / span * period_s / 2 / dt))
+        times += [times[-1] + half, times[-1] + 2 * half]
+        levels += [u_min + peak, u_min]
+    return _piecewise_linear(np.array(times), np.array(levels), dt)
+
+
+def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT_DT, seed=0):
+    """Ramps at constant rate between random levels (uniform in [u_min, u_max]),
+    starting at u_min: reversals inside the range, for judging models on minor loops.
+
+    ``rate`` (units per second) defaults to the paper's triangle slope,
+    2 (u_max - u_min) / 300 s. Each ramp's duration is rounded up to whole samples, so
+    every level is sampled exactly.
+
+    Examples
+    --------
+    >>> t, u = random_ramps(n_ramps=4, seed=3)
+    >>> float(u[0]), bool(u.min() >= 0 and u.max() <= 150)
+    (0.0, True)
+    """
+    _check_common(u_min, u_max, dt)
+    n_ramps = _count(n_ramps, "n_ramps")
+    if rate is None:
+        rate = 2 * (u_max - u_min) / PAPER_PERIOD_S
+    _positive(rate, "rate")
+    rng = np.random.default_rng(seed)
+    levels = np.concatenate(([u_min], rng.uniform(u_min, u_max, n_ramps)))
+    steps = np.maximum(1, np.ceil(np.abs(np.diff(levels)) / rate / dt - 1e-9))
+    times = np.concatenate(([0.0], np.cumsum(steps) * dt))
+    return _piecewise_linear(times, levels, dt)
+
+
+def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
+              dt=DEFAULT_DT):
+    """Steps of (u_max - u_min) / n_steps from u_min up to u_max (and back down if
+    ``down``), each level held for ``step_s`` seconds: creep shows within each step.
+
+    Examples
+    --------
+    >>> t, u = staircase(n_steps=2, step_s=2.0, dt=1.0)
+    >>> u.tolist()
+    [0.0, 0.0, 75.0, 75.0, 150.0, 150.0, 75.0, 75.0, 0.0, 0.0]
+    """
+    _check_common(u_min, u_max, dt)
+    n_steps = _count(n_steps, "n_steps")
+    _positive(step_s, "step_s")
+    k = np.arange(n_steps + 1)
+    if down:
+        k = np.concatenate((k, k[-2::-1]))
+    per_step = max(1, int(round(step_s / dt)))
+    # clip: u_min + span * k / n can round one ulp past u_max
+    levels = np.minimum(u_min + (u_max - u_min) * k / n_steps, u_max)
+    u = np.repeat(levels, per_step)
+    return np.arange(u.size) * dt, u

@@ -1,0 +1,48 @@
+"""Fits to measured data sets (../shared/data or $PIHYST_DATA; skipped when absent).
+
+Protocol (issue 3, item 8): the first cycle only settles the operator states, the model
+is fitted on the first half of the rest and judged on the second half (held back).
+"""
+
+import numpy as np
+import pytest
+
+from pihyst import fit
+from pihyst.io import datasets
+
+ROOT = datasets.data_root()
+pytestmark = [
+    pytest.mark.skipif(ROOT is None, reason="measured data not found: set PIHYST_DATA or put "
+                       "the data sets in ../shared/data next to the repository"),
+    pytest.mark.slow,
+]
+
+
+def _held_back_fit(u, y):
+    res = fit(u, y, initial_state="settle", holdout=0.5, refit=False)
+    rep = res.report.to_dict()
+    assert rep["data"]["initial_state"] == "settle" and rep["data"]["settle_samples"] > 0
+    assert rep["data"]["holdout"].startswith("last 0.5")
+    best = res.report.family(res.report.chosen)
+    rms = best["errors"]["held_back"]["rms"]
+    # refit=False: the returned model is the one judged; the held-back part is the tail
+    n_held = rep["data"]["held_back_samples"]
+    e = res.model.predict(u)[-n_held:] - y[-n_held:]
+    assert np.sqrt(np.mean(e ** 2)) == pytest.approx(rms, rel=1e-9)
+    return res, rms
+
+
+def test_p885_stack_held_back_rms():
+    u, y = datasets.p885(ROOT)
+    assert u.size == 8026 and u.min() == 0.0 and u.max() == pytest.approx(3.6)
+    res, rms = _held_back_fit(u, y)
+    assert res.model.input_range == pytest.approx((0.0, 3.6))
+    assert rms <= 0.35, res.report
+
+
+def test_smarthysteresis_sine_held_back_rms():
+    u, y = datasets.smarthysteresis(ROOT)
+    assert u.min() == pytest.approx(-150) and u.max() == pytest.approx(150)
+    res, rms = _held_back_fit(u, y)
+    assert res.model.input_range == pytest.approx((-150.0, 150.0))
+    assert rms <= 0.08, res.report
