@@ -114,9 +114,9 @@ def model_seeds(rng):
     return seeds
 
 
-def comp_ops(rng, n, y_hi, with_resets=True):
+def comp_ops(rng, n, with_resets=True):
     out = b""
-    for i in range(n):
+    for _ in range(n):
         roll = rng.random()
         if roll < 0.8:
             # desired around the last output: the harness reads [y_last - s, y_last + s]
@@ -146,8 +146,8 @@ def compensator_seeds(rng):
     classical = params(0, [0, 10, 30, 60], [0.008, 0.252, 0.019, 0.582], monotone=True)
     multislope = params(1, [0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028], monotone=True)
     for head in (classical, multislope):
-        seeds.append(bytes([3]) + head + limits() + comp_ops(rng, 150, 40))
-        seeds.append(bytes([1]) + head + limits(10.0, 120.0, 0.5, 10.0) + comp_ops(rng, 150, 40))
+        seeds.append(bytes([3]) + head + limits() + comp_ops(rng, 150))
+        seeds.append(bytes([1]) + head + limits(10.0, 120.0, 0.5, 10.0) + comp_ops(rng, 150))
     for i in range(24):
         family = i % 3
         r, w = random_bank(rng, family)
@@ -155,7 +155,7 @@ def compensator_seeds(rng):
         head = params(family, r, w, offset=rng.uniform(-2, 2), monotone=True, pwl=pwl)
         step = None if i % 4 else rng.uniform(0.1, 5)
         seeds.append(bytes([rng.randrange(7)]) + head + limits(step=step) +
-                     comp_ops(rng, rng.randint(20, 200), 40))
+                     comp_ops(rng, rng.randint(20, 200)))
     # a short scratch and a negative weight: refused
     seeds.append(bytes([0]) + classical + limits()[:-1] + bytes([7]))
     seeds.append(bytes([0]) + params(0, [0, 10], [0.2, -0.1]) + limits())
