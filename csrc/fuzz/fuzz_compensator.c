@@ -124,6 +124,11 @@ static void check(const uint8_t *data, size_t size)
             if (fl == 0 && sane(&f)) {
                 const double ulp_y = 8.0 * FUZZ_EPS * (fabs((double)u) + fabs((double)u_p) + 1.0) *
                                      f.max_slope * sum_w;
+                if (!(fabs((double)ca.y_last - (double)yd) <= 16.0 * (double)ca.tol + ulp_y))
+                    fprintf(stderr, "family %d, K = %zu, step %zu: u_p = %.17g, u = %.17g, "
+                            "y_d = %.17g, y_last = %.17g, tol = %.3g, ulp_y = %.3g\n",
+                            (int)f.p.family, K, steps, (double)u_p, (double)u, (double)yd,
+                            (double)ca.y_last, (double)ca.tol, ulp_y);
                 REQUIRE(fabs((double)ca.y_last - (double)yd) <= 16.0 * (double)ca.tol + ulp_y);
             }
             if (ref.n == N_MAX) flush(&cb, &ref);
