@@ -20,7 +20,8 @@
  *   - y_last equals a separate model: R's output for the chosen voltage is ca.y_last bit
  *     for bit, and model A's state array equals R's after every call;
  *   - a sample without flags meets the desired value: |y_last - y_d| <= 16 tol plus the
- *     output change of a few ulps of voltage at the steepest slope (when sane).
+ *     output change of a few ulps of voltage at the steepest slope, plus underflow
+ *     (when sane).
  * Build and run: make -C csrc fuzz (see docs/c-core.md). */
 #include "fuzz_common.h"
 
@@ -122,8 +123,12 @@ static void check(const uint8_t *data, size_t size)
             REQUIRE(same_bits(state_a, state_r, K));
             if (sane(&f)) REQUIRE(isfinite(ca.y_last));
             if (fl == 0 && sane(&f)) {
-                const double ulp_y = 8.0 * FUZZ_EPS * (fabs((double)u) + fabs((double)u_p) + 1.0) *
-                                     f.max_slope * sum_w;
+                /* a few ulps of voltage at the steepest slope, and underflow (subnormal
+                 * weights or values) in each term of the output */
+                const double ulp_y =
+                    8.0 * FUZZ_EPS * (fabs((double)u) + fabs((double)u_p) + 1.0) * f.max_slope *
+                        sum_w +
+                    ((double)K + 2.0) * FUZZ_TINY;
                 if (!(fabs((double)ca.y_last - (double)yd) <= 16.0 * (double)ca.tol + ulp_y))
                     fprintf(stderr, "family %d, K = %zu, step %zu: u_p = %.17g, u = %.17g, "
                             "y_d = %.17g, y_last = %.17g, tol = %.3g, ulp_y = %.3g\n",
