@@ -51,7 +51,8 @@ typedef enum {
     PIHYST_ETHRESHOLD = -4,  /* thresholds negative or not strictly increasing */
     PIHYST_ESHAPE = -5,      /* multislope shape invalid: needs 0 < a < b, 0 <= h <= 1, U > 0 */
     PIHYST_EMULTISLOPE_R = -6, /* multislope threshold above (1 - a)U / (1 - a h) */
-    PIHYST_EPOLYLINE = -7,   /* breakpoints not strictly increasing, or envelope decreasing */
+    PIHYST_EPOLYLINE = -7,   /* breakpoints not strictly increasing (or a subnormal apart),
+                                envelope decreasing, or a segment's slope not finite */
     PIHYST_EENVELOPE = -8,   /* R > F somewhere on the input range */
     PIHYST_ERANGE = -9,      /* input range empty (u_min >= u_max) */
     PIHYST_ENEGATIVE_WEIGHT = -10, /* compensator: a weight is negative (model not monotone) */

@@ -19,6 +19,7 @@ typedef float real;
 #define R_FABS fabsf
 #define R_NEXTAFTER nextafterf
 #define R_EPS FLT_EPSILON
+#define R_MIN FLT_MIN
 /* relative slack of the validation checks for the rounding of the envelope constants:
  * 32 ulps (the constants take a few roundings each) */
 #define R_SLACK (RC(32.0) * FLT_EPSILON)
@@ -28,6 +29,7 @@ typedef double real;
 #define R_FABS fabs
 #define R_NEXTAFTER nextafter
 #define R_EPS DBL_EPSILON
+#define R_MIN DBL_MIN
 #define R_SLACK 1e-12
 #endif
 #define R_INF ((real)INFINITY)

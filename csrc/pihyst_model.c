@@ -90,8 +90,14 @@ static pihyst_status check_polyline(const real *x, const real *y, size_t n)
     size_t i;
     if (n == 0) return PIHYST_ESIZE;
     if (!all_finite(x, n) || !all_finite(y, n)) return PIHYST_ENONFINITE;
-    for (i = 1; i < n; ++i)
+    for (i = 1; i < n; ++i) {
         if (!(x[i] > x[i - 1]) || y[i] < y[i - 1]) return PIHYST_EPOLYLINE;
+        /* Breakpoints closer than the smallest normal number: dy (u - x) / dx would
+         * amplify the underflow of the product into a staircase, not a line. A slope
+         * that overflows would turn the envelope into +-inf and NaN. */
+        if (!(x[i] - x[i - 1] >= R_MIN) || !isfinite((y[i] - y[i - 1]) / (x[i] - x[i - 1])))
+            return PIHYST_EPOLYLINE;
+    }
     return PIHYST_OK;
 }
 
@@ -432,7 +438,8 @@ const char *pihyst_status_text(pihyst_status status)
         return "multislope threshold above (1 - a)U / (1 - a h): the falling envelope "
                "would not return to the origin";
     case PIHYST_EPOLYLINE:
-        return "polyline breakpoints must be strictly increasing and values non-decreasing";
+        return "polyline breakpoints must be strictly increasing (by more than the smallest "
+               "normal number), values non-decreasing and slopes finite";
     case PIHYST_EENVELOPE: return "rising envelope above falling envelope on the input range";
     case PIHYST_ERANGE: return "input range must have u_min < u_max";
     case PIHYST_ENEGATIVE_WEIGHT:

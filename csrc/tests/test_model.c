@@ -145,6 +145,19 @@ static void test_pwl(void)
           PIHYST_EENVELOPE);
     CHECK(model_init(&m, PIHYST_PWL, 1, NULL, w, 0, 0, 150, NULL, &p, coef, state, NULL) ==
           PIHYST_OK);
+    {   /* found by fuzzing: breakpoints a subnormal apart (the envelope became a
+         * staircase, or infinite), and a slope that overflows */
+        const real sx[2] = {0.0, TOL(5e-324, 1e-45)}, sy[2] = {0.0, TOL(5e-324, 1e-45)};
+        const real vx[2] = {0.0, TOL(1e-300, 1e-30)}, vy[2] = {0.0, TOL(1e300, 1e30)};
+        const size_t one[2] = {0, 2};
+        pihyst_pwl subnormal = {one, sx, sy, one, sx, sy}, steep = {one, vx, vy, one, vx, vy};
+        pihyst_model bad;
+        real bad_coef[PIHYST_COEF_LEN(1)], bad_state[1];
+        CHECK(model_init(&bad, PIHYST_PWL, 1, NULL, w, 0, 0, 150, NULL, &subnormal, bad_coef,
+                         bad_state, NULL) == PIHYST_EPOLYLINE);
+        CHECK(model_init(&bad, PIHYST_PWL, 1, NULL, w, 0, 0, 150, NULL, &steep, bad_coef,
+                         bad_state, NULL) == PIHYST_EPOLYLINE);
+    }
     CHECK(model_init(&mc, PIHYST_CLASSICAL, 1, r, w, 0, 0, 150, NULL, NULL, coef_c, state_c,
                             NULL) == PIHYST_OK);
     cycle(u);

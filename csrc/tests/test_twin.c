@@ -10,8 +10,8 @@
  *
  *     |y_f32 - y_f64| <= (K + 8) FLT_EPSILON E,   E = |offset| + sum_k |w_k| (b u_big + U + r_k)   (T)
  *
- * with u_big = max(|u_min|, |u_max|) (b = 1, U = 0 for classical). The measured worst
- * case is printed, as a fraction of T.
+ * with u_big = max(|u_min|, |u_max|) (b = 1, U = 0 for classical; PWL: see
+ * twin_init_pwl). The measured worst case is printed, as a fraction of T.
  *
  * Compensator. In single precision the output is known to about an ulp of the output
  * scale, so the compensator holds once |y_d - y| <= tol_f32 = 4 (K + 2) FLT_EPSILON S (its
@@ -30,6 +30,7 @@
 
 #define N_TWIN 4000
 #define KMAX 64
+#define PMAX 5 /* PWL: breakpoints per polyline */
 
 static unsigned lcg = 777u;
 static float uniform_f(void) /* [0, 1), a float */
@@ -44,6 +45,9 @@ typedef struct {
     pihyst_model_f32 m32;
     double r64[KMAX], w64[KMAX], coef64[PIHYST_COEF_LEN(KMAX)], state64[KMAX];
     float r32[KMAX], w32[KMAX], coef32[PIHYST_COEF_LEN(KMAX)], state32[KMAX];
+    size_t start[KMAX + 1];                                /* PWL: shared offsets */
+    double x64[KMAX * PMAX], rise64[KMAX * PMAX], fall64[KMAX * PMAX];
+    float x32[KMAX * PMAX], rise32[KMAX * PMAX], fall32[KMAX * PMAX];
     double E; /* the scale of (T) */
 } twin;
 
@@ -75,6 +79,59 @@ static int twin_init(twin *t, pihyst_family family, size_t K, const float *r, co
         t->w64[k] = w[k];
         t->E += fabs(w[k]) * (b * u_big + U + r[k]);
     }
+    return pihyst_model_init(&t->m64, &p64, t->coef64, t->state64) == PIHYST_OK &&
+           pihyst_model_init_f32(&t->m32, &p32, t->coef32, t->state32) == PIHYST_OK;
+}
+
+/* A PWL model in both precisions: per operator a random polyline R through PMAX float
+ * breakpoints, and F = R + gap on the same abscissae. The error of one evaluation,
+ * y_i + (y_{i+1} - y_i)(u - x_i)/(x_{i+1} - x_i), is a few roundings of terms up to
+ * max|y| + s (u_big + max|x|), s the steepest slope: that replaces b u_big + U + r_k in E. */
+static int twin_init_pwl(twin *t, size_t K, const float *w, float offset, float u_min,
+                         float u_max)
+{
+    pihyst_params p64 = {.family = PIHYST_PWL, .n_ops = K, .weights = t->w64,
+                         .offset = offset, .u_min = u_min, .u_max = u_max};
+    pihyst_params_f32 p32 = {.family = PIHYST_PWL, .n_ops = K, .weights = t->w32,
+                             .offset = offset, .u_min = u_min, .u_max = u_max};
+    const double u_big = fabs(u_min) > fabs(u_max) ? fabs(u_min) : fabs(u_max);
+    size_t k, i;
+    t->E = fabs(offset);
+    t->start[0] = 0;
+    for (k = 0; k < K; ++k) {
+        const float gap = 5.0f * uniform_f();
+        float x = u_min - 20.0f + 40.0f * uniform_f(), y = -20.0f + 40.0f * uniform_f();
+        double slope = 0.0, big_x = 0.0, big_y = 0.0;
+        for (i = 0; i < PMAX; ++i) {
+            const size_t at = k * PMAX + i;
+            if (i) {
+                const float dx = 1.0f + 40.0f * uniform_f(), dy = 30.0f * uniform_f();
+                x += dx;
+                y += dy;
+                if (dy / dx > slope) slope = dy / dx;
+            }
+            t->x32[at] = x;
+            t->rise32[at] = y;
+            t->fall32[at] = y + gap;
+            t->x64[at] = x;
+            t->rise64[at] = y;
+            t->fall64[at] = (double)t->fall32[at];
+            if (fabs(x) > big_x) big_x = fabs(x);
+            if (fabs(t->fall32[at]) > big_y) big_y = fabs(t->fall32[at]);
+        }
+        t->start[k + 1] = (k + 1) * PMAX;
+        t->w32[k] = w[k];
+        t->w64[k] = w[k];
+        t->E += fabs(w[k]) * (big_y + slope * (u_big + big_x));
+    }
+    p64.pwl.rise_start = p64.pwl.fall_start = t->start;
+    p64.pwl.rise_x = p64.pwl.fall_x = t->x64;
+    p64.pwl.rise_y = t->rise64;
+    p64.pwl.fall_y = t->fall64;
+    p32.pwl.rise_start = p32.pwl.fall_start = t->start;
+    p32.pwl.rise_x = p32.pwl.fall_x = t->x32;
+    p32.pwl.rise_y = t->rise32;
+    p32.pwl.fall_y = t->fall32;
     return pihyst_model_init(&t->m64, &p64, t->coef64, t->state64) == PIHYST_OK &&
            pihyst_model_init_f32(&t->m32, &p32, t->coef32, t->state32) == PIHYST_OK;
 }
@@ -127,8 +184,8 @@ static void compare_compensator(twin *t, float max_step, int unique)
     static double yd64[N_TWIN], u64[N_TWIN], y64[N_TWIN], y_check[N_TWIN], u_in[N_TWIN];
     static pihyst_flags f32[N_TWIN], f64[N_TWIN];
     const size_t K = t->m64.n_ops;
-    double scratch64[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 0)];
-    float scratch32[PIHYST_COMPENSATOR_SCRATCH_LEN_F32(KMAX, 0)];
+    static double scratch64[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 2 * KMAX * PMAX)];
+    static float scratch32[PIHYST_COMPENSATOR_SCRATCH_LEN_F32(KMAX, 2 * KMAX * PMAX)];
     pihyst_compensator c64;
     pihyst_compensator_f32 c32;
     const float lo = t->m32.u_min, hi = t->m32.u_max;
@@ -202,6 +259,14 @@ void run_twin_tests(void)
             compare_forward(&t);
             compare_compensator(&t, INFINITY, fam == 0);
         }
+    }
+    /* PWL banks */
+    for (i = 0; i < sizeof sizes / sizeof *sizes; ++i) {
+        const size_t K = sizes[i];
+        for (k = 0; k < K; ++k) w[k] = 0.01f + 0.1f * uniform_f();
+        CHECK(twin_init_pwl(&t, K, w, 0.5f, 0.0f, 150.0f));
+        compare_forward(&t);
+        compare_compensator(&t, INFINITY, 0);
     }
     printf("single vs double precision: worst |y_f32 - y_f64| %.2f of bound (T), worst "
            "|y_f64(u_f32) - y_d| %.2f of bound (C)\n", worst_forward, worst_compensator);
