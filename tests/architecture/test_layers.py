@@ -8,7 +8,7 @@ import hides a cycle from Python, not from this test). Layers, lowest first
 1. ``model``
 2. ``io``, ``inverse``
 3. ``identify``, ``sim``
-4. ``study``, ``rig``
+4. ``study``, ``rig``, ``fleet``
 5. ``cli``
 
 A module may import its own sub-package and lower layers, never a higher layer nor a
@@ -28,7 +28,7 @@ LAYERS = [
     {"model"},
     {"io", "inverse"},
     {"identify", "sim"},
-    {"study", "rig"},
+    {"study", "rig", "fleet"},
     {"cli"},
 ]
 LAYER_OF = {unit: i for i, units in enumerate(LAYERS) for unit in units}
