@@ -126,7 +126,7 @@ class _Dask:
             if scheduler == "local":
                 self.cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,
                                             threads_per_worker=1, processes=True,
-                                            dashboard_address=None)
+                                            dashboard_address=":0")
                 self.client = Client(self.cluster)
             else:
                 self.client = Client(scheduler, timeout="10s")
