@@ -38,7 +38,7 @@ def test_model_system_is_predict(family):
     assert system.isdtime(strict=True) and system.dt == 0.01
     assert system.state_labels == [f"f[{k}]" for k in range(model.n_operators)]
     resp = ct.input_output_response(system, 0.01 * np.arange(u.size), u,
-                                    model.initial_state, return_states=True)
+                                    model.initial_state)
     np.testing.assert_allclose(resp.outputs, model.predict(u), rtol=0, atol=1e-12)
     # the state is the operator state before each sample: f[t-1]
     phi = model.operators(u)
