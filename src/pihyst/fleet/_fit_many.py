@@ -238,6 +238,9 @@ def _run_on(client, jobs, options, outcomes, progress):
         name, source, lines, read_time = futures[fut]
         if fut.status == "finished":
             outcome = _outcome(fut.result(), name, source, lines, read_time)
+        elif fut.status == "cancelled":   # e.g. the client or the cluster went away
+            outcome = RecordOutcome(name, "failed", source=source, seconds=read_time,
+                                    error="cancelled: the cluster dropped the task")
         else:  # the task itself failed: a worker died, or the record could not be sent
             err = fut.exception()
             outcome = RecordOutcome(name, "failed", source=source, seconds=read_time,
