@@ -13,8 +13,7 @@ from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
 from pihyst.cli.fit import _holdout, _thresholds
 from pihyst.fleet import fit_many, summary_csv, summary_json
-from pihyst.identify import INITIAL_STATES
-from pihyst.identify._families import FAMILY_NAMES
+from pihyst.identify import FAMILY_NAMES, INITIAL_STATES
 from pihyst.io import save_model
 
 SUMMARY_STEM = "summary"

@@ -30,7 +30,10 @@ __all__ = ["FleetResult", "RecordOutcome", "fit_many", "INPUT_COLUMN", "OUTPUT_C
 INPUT_COLUMN = "voltage_V"
 OUTPUT_COLUMN = "displacement_um"
 _COLUMN_OF = {"input": INPUT_COLUMN, "output": OUTPUT_COLUMN}
-_FIT_OPTIONS = frozenset(p for p in inspect.signature(fit).parameters if p not in ("u", "y"))
+_FIT_PARAMETERS = inspect.signature(fit).parameters
+# the keyword options fit() names (None: it takes any keyword, so fit() checks them)
+_FIT_OPTIONS = None if any(p.kind is p.VAR_KEYWORD for p in _FIT_PARAMETERS.values()) \
+    else frozenset(p for p in _FIT_PARAMETERS if p not in ("u", "y"))
 
 
 @dataclass(frozen=True)
@@ -194,7 +197,7 @@ def fit_many(records, client=None, *, progress=None, **options):
     ...                                  holdout=None).model
     True
     """
-    unknown = sorted(set(options) - _FIT_OPTIONS)
+    unknown = [] if _FIT_OPTIONS is None else sorted(set(options) - _FIT_OPTIONS)
     if unknown:
         raise TypeError(f"fit_many() got options that pihyst.fit does not take: "
                         f"{', '.join(unknown)}")
