@@ -184,6 +184,8 @@ def fit_many(records, client=None, *, progress=None, **options):
     TypeError
         An option that :func:`pihyst.fit` does not take, or records that are neither a
         mapping nor a sequence.
+    ValueError
+        Two records with the same name (e.g. files of the same name in two folders).
 
     Examples
     --------
