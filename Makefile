@@ -11,7 +11,7 @@ $(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*
 	@echo "== first run: creating $(VENV) and installing pihyst with its dependencies (1-3 min)"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --progress-bar off -e ".[test]" | grep -E "^(Collecting|Building|Successfully)" || true
+	$(BIN)/pip install --progress-bar off -e ".[test]" | grep -E "^(Collecting|Building|Successfully|ERROR)" || true
 	@test -x $(BIN)/pihyst || { echo "pip install failed: run $(BIN)/pip install -e '.[test]'"; exit 1; }
 	touch $@
 
