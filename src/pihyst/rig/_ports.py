@@ -1,0 +1,38 @@
+"""Opening serial ports from any pyserial URL (a device path, ``spy://``, ``socket://``,
+``pihystsim://`` for the emulated instruments, ...)."""
+
+import serial
+
+from pihyst.rig import _serial_handlers
+
+
+class RigError(IOError):
+    """The rig could not do what it was asked (a port that does not open, a device that
+    does not answer as the protocol says); the message is one line."""
+
+
+class NoReplyError(RigError, TimeoutError):
+    """A device did not answer within its timeout."""
+
+
+def open_port(url, baudrate, timeout_s, what):
+    """An open pyserial port; ``what`` ('supply', 'sensor') names it in errors."""
+    if _serial_handlers.url_name(url) is not None and \
+            "pihyst.rig" not in serial.protocol_handler_packages:
+        serial.protocol_handler_packages.append("pihyst.rig")
+    try:
+        return serial.serial_for_url(url, baudrate=baudrate, timeout=timeout_s,
+                                     write_timeout=max(1.0, timeout_s))
+    except (serial.SerialException, ValueError, OSError) as err:
+        raise RigError(f"{what}: cannot open port {url}: {err}") from None
+
+
+def read_line(port, terminator, what):
+    """Bytes up to and including ``terminator``; raises :class:`NoReplyError` when
+    nothing came and :class:`RigError` for a reply cut short."""
+    data = port.read_until(terminator)
+    if not data.endswith(terminator):
+        if not data:
+            raise NoReplyError(f"{what}: no reply within {port.timeout:g} s")
+        raise RigError(f"{what}: reply cut short: {data!r}")
+    return data
