@@ -42,7 +42,8 @@ class LoopSettings:
     watchdog_periods: float = 5.0         # loop stall (in periods) that zeroes the output
     readback_every: int = 1               # ticks between readbacks (when configured)
     readback_tolerance_V: float = 1.0
-    stuck_ticks: int = 0                  # 0: off; see Controller
+    stuck_ticks: int = 20                 # a reading unchanged this long while the voltage
+    #                                       moves stuck_volts stops the run (0: off)
     stuck_volts: float = 5.0
 
     @property
