@@ -237,9 +237,15 @@ class Controller:
                 limit = s.watchdog_periods * s.period_s
                 self._watchdog = Watchdog(limit, self._zero_from_watchdog).start()
                 self._watchdog.busy()
-            with self._supply_lock:
-                self.supply.set_voltage(0.0)
-                self.supply.output_on()
+            for attempt in range(s.max_comm_errors):
+                try:
+                    with self._supply_lock:
+                        self.supply.set_voltage(0.0)
+                        self.supply.output_on()
+                    break
+                except OSError as err:
+                    if attempt == s.max_comm_errors - 1:
+                        raise StopRun(f"could not start: supply: {err}") from None
             self.t0 = deadline = self.clock.now()
             self._note(f"start: 0 V, output on; {program.describe()}")
             target = program.initial_voltage()

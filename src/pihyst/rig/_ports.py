@@ -1,7 +1,15 @@
 """Opening serial ports from any pyserial URL (a device path, ``spy://``, ``socket://``,
 ``pihystsim://`` for the emulated instruments, ...)."""
 
+import functools
+
 import serial
+
+try:
+    import termios
+    _TERMIOS_ERRORS = (termios.error,)
+except ImportError:  # pragma: no cover - not on Windows
+    _TERMIOS_ERRORS = ()
 
 from pihyst.rig import _serial_handlers
 
@@ -36,3 +44,17 @@ def read_line(port, terminator, what):
             raise NoReplyError(f"{what}: no reply within {port.timeout:g} s")
         raise RigError(f"{what}: reply cut short: {data!r}")
     return data
+
+
+def port_errors(what):
+    """Decorator: errors of the port that are not OSError (pyserial lets termios.error out
+    of a vanished device) become :class:`RigError`, so the loop counts them."""
+    def wrap(method):
+        @functools.wraps(method)
+        def call(*args, **kwargs):
+            try:
+                return method(*args, **kwargs)
+            except _TERMIOS_ERRORS as err:
+                raise RigError(f"{what}: port error: {err}") from None
+        return call
+    return wrap

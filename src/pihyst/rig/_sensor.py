@@ -9,7 +9,7 @@ micrometres: a value, or none with the status 'over-range+', 'over-range-' or 'i
 """
 
 from pihyst.rig._codecs import Reading, ReplyError, parse_reply
-from pihyst.rig._ports import open_port, read_line
+from pihyst.rig._ports import open_port, port_errors, read_line
 
 
 class KeyenceSensor:
@@ -25,6 +25,7 @@ class KeyenceSensor:
             self.command = f"MS,{cfg.output:02d}"
         self._request = (self.command + "\r").encode("ascii")
 
+    @port_errors("sensor")
     def read(self):
         """One measurement of the configured output, in micrometres."""
         self.port.reset_input_buffer()

@@ -13,7 +13,7 @@ import minimalmodbus
 
 from pihyst.rig._clock import WallClock
 from pihyst.rig._codecs import register_count
-from pihyst.rig._ports import RigError, open_port, read_line
+from pihyst.rig._ports import RigError, open_port, port_errors, read_line
 
 _BYTEORDER = {"big": minimalmodbus.BYTEORDER_BIG,             # ABCD: high word first
               "little": minimalmodbus.BYTEORDER_LITTLE_SWAP}  # CDAB: low word first
@@ -29,6 +29,7 @@ class _Instrument(minimalmodbus.Instrument):
         self._clock = clock
         self._last_read = -math.inf
 
+    @port_errors("supply")
     def _communicate(self, request, number_of_bytes_to_read):
         # t_silence = 3.5 characters of 11 bits, at least 1.75 ms (Modbus over serial line)
         silence = max(3.5 * 11 / self.serial.baudrate, 0.00175)
@@ -136,6 +137,7 @@ class AsciiSupply:
         self._prompt = cfg.prompt.encode("ascii")
         self._number = re.compile(cfg.reply_pattern)
 
+    @port_errors("supply")
     def _command(self, text, query=False):
         c, port = self.cfg, self.port
         port.reset_input_buffer()
