@@ -27,6 +27,7 @@ def _common(p, output=True):
     p.add_argument("--real-time", action="store_true",
                    help="emulated instruments only: run in wall-clock time (default: virtual "
                         "time, as fast as the computation goes)")
+    _fault_option(p)
     if output:
         p.add_argument("-o", "--output", metavar="LOG.csv", required=True,
                        help="run log (CSV that 'pihyst fit' reads; written as the run goes)")
@@ -96,12 +97,37 @@ def register(sub):
                     "talk to them as to the real instruments. Runs until Ctrl-C.")
     e.add_argument("--config", metavar="RIG.toml", required=True)
     e.add_argument("--plant", default=None, metavar="NAME", help="the simulated beam")
+    _fault_option(e)
     e.add_argument("--duration", type=float, default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     e.set_defaults(run=run_emulate)
 
 
 # ----------------------------------------------------------------------------- helpers
+def _fault_option(p):
+    p.add_argument("--fault", action="append", default=[], metavar="DEVICE:KIND[:START[:N]]",
+                   help="emulated instruments only: inject a fault, e.g. sensor:over-range:5 "
+                        "(from 5 s on) or supply:no-reply:10:3 (3 replies from 10 s on); "
+                        "kinds: no-reply, late-reply, truncated, garbled, bad-crc, "
+                        "error-code, stuck, over-range, vanish. Repeatable.")
+
+
+def _faults(args):
+    from pihyst.rig import Fault
+    faults = []
+    for text in args.fault:
+        parts = text.split(":")
+        try:
+            if not 2 <= len(parts) <= 4:
+                raise ValueError("expected DEVICE:KIND[:START[:N]]")
+            start = float(parts[2]) if len(parts) > 2 else 0.0
+            count = int(parts[3]) if len(parts) > 3 else None
+            faults.append(Fault(parts[1], parts[0], start_s=start, count=count))
+        except ValueError as err:
+            raise UsageError(f"--fault {text}: {err}") from None
+    return faults
+
+
 def _config(args):
     from pihyst.rig import ConfigError, load_config
     from pihyst.rig._plants import PLANT_NAMES
@@ -115,9 +141,12 @@ def _config(args):
 
 
 def _open(args, config):
-    from pihyst.rig import Rig, RigError
+    from pihyst.rig import Rig, RigError, is_emulated
+    faults = _faults(args)
+    if faults and not is_emulated(config):
+        raise UsageError("--fault: only for emulated instruments (pihystsim:// ports)")
     try:
-        return Rig(config, real_time=args.real_time, plant=args.plant)
+        return Rig(config, real_time=args.real_time, plant=args.plant, faults=faults)
     except RigError as err:
         raise UsageError(f"{args.config}: {err}") from None
 
@@ -185,7 +214,6 @@ def run_check(args):
 
 
 def run_record(args):
-    from pihyst import signals
     from pihyst.rig import VoltageProgram
     config = _config(args)
     r = config.rig
@@ -279,7 +307,7 @@ def run_emulate(args):
         stop.set()
     old = signal.signal(signal.SIGTERM, _stop)
     try:
-        with PtyEmulators(config, plant=args.plant) as emu:
+        with PtyEmulators(config, plant=args.plant, faults=_faults(args)) as emu:
             for what, path in emu.paths.items():
                 c = getattr(config, what)
                 print(f"{what}: {path}  ({c.protocol}, {c.baudrate} baud)", flush=True)
