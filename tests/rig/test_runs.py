@@ -221,3 +221,45 @@ def test_watchdog_zeroes_a_stalled_loop(tmp_path):
     # the watchdog thread sent 0 V while the loop was stuck: 3 periods into the stall
     t_zero = min(t for t, u in st.commands if u == 0.0 and t > stalled[0])
     assert stalled[0] + 0.15 < t_zero < stalled[0] + 0.5
+
+
+# ----------------------------------------------------------------------------- tracking
+def tracking_runs(tmp_path, desired, gains=(1.0, 10.0)):
+    import pihyst
+    from pihyst.rig import FeedbackProgram, FeedforwardProgram
+    config = make_config(rig={"rate_hz": 10.0})
+    _, u = triangle(period_s=60.0, dt=0.1)
+    loop, _, _ = record(tmp_path, config, program=VoltageProgram(u))
+    y = loop.column("displacement_um", "run")
+    model = pihyst.fit(u, y, family="multislope", thresholds=[0, 20, 30, 40]).model
+    out = {}
+    for name, program in (
+            ("open", FeedforwardProgram(model, desired, 0.0, 150.0, 20.0)),
+            ("feedback", FeedbackProgram(model, desired, 0.0, 150.0, 0.1, *gains,
+                                         max_step=20.0))):
+        result, emu, _ = record(tmp_path, config, program=program)
+        assert result.completed
+        e = result.column("displacement_um", "run") - result.column("reference", "run")
+        out[name] = (e, result, program)
+    return out
+
+
+def test_feedback_removes_what_feedforward_cannot(tmp_path):
+    _, desired = triangle(u_max=35.0, period_s=60.0, dt=0.1)
+    runs = tracking_runs(tmp_path, np.r_[desired, np.full(300, 20.0)])
+    e_open, e_fb = runs["open"][0], runs["feedback"][0]
+    assert np.mean(np.abs(e_fb)) < 0.3 * np.mean(np.abs(e_open))
+    # holding 20 um for 30 s: creep moves the open-loop beam, feedback holds it
+    assert np.mean(np.abs(e_fb[-100:])) < 0.05 < np.mean(np.abs(e_open[-100:]))
+
+
+def test_anti_windup_at_the_voltage_limit(tmp_path):
+    # 60 um is out of reach (the beam gives ~45 um at 150 V): the voltage saturates and
+    # the integral must not wind up, or the way back to 20 um would overshoot for long
+    desired = np.r_[np.linspace(0, 60, 100), np.full(100, 60.0), np.full(100, 20.0)]
+    runs = tracking_runs(tmp_path, desired)
+    e, result, program = runs["feedback"]
+    u = result.column("voltage_V", "run")
+    assert u[150:200].max() == 150.0
+    assert abs(program.integral) < 50.0
+    assert np.mean(np.abs(e[-50:])) < 0.05

@@ -47,7 +47,7 @@ def register(sub):
                "examples/rig/emulated.toml -o loop.csv && pihyst fit loop.csv --model "
                "multislope -o model.json && pihyst rig track model.json "
                "examples/triangle_desired.csv --config examples/rig/emulated.toml "
-               "--feedback 0.3,2 -o run.csv")
+               "--feedback 1,10 -o run.csv")
     rig_sub = p.add_subparsers(dest="rig_command", metavar="ACTION", required=True)
 
     c = rig_sub.add_parser("check", help="open both instruments, one reading, supply at 0 V",
@@ -85,8 +85,8 @@ def register(sub):
     t.add_argument("model", metavar="MODEL.json")
     t.add_argument("desired", metavar="DESIRED.csv", help="CSV with time_s, displacement_um")
     t.add_argument("--feedback", metavar="KP,KI[,KD]", default=None,
-                   help="PID gains on the error in um (KP dimensionless, KI in 1/s, KD in s), "
-                        "e.g. 0.3,2")
+                   help="PID gains on the error in um (KP in V/um, KI in V/(um s), KD in V s/um), "
+                        "e.g. 1,10")
     _common(t)
     t.set_defaults(run=run_track)
 

@@ -17,8 +17,6 @@ from dataclasses import astuple, dataclass
 
 import numpy as np
 
-from pihyst import __version__
-
 COLUMNS = ("tick", "time_s", "phase", "reference", "command_V", "voltage_V", "readback_V",
            "displacement_um", "sensor_status", "supply_status", "overrun", "late_s",
            "busy_s")

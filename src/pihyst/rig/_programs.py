@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from pihyst.compensate import FLAG_SATURATED_HIGH, FLAG_SATURATED_LOW, FLAG_SLEW, Compensator
+from pihyst.compensate import Compensator
 
 
 class VoltageProgram:
@@ -89,16 +89,23 @@ class FeedforwardProgram:
 
 
 class FeedbackProgram(FeedforwardProgram):
-    """Feedforward plus PID feedback on the measured error, in displacement units: the
-    compensator linearises the beam, the PID corrects what the model misses (creep,
-    drift, model error):
+    """Feedforward plus PID feedback on the measured error: the compensator cancels the
+    hysteresis, the PID corrects what the model misses (creep, drift, model error) with a
+    small voltage on top:
 
-        e_k = y_d[k] - y_k,   c_k = Kp e_k + Ki sum_j e_j dt + Kd (e_k - e_{k-1}) / dt,
-        u_k = H^-1(y_d[k] + c_k)
+        e_k = y_d[k] - y_k,
+        u_k = H^-1(y_d[k]) + Kp e_k + Ki sum_j e_j dt + Kd (e_k - e_{k-1}) / dt
 
-    Anti-windup by conditional integration: the integral does not grow while the
-    compensator is saturated (voltage limit) or slew-limited in the direction of the error.
-    Ticks without a valid reading leave the integral unchanged."""
+    (gains in V/um, V/(um s) and V s/um), then clipped to the limits and the slew limit.
+    The feedforward path runs on its own (the compensator's state follows H^-1(y_d), not
+    the corrected voltage): the correction is a small voltage added in parallel. Feeding
+    the correction through the inverse instead (a corrected desired value, or an
+    operator state that follows every correction) makes small reversals at which the
+    model is flat, and the voltage jumps across them.
+
+    Anti-windup by conditional integration: the integral does not change on a tick whose
+    voltage was clipped (limit or slew) in the direction of the error. Ticks without a
+    valid reading leave the integral unchanged."""
 
     def __init__(self, model, desired, u_min, u_max, dt, kp, ki, kd=0.0, max_step=None,
                  description="desired"):
@@ -109,23 +116,35 @@ class FeedbackProgram(FeedforwardProgram):
         self.dt, self.kp, self.ki, self.kd = dt, kp, ki, kd
         self.integral = 0.0
         self._e_prev = None
+        self._last = None
+
+    def start(self):
+        super().start()
+        self._last = self.compensator.voltage
 
     def command(self, k, measured_um):
         y_d = float(self.desired[k])
-        if measured_um is None or not math.isfinite(measured_um):
-            return y_d, self._feedforward(y_d + self.integral)
-        e = y_d - measured_um
-        step = self.ki * e * self.dt
-        derivative = 0.0 if self._e_prev is None else self.kd * (e - self._e_prev) / self.dt
-        self._e_prev = e
-        self.integral += step
-        u = self._feedforward(y_d + self.kp * e + self.integral + derivative)
-        flags = self.compensator.last_flags
-        if (e > 0 and flags & (FLAG_SATURATED_HIGH | FLAG_SLEW)) or \
-                (e < 0 and flags & (FLAG_SATURATED_LOW | FLAG_SLEW)):
-            self.integral -= step
-        return y_d, u
+        u_ff = self.compensator.step(y_d)
+        integral = self.integral
+        correction = integral
+        e = None
+        if measured_um is not None and math.isfinite(measured_um):
+            e = y_d - measured_um
+            integral = self.integral + self.ki * e * self.dt
+            derivative = 0.0 if self._e_prev is None else (e - self._e_prev) / self.dt
+            self._e_prev = e
+            correction = self.kp * e + integral + self.kd * derivative
+        u = u_ff + correction
+        lo, hi = self.limits
+        if self.max_step is not None and self._last is not None:
+            lo, hi = max(lo, self._last - self.max_step), min(hi, self._last + self.max_step)
+        u_sent = min(max(u, lo), hi)
+        pushing = e is not None and ((u_sent < u and e > 0) or (u_sent > u and e < 0))
+        if not pushing:
+            self.integral = integral
+        self._last = u_sent
+        return y_d, u_sent
 
     def describe(self):
         return (super().describe().replace("open loop", "with feedback") +
-                f"; PID Kp {self.kp:g}, Ki {self.ki:g}/s, Kd {self.kd:g} s")
+                f"; PID Kp {self.kp:g} V/um, Ki {self.ki:g} V/(um s), Kd {self.kd:g} V s/um")
