@@ -18,8 +18,15 @@ import time
 
 import numpy as np
 
-from pihyst.rig import Controller, LoopSettings, Reading, Rig, VirtualClock, VoltageProgram
-from pihyst.rig import parse_config
+from pihyst.rig import (
+    Controller,
+    LoopSettings,
+    Reading,
+    Rig,
+    VirtualClock,
+    VoltageProgram,
+    parse_config,
+)
 from pihyst.signals import triangle
 
 
