@@ -85,6 +85,14 @@ def test_keyence_error_codes(code, meaning):
     assert info.value.code == code
 
 
+@pytest.mark.parametrize("code, meaning", [(0, "command error"), (1, "status error"),
+                                           (20, "command length"), (21, "parameter count"),
+                                           (22, "invalid parameter"), (88, "timeout")])
+def test_keyence_g3000_error_codes(code, meaning):
+    with pytest.raises(KeyenceError, match=f"ER,M1,{code:02d}.*{meaning}"):
+        parse_reply(f"ER,M1,{code:02d}", "M1", "keyence-lk-g3000")
+
+
 def test_keyence_replies():
     assert parse_reply("MS,01,+0012.3456", "MS,01") == [Reading(12.3456)]
     assert parse_reply("M1,+01.2345", "M1") == [Reading(1.2345)]

@@ -104,13 +104,18 @@ def test_ascii_scpi():
 
 
 def test_ascii_mdt693b_echo_and_prompt():
+    # the dialogue of a captured MDT693B session (public driver code): the command is
+    # echoed, '*' acknowledges, a query's reply follows the prompt
     supply, port = ascii_supply(
         [(b"xvoltage=24.68\r", b"xvoltage=24.68\r*"),
-         (b"xvoltage?\r", b"xvoltage?\r[  24.68]\r*")],
+         (b"xvoltage?\r", b"xvoltage?\r*[  24.8]\r"),
+         (b"xvoltage=200.00\r", b"xvoltage=200.00\rCMD_NOT_DEFINED\r*")],
         terminator="\r", set_command="xvoltage={volts:.2f}", query_command="xvoltage?",
         echo=True, prompt="*")
     supply.set_voltage(24.68)
-    assert supply.read_voltage() == 24.68
+    assert supply.read_voltage() == 24.8
+    with pytest.raises(RigError, match="CMD_NOT_DEFINED"):
+        supply.set_voltage(200.0)
     port.done()
 
 
@@ -160,6 +165,9 @@ def test_keyence_invalid_readings(reply, status):
 def test_keyence_failures():
     s, _ = sensor([(b"MS,01\r", b"ER,MS,62\r")])
     with pytest.raises(KeyenceError, match="62 .parameter range"):
+        s.read()
+    s, _ = sensor([(b"M1\r", b"ER,M1,22\r")], protocol="keyence-lk-g3000")
+    with pytest.raises(KeyenceError, match="22 .invalid parameter"):
         s.read()
     s, _ = sensor([(b"MS,01\r", b"MS,01,+00")])
     with pytest.raises(RigError, match="cut short"):

@@ -89,7 +89,11 @@ def test_keyence_g3000_and_faults():
         assert port.read_until(b"\r") == b"M1,+FFFFFFF\r"
         port.write(b"M0\r")
         reply = port.read_until(b"\r")
+        # a sign and 7 characters: +dd.dddd
         assert reply.startswith(b"M0,") and reply.endswith(b",XXXXXXXX\r")
+        assert len(reply.split(b",")[1]) == 8 and reply[5:6] in b"0123456789"
+        port.write(b"M5\r")
+        assert port.read_until(b"\r") == b"ER,M5,00\r"
         clock.sleep(1.0)
         port.write(b"M1\r")
         assert port.read_until(b"\r") == b"ER,M1,88\r"

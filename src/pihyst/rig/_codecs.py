@@ -101,18 +101,27 @@ def request_length(buffer):
 
 # ----------------------------------------------------------------------------- KEYENCE LK
 
-#: ER codes of the LK-G5000 communication manual (assumed the same on the LK-G3000).
-KEYENCE_ERRORS = {50: "command error", 51: "status error", 60: "command length error",
-                  61: "parameter count error", 62: "parameter range error",
-                  88: "timeout error", 99: "other error"}
+#: ER codes: LK-G5000 / LK-HD communication manual, and the LK-G (LK-G3000) user manual.
+KEYENCE_ERRORS = {
+    "keyence-lk-g5000": {50: "command error", 51: "status error", 60: "command length error",
+                         61: "parameter count error", 62: "parameter range error",
+                         88: "timeout error", 99: "other error"},
+    "keyence-lk-g3000": {0: "command error", 1: "status error", 20: "command length error",
+                         21: "parameter count error", 22: "invalid parameter error",
+                         88: "timeout error", 99: "other error"},
+}
+
+#: The code each dialect answers for an unknown command and for a bad parameter.
+KEYENCE_COMMAND_ERROR = {"keyence-lk-g5000": 50, "keyence-lk-g3000": 0}
+KEYENCE_PARAMETER_ERROR = {"keyence-lk-g5000": 62, "keyence-lk-g3000": 22}
 
 
 class KeyenceError(IOError):
     """The controller answered ``ER,<command>,<code>``."""
 
-    def __init__(self, command, code):
+    def __init__(self, command, code, dialect="keyence-lk-g5000"):
         self.command, self.code = command, code
-        meaning = KEYENCE_ERRORS.get(code, "unknown error code")
+        meaning = KEYENCE_ERRORS[dialect].get(code, "unknown error code")
         super().__init__(f"sensor error ER,{command},{code:02d} ({meaning})")
 
 
@@ -169,7 +178,7 @@ def format_value(value, decimals=4, width=None):
     return f"{value:+0{width + 1}.{decimals}f}"
 
 
-def parse_reply(reply, command):
+def parse_reply(reply, command, dialect="keyence-lk-g5000"):
     """Values of a reply to ``command`` (without CR): ``MS,01,+0012.3456`` to ``MS,01``
     (LK-G5000) or ``M1,+01.2345`` to ``M1`` (LK-G3000). Raises :class:`KeyenceError`
     for ``ER,...`` and :class:`ReplyError` for anything else unexpected.
@@ -182,7 +191,7 @@ def parse_reply(reply, command):
     if reply.startswith("ER,"):
         parts = reply.split(",")
         if len(parts) == 3 and parts[2].strip().isdigit():
-            raise KeyenceError(parts[1], int(parts[2]))
+            raise KeyenceError(parts[1], int(parts[2]), dialect)
         raise ReplyError(f"malformed error reply {reply!r}")
     prefix = command + ","
     if not reply.startswith(prefix):

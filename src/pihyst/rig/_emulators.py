@@ -14,6 +14,8 @@ import struct
 import numpy as np
 
 from pihyst.rig._codecs import (
+    KEYENCE_COMMAND_ERROR,
+    KEYENCE_PARAMETER_ERROR,
     crc_ok,
     decode_registers,
     encode_registers,
@@ -316,6 +318,9 @@ class AsciiSupply(Device):
         st.touch(t)
         if self.faults.stuck(t - self.t0):
             st.stuck = True
+        # echo, then for a query the prompt, the reply and the terminator, then the prompt
+        # (a Thorlabs MDT693B answers 'xvoltage?' with 'xvoltage?\r*[  24.8]\r' and is
+        # ready again after '*'); an SCPI-like supply answers queries only
         term = cfg.terminator
         out = line + term if cfg.echo else ""
         m = self._set.fullmatch(line)
@@ -326,7 +331,7 @@ class AsciiSupply(Device):
             else:
                 out += "ERROR" + term
         elif cfg.query_command and line == cfg.query_command:
-            out += self.reply_template.format(volts=st.output_V) + term
+            out += cfg.prompt + self.reply_template.format(volts=st.output_V) + term
         elif cfg.output_on_command and line == cfg.output_on_command:
             st.set_output(True, t)
         elif cfg.output_off_command and line == cfg.output_off_command:
@@ -362,7 +367,12 @@ class KeyenceSensor(Device):
         y = self.beam.measure(t)
         if over_range or abs(y) > self.range_um:
             return "+FFFFFFF" if (over_range or y > 0) else "-FFFFFFF"
-        text = format_value(self.cfg.sign * y / self.cfg.scale_um, self.decimals)
+        # the LK-G3000 prints a sign and 7 characters (digits and point), right-aligned;
+        # a value that does not fit is over-range
+        width = 7 if self.cfg.protocol == "keyence-lk-g3000" else None
+        text = format_value(self.cfg.sign * y / self.cfg.scale_um, self.decimals, width)
+        if width is not None and len(text) > width + 1:
+            return "+FFFFFFF" if text[0] == "+" else "-FFFFFFF"
         if self.faults.stuck(t - self.t0):
             self._stuck_text = self._stuck_text or text
             return self._stuck_text
@@ -404,9 +414,9 @@ class KeyenceSensor(Device):
         if fault is not None:
             code = fault.code
         elif outputs is None:
-            code = 50                        # command error
+            code = KEYENCE_COMMAND_ERROR[self.cfg.protocol]
         elif not outputs:
-            code = 62                        # parameter range error
+            code = KEYENCE_PARAMETER_ERROR[self.cfg.protocol]
         else:
             code = None
         if code is not None:

@@ -35,7 +35,7 @@ class KeyenceSensor:
             text = raw[:-1].decode("ascii")
         except UnicodeDecodeError:
             raise ReplyError(f"sensor: garbled reply {raw!r}") from None
-        values = parse_reply(text, self.command)
+        values = parse_reply(text, self.command, self.cfg.protocol)
         if len(values) != 1:
             raise ReplyError(f"sensor: expected one value in {text!r}")
         reading = values[0]

@@ -127,8 +127,9 @@ class AsciiSupply:
     """A supply with an ASCII line protocol: ``set_command`` ('VOLT {volts:.2f}'),
     ``query_command`` ('MEAS:VOLT?'), ``output_on_command``/``output_off_command``, each
     followed by ``terminator``. With ``echo`` the device repeats each command; with a
-    ``prompt`` (e.g. '*') it signals that it is ready again. The number in a query's
-    reply is the first match of ``reply_pattern``."""
+    ``prompt`` (e.g. '*') it acknowledges a set command (and may put it before a query's
+    reply). The number in a query's reply line is the first match of
+    ``reply_pattern``."""
 
     def __init__(self, port, cfg, clock=WallClock):
         self.cfg = cfg
@@ -139,23 +140,26 @@ class AsciiSupply:
 
     @port_errors("supply")
     def _command(self, text, query=False):
+        """Send one command; returns the reply line of a query (prompt and blanks
+        stripped). A set command with a prompt is acknowledged by the prompt alone:
+        anything before it is an error message."""
         c, port = self.cfg, self.port
         port.reset_input_buffer()
-        port.write(text.encode("ascii") + self._term)
-        answer = b""
-        if self._prompt:
-            answer = read_line(port, self._prompt, "supply")[:-len(self._prompt)]
-        elif c.echo or query:
-            answer = read_line(port, self._term, "supply")
-            if c.echo and query:
-                answer += read_line(port, self._term, "supply")
+        sent = text.encode("ascii") + self._term
+        port.write(sent)
         if c.echo:
-            echo = text.encode("ascii") + self._term
-            if not answer.startswith(echo):
-                raise RigError(f"supply: expected the echo {echo!r}, got {answer!r}")
-            answer = answer[len(echo):]
-        reply = answer.decode("ascii", "replace").strip()
-        if "ERR" in reply.upper():
+            echo = read_line(port, self._term, "supply")
+            if echo != sent:
+                raise RigError(f"supply: expected the echo {sent!r}, got {echo!r}")
+        reply = b""
+        if query:
+            reply = read_line(port, self._term, "supply")[:-len(self._term)]
+        elif self._prompt:
+            reply = read_line(port, self._prompt, "supply")[:-len(self._prompt)]
+        reply = reply.decode("ascii", "replace").strip()
+        if self._prompt:
+            reply = reply.lstrip(c.prompt).strip()
+        if reply and (not query or "ERR" in reply.upper()):
             raise RigError(f"supply: {text!r} answered {reply!r}")
         return reply
 
