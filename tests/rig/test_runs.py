@@ -264,3 +264,17 @@ def test_anti_windup_at_the_voltage_limit(tmp_path):
     assert u[150:200].max() == 150.0
     assert abs(program.integral) < 50.0
     assert np.mean(np.abs(e[-50:])) < 0.05
+
+
+def test_hdf5_log(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    config = make_config()
+    with Rig(config, faults=[Fault("over-range", "sensor", start_s=2.0)]) as rig:
+        result = rig.run(VoltageProgram(triangle(period_s=20.0, dt=0.05)[1]),
+                         tmp_path / "run.h5", handle_signals=False)
+    with h5py.File(tmp_path / "run.h5") as f:
+        assert f["tick"][:].tolist() == list(range(len(result.records)))
+        assert f["sensor_status"].asstr()[-1] in ("over-range+", "not read")
+        assert any(n.startswith("stopped: 5 consecutive invalid") for n in
+                   f.attrs["notes"])
+        assert any("rig run log" in m for m in f.attrs["metadata"])

@@ -30,7 +30,8 @@ def _common(p, output=True):
     _fault_option(p)
     if output:
         p.add_argument("-o", "--output", metavar="LOG.csv", required=True,
-                       help="run log (CSV that 'pihyst fit' reads; written as the run goes)")
+                       help="run log, written as the run goes: CSV that 'pihyst fit' reads, "
+                            "or HDF5 for a name ending in .h5 (needs pihyst[hdf5])")
         p.add_argument("--fsync", action="store_true",
                        help="force every log row to the disk (survives a power cut)")
 
@@ -156,6 +157,12 @@ def _check_output(path):
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise UsageError(f"-o {path}: the folder {folder} does not exist")
+    if path.lower().endswith((".h5", ".hdf5")):
+        try:
+            import h5py  # noqa: F401
+        except ImportError:
+            raise UsageError(f"-o {path}: HDF5 logs need h5py: pip install "
+                             "'pihyst[hdf5]'") from None
 
 
 def _report(result, args, rig):

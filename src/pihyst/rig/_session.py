@@ -98,11 +98,14 @@ class Rig:
                           clock=self.clock, **kwargs)
 
     def run(self, program, log_path=None, *, notes=(), fsync=False, handle_signals=True):
-        """Run ``program`` into the CSV log ``log_path`` (None: no file); returns the
-        :class:`RunResult`."""
+        """Run ``program`` into the log ``log_path`` (CSV, or HDF5 for .h5/.hdf5; None:
+        no file); returns the :class:`RunResult`."""
         log = None
         if log_path is not None:
-            log = CsvRunLog(log_path, metadata(self, program, notes), fsync=fsync)
+            cls = CsvRunLog
+            if str(log_path).lower().endswith((".h5", ".hdf5")):
+                from pihyst.rig._hdf5 import Hdf5RunLog as cls
+            log = cls(log_path, metadata(self, program, notes), fsync=fsync)
         try:
             return self.controller(log, handle_signals=handle_signals).run(program)
         finally:
