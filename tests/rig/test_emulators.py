@@ -140,3 +140,17 @@ def test_ascii_supply_round_trip(dialect):
         assert emu.supply_state.output_V == (0.0 if dialect == "scpi" else 24.68)
     finally:
         unregister("t-ascii")
+
+
+def test_reads_time_out_on_the_emulators_clock_not_the_wall_clock(bench, monkeypatch):
+    # a loaded machine: every wall-clock reading is a second later than the last one
+    import itertools
+
+    import serial.serialutil
+    ticks = itertools.count()
+    monkeypatch.setattr(serial.serialutil.Timeout, "TIME", lambda: float(next(ticks)))
+    _, _, _, sensor = bench
+    for _ in range(3):
+        sensor.write(b"MS,01\r")
+        reply = sensor.read_until(b"\r")
+        assert reply.startswith(b"MS,01,") and reply.endswith(b"\r")

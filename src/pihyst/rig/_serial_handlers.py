@@ -122,6 +122,34 @@ class Serial(SerialBase):
             self._rx.popleft()
         return bytes(taken)
 
+    def read_until(self, expected=b"\n", size=None):
+        """Bytes up to and including ``expected`` (or ``size`` bytes), within one timeout
+        of the emulators' clock (pyserial's own read_until times out on the wall clock,
+        which is wrong in virtual time)."""
+        self._check()
+        now = self.clock.now()
+        deadline = float("inf") if self._timeout is None else now + self._timeout
+        taken = bytearray()
+        done = None
+        for t, byte in self._rx:
+            if t > deadline:
+                break
+            taken.append(byte)
+            done = t
+            if taken.endswith(expected) or (size is not None and len(taken) >= size):
+                break
+        else:
+            if deadline == float("inf"):
+                raise SerialException(f"{self._port}: read without timeout would wait "
+                                      "forever")
+        if not (taken.endswith(expected) or (size is not None and len(taken) >= size)):
+            done = deadline
+        self.clock.sleep(max(0.0, done - now))
+        self._check()
+        for _ in taken:
+            self._rx.popleft()
+        return bytes(taken)
+
     def reset_input_buffer(self):
         self._check()
         now = self.clock.now()
