@@ -30,7 +30,7 @@ True
 """
 
 from pihyst.rig._clock import VirtualClock, WallClock
-from pihyst.rig._codecs import KeyenceError, Reading, ReplyError
+from pihyst.rig._codecs import KeyenceError, Reading, ReplyError, crc16_modbus, crc_ok
 from pihyst.rig._config import (
     ConfigError,
     EmulatorConfig,
@@ -57,6 +57,6 @@ __all__ = [
     "KeyenceError", "KeyenceSensor", "LoopSettings", "ModbusRtuSupply", "NoReplyError",
     "Reading", "ReplyError", "Rig", "RigConfig", "RigError", "RunResult", "SensorConfig",
     "SupplyConfig", "TickRecord", "VirtualClock", "VoltageProgram", "WallClock",
-    "is_emulated", "load_config", "open_port", "open_sensor", "open_supply", "parse_config",
+    "crc16_modbus", "crc_ok", "is_emulated", "load_config", "open_port", "open_sensor", "open_supply", "parse_config",
     "read_run_log",
 ]
