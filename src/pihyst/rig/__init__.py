@@ -57,6 +57,6 @@ __all__ = [
     "KeyenceError", "KeyenceSensor", "LoopSettings", "ModbusRtuSupply", "NoReplyError",
     "Reading", "ReplyError", "Rig", "RigConfig", "RigError", "RunResult", "SensorConfig",
     "SupplyConfig", "TickRecord", "VirtualClock", "VoltageProgram", "WallClock",
-    "crc16_modbus", "crc_ok", "is_emulated", "load_config", "open_port", "open_sensor", "open_supply", "parse_config",
-    "read_run_log",
+    "crc16_modbus", "crc_ok", "is_emulated", "load_config", "open_port", "open_sensor",
+    "open_supply", "parse_config", "read_run_log",
 ]

@@ -7,7 +7,7 @@ import signal
 
 import numpy as np
 import pytest
-from conftest import make_config
+from rig_helpers import make_config
 
 from pihyst.cli import main as pihyst_main
 from pihyst.rig import Fault, Rig, VoltageProgram, WallClock, read_run_log

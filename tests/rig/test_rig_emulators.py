@@ -1,7 +1,7 @@
 """The emulated instruments, byte for byte, through their in-process pyserial ports."""
 
 import pytest
-from conftest import make_config
+from rig_helpers import make_config
 
 from pihyst.rig import Emulators, Fault, VirtualClock, open_port
 from pihyst.rig._codecs import with_crc

@@ -4,7 +4,7 @@ import math
 
 import minimalmodbus
 import pytest
-from conftest import ScriptedPort, make_config
+from rig_helpers import ScriptedPort, make_config
 
 from pihyst.rig import (
     AsciiSupply,

@@ -2,9 +2,9 @@
 beam, never skip a tick in the log, never send a setpoint outside the limits or the slew."""
 
 import numpy as np
-from conftest import make_config
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from rig_helpers import make_config
 
 from pihyst.rig import FAULT_KINDS, Fault, Rig, VoltageProgram, read_run_log
 from pihyst.signals import triangle

@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import make_config
+from rig_helpers import make_config
 
 from pihyst.rig import Rig, VoltageProgram, open_sensor, open_supply
 from pihyst.rig._pty import PtyEmulators
@@ -49,7 +49,7 @@ def test_vanishing_pseudo_terminal(tmp_path):
 
 def test_emulate_command_prints_paths_and_serves(tmp_path):
     cfg = tmp_path / "rig.toml"
-    from conftest import config_text
+    from rig_helpers import config_text
     cfg.write_text(config_text())
     proc = subprocess.Popen([sys.executable, "-m", "pihyst", "rig", "emulate", "--config",
                              str(cfg), "--duration", "20"], stdout=subprocess.PIPE, text=True)

@@ -2,7 +2,7 @@
 three commands."""
 
 import pytest
-from conftest import config_text
+from rig_helpers import config_text
 
 from pihyst.cli import main
 
@@ -87,3 +87,21 @@ def test_a_fault_stops_the_run_with_status_1(tmp_path, capsys, cfg):
     assert "the run stopped early: 5 consecutive invalid sensor readings" in \
         error_line(capsys)
     assert "# stopped: 5 consecutive invalid sensor readings" in out.read_text()
+
+
+def test_record_a_csv_of_voltages(tmp_path, capsys, cfg):
+    volts = tmp_path / "volts.csv"
+    volts.write_text("# a ramp\ntime_s,voltage_V\n0,0\n2,40\n4,0\n")
+    out = tmp_path / "loop.csv"
+    assert main(["rig", "record", "--config", str(cfg), "--voltages", str(volts),
+                 "-o", str(out)]) == 0
+    from pihyst.rig import read_run_log
+    columns, _ = read_run_log(out)
+    run = columns["phase"] == "run"
+    assert run.sum() == 81                      # 4 s at 20 Hz, both ends included
+    assert columns["voltage_V"][run].max() == pytest.approx(40.0)
+    volts.write_text("time_s,voltage_V\n0,0\n1,400\n")
+    assert main(["rig", "record", "--config", str(cfg), "--voltages", str(volts),
+                 "-o", str(tmp_path / "no.csv")]) == 2
+    assert "outside the rig's limits" in error_line(capsys)
+    assert not (tmp_path / "no.csv").exists()
