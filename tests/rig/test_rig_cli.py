@@ -63,12 +63,13 @@ def test_bad_options_and_ports(tmp_path, capsys, cfg):
 
 def test_record_fit_track(tmp_path, capsys, cfg):
     loop, model, run = (tmp_path / n for n in ("loop.csv", "model.json", "run.csv"))
-    assert main(["rig", "record", "--config", str(cfg), "--period", "60",
+    assert main(["rig", "record", "--config", str(cfg), "--period", "30",
                  "-o", str(loop)]) == 0
     assert "stopped: end of the program; 0 V, output off" in capsys.readouterr().out
-    assert main(["fit", str(loop), "--model", "multislope", "-o", str(model)]) == 0
+    assert main(["fit", str(loop), "--model", "multislope", "--thresholds", "0,20,30,40",
+                 "-o", str(model)]) == 0
     desired = tmp_path / "desired.csv"
-    desired.write_text("time_s,displacement_um\n0,0\n30,35\n60,0\n")
+    desired.write_text("time_s,displacement_um\n0,0\n15,35\n30,0\n")
     capsys.readouterr()
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "--feedback", "0.3,2", "-o", str(run)]) == 0

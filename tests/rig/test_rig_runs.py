@@ -48,7 +48,8 @@ def test_record_fits_as_it_is(tmp_path):
     y = result.column("displacement_um", "run")
     assert 40 < y.max() < 50 and abs(y[0]) < 0.1
     out = tmp_path / "model.json"
-    assert pihyst_main(["fit", str(log), "--model", "multislope", "-o", str(out)]) == 0
+    assert pihyst_main(["fit", str(log), "--model", "multislope", "--thresholds",
+                        "0,20,30,40", "-o", str(out)]) == 0
     assert out.exists()
 
 
@@ -156,7 +157,8 @@ def test_a_few_invalid_readings_are_logged_and_the_log_still_fits(tmp_path):
     assert set(columns["sensor_status"]) >= {"ok", "over-range+"}
     assert np.isnan(columns["displacement_um"][columns["sensor_status"] != "ok"]).all()
     assert_every_tick_logged(result, log)
-    assert pihyst_main(["fit", str(log), "-o", str(tmp_path / "m.json")]) == 0
+    assert pihyst_main(["fit", str(log), "--model", "classical", "--thresholds", "0,10,30",
+                        "-o", str(tmp_path / "m.json")]) == 0
 
 
 class Raising(VoltageProgram):
@@ -229,7 +231,7 @@ def tracking_runs(tmp_path, desired, gains=(1.0, 10.0)):
     import pihyst
     from pihyst.rig import FeedbackProgram, FeedforwardProgram
     config = make_config(rig={"rate_hz": 10.0})
-    _, u = triangle(period_s=60.0, dt=0.1)
+    _, u = triangle(period_s=40.0, dt=0.1)
     loop, _, _ = record(tmp_path, config, program=VoltageProgram(u))
     y = loop.column("displacement_um", "run")
     model = pihyst.fit(u, y, family="multislope", thresholds=[0, 20, 30, 40]).model
@@ -246,7 +248,7 @@ def tracking_runs(tmp_path, desired, gains=(1.0, 10.0)):
 
 
 def test_feedback_removes_what_feedforward_cannot(tmp_path):
-    _, desired = triangle(u_max=35.0, period_s=60.0, dt=0.1)
+    _, desired = triangle(u_max=35.0, period_s=40.0, dt=0.1)
     runs = tracking_runs(tmp_path, np.r_[desired, np.full(300, 20.0)])
     e_open, e_fb = runs["open"][0], runs["feedback"][0]
     assert np.mean(np.abs(e_fb)) < 0.3 * np.mean(np.abs(e_open))
