@@ -45,10 +45,14 @@ def test_loop_with_random_faults_and_timing(tmp_path, fault_list, rate, delay, b
     columns, notes = read_run_log(log)
     assert columns["tick"].tolist() == list(range(len(result.records)))
     assert notes[-1].startswith("stopped: " + result.reason)
-    sent = result.column("voltage_V")
-    sent = sent[np.isfinite(sent)]
-    assert np.all((sent >= 0.0) & (sent <= 120.0))
-    if slew is not None and sent.size:
-        steps = np.abs(np.diff(np.r_[0.0, sent]))
-        assert steps.max() <= slew / rate * (1 + 1e-9)
+    # what the supply received (and did): within the limits, and within the slew limit
+    # of each other unless the supply stopped answering during the ramp down
+    received = np.array([0.0] + [u for _, u in emu.supply_state.commands])
+    assert np.all((received >= 0.0) & (received <= 120.0))
+    if slew is not None:
+        steps = np.abs(np.diff(received))
+        if any("0 V at once" in n for n in notes):
+            steps = steps[:-1]
+        # (the setpoints travel as float32: a few uV of rounding)
+        assert steps.max(initial=0.0) <= slew / rate + 1e-4
     assert np.all(np.diff(columns["time_s"]) > 0)

@@ -156,6 +156,7 @@ class Controller:
             sent = u
             self.guard.sent(u)
         except OSError as err:
+            self.guard.failed(u)
             error = error or f"supply: {err}"
             supply_status = f"error: {err}"
         readback = NAN
@@ -294,11 +295,10 @@ class Controller:
         self._note(f"stopping: {reason}")
         # a failing sensor would cost its timeout on every step of the ramp
         read_sensor = "sensor" not in reason and not reason.startswith("watchdog")
-        u = self.guard.last
         step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
         failures = 0
-        while u > 0 and step is not None and failures < 2:
-            u = max(0.0, u - step)
+        while self.guard.hi > 0 and step is not None and failures < 2:
+            u = self.guard.check(max(0.0, self.guard.hi - step))
             start, late = self._wait(deadline)
             y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
             try:
@@ -308,11 +308,15 @@ class Controller:
                 self.guard.sent(u)
             except OSError as err:
                 failures += 1
+                self.guard.failed(u)
                 sent, supply_status = NAN, f"error: {err}"
             end = self.clock.now()
             deadline, overrun = self._advance(deadline, end)
             self._record(TickRecord(self.tick, start - self.t0, "shutdown", NAN, u, sent, NAN,
                                     y, status, supply_status, overrun, late, end - start))
+        if self.guard.hi > 0:
+            self._note("the supply did not follow the ramp: 0 V at once" if step is not None
+                       else "no slew limit: 0 V at once")
         problems = []
         for what, call in (("0 V", lambda: self.supply.set_voltage(0.0)),
                            ("output off", self.supply.output_off)):

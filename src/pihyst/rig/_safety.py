@@ -18,26 +18,39 @@ class Terminated(BaseException):
 class SetpointGuard:
     """Every setpoint passes here before it is sent:
 
-        u = clip(command, u_min, u_max),  |u - u_last| <= slew / rate
+        u = clip(command, u_min, u_max),  |u - v| <= slew / rate for every voltage v the
+                                          supply may be at
 
-    A non-finite command is refused (:class:`StopRun`): it is a fault upstream, not a
-    value to clip."""
+    After a send that failed (no reply, bad reply) the supply may or may not have taken
+    the new value, so the guard keeps the range [lo, hi] of voltages it may be at and
+    keeps the next setpoint within one step of both ends. A non-finite command is
+    refused (:class:`StopRun`): it is a fault upstream, not a value to clip."""
 
     def __init__(self, u_min, u_max, max_step=None):
         self.u_min, self.u_max = u_min, u_max
         self.max_step = max_step
-        self.last = 0.0
+        self.lo = self.hi = 0.0
+
+    @property
+    def last(self):
+        """The highest voltage the supply may be at."""
+        return self.hi
 
     def check(self, command):
         if not math.isfinite(command):
             raise StopRun(f"refused a non-finite setpoint ({command})")
         u = min(max(command, self.u_min), self.u_max)
         if self.max_step is not None:
-            u = min(max(u, self.last - self.max_step), self.last + self.max_step)
+            u = min(max(u, self.hi - self.max_step), self.lo + self.max_step)
         return u
 
     def sent(self, u):
-        self.last = u
+        """``u`` was sent and acknowledged."""
+        self.lo = self.hi = u
+
+    def failed(self, u):
+        """Sending ``u`` failed: the supply may be at ``u`` or where it was."""
+        self.lo, self.hi = min(self.lo, u), max(self.hi, u)
 
 
 class SignalGuard:
