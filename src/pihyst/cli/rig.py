@@ -11,9 +11,9 @@ import sys
 
 import numpy as np
 
+from pihyst import load_model
 from pihyst.cli.errors import UsageError
 from pihyst.csvio import CSVError, column_number, read_columns
-from pihyst.io import load_model
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
@@ -286,7 +286,7 @@ def run_track(args):
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
     with _open(args, config) as rig:
-        result = rig.run(program, args.output, notes=[f"model: {args.model}"],
+        result = rig.run(program, args.output, notes=[f"model: {args.model}: {model!r}"],
                          fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     ref = result.column("reference", phase="run")

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from pihyst.compensate import Compensator
+from pihyst import Compensator
 
 
 class VoltageProgram:

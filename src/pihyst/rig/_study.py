@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.identify import fit
+from pihyst import fit
 from pihyst.io import write_atomically
 from pihyst.metrics import error_summary
 from pihyst.rig._config import parse_config
