@@ -154,3 +154,21 @@ def test_reads_time_out_on_the_emulators_clock_not_the_wall_clock(bench, monkeyp
         sensor.write(b"MS,01\r")
         reply = sensor.read_until(b"\r")
         assert reply.startswith(b"MS,01,") and reply.endswith(b"\r")
+
+
+def test_parity_and_stop_bits():
+    # Modbus RTU's default framing, 8E1: 11 bits per byte
+    config = make_config(supply={"parity": "E"})
+    emu = Emulators(config)
+    clock = VirtualClock()
+    register("t-8e1", emu.supply, clock)
+    try:
+        port = open_port("pihystsim://t-8e1", 19200, 0.1, "supply", parity="E")
+        port.write(h("0110000A00020442C80000"))
+        assert port.read(8) == h("0110000A0002")
+        assert clock.now() == pytest.approx(21 * 11 / 19200 + 0.005)
+        wrong = open_port("pihystsim://t-8e1", 19200, 0.1, "supply")     # 8N1
+        wrong.write(h("0110000A00020442C80000"))
+        assert wrong.read(8) == b""
+    finally:
+        unregister("t-8e1")

@@ -21,6 +21,11 @@ class ConfigError(ValueError):
     """A rig configuration could not be used; the message is one line."""
 
 
+def char_bits(port_config):
+    """Bits on the wire per byte: start, 8 data, parity (unless N), stop bits."""
+    return 1 + 8 + (port_config.parity != "N") + port_config.stopbits
+
+
 SUPPLY_PROTOCOLS = ("modbus-rtu", "ascii")
 SENSOR_PROTOCOLS = ("keyence-lk-g5000", "keyence-lk-g3000")
 REGISTER_FORMATS = ("uint16", "uint32", "float32")
@@ -65,6 +70,8 @@ class SupplyConfig:
     baudrate: int = 19200
     protocol: str = "modbus-rtu"
     timeout_s: float = 0.1
+    parity: str = "N"                     # N, E or O (Modbus RTU's default is E)
+    stopbits: int = 1                     # 1 or 2
     # Modbus RTU
     address: int = 1
     setpoint_register: int = 10
@@ -91,6 +98,8 @@ class SensorConfig:
     port: str = "/dev/ttyUSB1"
     baudrate: int = 115200
     protocol: str = "keyence-lk-g5000"
+    parity: str = "N"
+    stopbits: int = 1
     output: int = 1
     scale_um: float = 1.0                 # micrometres per reported unit
     sign: int = 1
@@ -233,6 +242,10 @@ def _validate(check, cfg):
         _positive(check, sec, "timeout_s", c.timeout_s)
         if not c.port:
             check.fail(sec, "port", "must name a serial port or a pyserial URL")
+        if c.parity not in ("N", "E", "O"):
+            check.fail(sec, "parity", f"must be N, E or O, got {c.parity!r}")
+        if c.stopbits not in (1, 2):
+            check.fail(sec, "stopbits", f"must be 1 or 2, got {c.stopbits}")
     if not 0 <= s.address <= 247:
         check.fail("supply", "address", f"must be a Modbus slave address 1..247, got {s.address}")
     if s.setpoint_format not in REGISTER_FORMATS:

@@ -24,6 +24,7 @@ from pihyst.rig._codecs import (
     request_length,
     with_crc,
 )
+from pihyst.rig._config import char_bits
 from pihyst.rig._faults import FaultSet
 from pihyst.rig._plants import make_plant
 
@@ -75,8 +76,10 @@ class Device:
 
     name = "device"
 
-    def __init__(self, baudrate, delay_s, faults=None):
-        self.baudrate = baudrate
+    def __init__(self, port_config, delay_s, faults=None):
+        self.baudrate = port_config.baudrate
+        self.parity, self.stopbits = port_config.parity, port_config.stopbits
+        self.char_bits = char_bits(port_config)
         self.delay_s = delay_s
         self.faults = faults if faults is not None else FaultSet()
         self.requests = 0
@@ -176,7 +179,7 @@ class ModbusSupply(Device):
     name = "supply"
 
     def __init__(self, cfg, state, faults=None, delay_s=0.005):
-        super().__init__(cfg.baudrate, delay_s, faults)
+        super().__init__(cfg, delay_s, faults)
         self.cfg = cfg
         self.state = state
         self._buffer = b""
@@ -216,7 +219,7 @@ class ModbusSupply(Device):
         st.set_voltage(volts, t)
 
     def receive(self, data, t):
-        char = 10.0 / self.baudrate
+        char = self.char_bits / self.baudrate
         # a silence of more than 3.5 characters ends a frame (Modbus over serial line 2.5.1.1)
         if self._last_byte_t is not None and t - len(data) * char - self._last_byte_t > 3.5 * char:
             self._buffer = b""
@@ -294,7 +297,7 @@ class AsciiSupply(Device):
     name = "supply"
 
     def __init__(self, cfg, state, faults=None, delay_s=0.005, reply_template="{volts:.3f}"):
-        super().__init__(cfg.baudrate, delay_s, faults)
+        super().__init__(cfg, delay_s, faults)
         self.cfg = cfg
         self.state = state
         self.reply_template = reply_template
@@ -352,7 +355,7 @@ class KeyenceSensor(Device):
     name = "sensor"
 
     def __init__(self, cfg, beam, faults=None, delay_s=0.001, decimals=4, range_um=300.0):
-        super().__init__(cfg.baudrate, delay_s, faults)
+        super().__init__(cfg, delay_s, faults)
         self.cfg = cfg
         self.beam = beam
         self.decimals = decimals

@@ -23,14 +23,15 @@ class NoReplyError(RigError, TimeoutError):
     """A device did not answer within its timeout."""
 
 
-def open_port(url, baudrate, timeout_s, what):
+def open_port(url, baudrate, timeout_s, what, parity="N", stopbits=1):
     """An open pyserial port; ``what`` ('supply', 'sensor') names it in errors."""
     if _serial_handlers.url_name(url) is not None and \
             "pihyst.rig" not in serial.protocol_handler_packages:
         serial.protocol_handler_packages.append("pihyst.rig")
     try:
         return serial.serial_for_url(url, baudrate=baudrate, timeout=timeout_s,
-                                     write_timeout=max(1.0, timeout_s))
+                                     write_timeout=max(1.0, timeout_s), parity=parity,
+                                     stopbits=stopbits)
     except (serial.SerialException, ValueError, OSError) as err:
         raise RigError(f"{what}: cannot open port {url}: {err}") from None
 

@@ -32,7 +32,7 @@ class _PtyDevice:
         self._thread.start()
 
     def _char_s(self):
-        return 10.0 / self.device.baudrate
+        return self.device.char_bits / self.device.baudrate
 
     def _serve(self):
         while not self._stop.is_set():

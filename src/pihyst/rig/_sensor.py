@@ -55,5 +55,6 @@ class KeyenceSensor:
 
 def open_sensor(cfg, port=None):
     if port is None:
-        port = open_port(cfg.port, cfg.baudrate, cfg.timeout_s, "sensor")
+        port = open_port(cfg.port, cfg.baudrate, cfg.timeout_s, "sensor", cfg.parity,
+                         cfg.stopbits)
     return KeyenceSensor(port, cfg)

@@ -1,9 +1,9 @@
 """Emulated instruments as pyserial ports: ``pihystsim://NAME`` opens the device
 registered under NAME (see :func:`register`), in this process.
 
-The port emulates the wire: bytes take 10 bit times each at the port's baud rate (8N1),
-in both directions, one byte after the other; a device answers ``delay_s`` after the
-last byte of a request. Time is the registered clock's, so with a
+The port emulates the wire: bytes take their bit times (start, 8 data, parity, stop) at
+the port's baud rate, in both directions, one byte after the other; a device answers
+``delay_s`` after the last byte of a request. Time is the registered clock's, so with a
 :class:`~pihyst.rig._clock.VirtualClock` a read that waits for a reply advances virtual
 time instead of sleeping. A port whose baud rate differs from the device's gets no
 replies (the device sees garbage), as on a real line.
@@ -74,7 +74,8 @@ class Serial(SerialBase):
 
     @property
     def _char_s(self):
-        return 10.0 / self._baudrate
+        bits = 1 + self._bytesize + (self._parity != "N") + self._stopbits
+        return bits / self._baudrate
 
     def _check(self):
         if not self.is_open:
@@ -96,7 +97,8 @@ class Serial(SerialBase):
             return 0
         start = max(self.clock.now(), self._tx_free)
         self._tx_free = start + len(data) * self._char_s
-        if self._baudrate != self.device.baudrate:
+        if (self._baudrate, self._parity, self._stopbits) != \
+                (self.device.baudrate, self.device.parity, self.device.stopbits):
             return len(data)
         for ready, reply in self.device.receive(data, self._tx_free):
             begin = max(ready, self._rx_free)

@@ -61,10 +61,11 @@ class Rig:
         from pihyst.rig._ports import open_port
         self.supply = self.sensor = None
         try:
-            self.supply = open_supply(config.supply, clock, port=open_port(
-                supply_url, config.supply.baudrate, config.supply.timeout_s, "supply"))
-            self.sensor = open_sensor(config.sensor, port=open_port(
-                sensor_url, config.sensor.baudrate, config.sensor.timeout_s, "sensor"))
+            s, n = config.supply, config.sensor
+            self.supply = open_supply(s, clock, port=open_port(
+                supply_url, s.baudrate, s.timeout_s, "supply", s.parity, s.stopbits))
+            self.sensor = open_sensor(n, port=open_port(
+                sensor_url, n.baudrate, n.timeout_s, "sensor", n.parity, n.stopbits))
         except BaseException:
             self.close()
             raise

@@ -199,6 +199,7 @@ class AsciiSupply:
 def open_supply(cfg, clock=WallClock, port=None):
     """The driver for ``cfg``; opens ``cfg.port`` unless a pyserial-like ``port`` is given."""
     if port is None:
-        port = open_port(cfg.port, cfg.baudrate, cfg.timeout_s, "supply")
+        port = open_port(cfg.port, cfg.baudrate, cfg.timeout_s, "supply", cfg.parity,
+                         cfg.stopbits)
     cls = ModbusRtuSupply if cfg.protocol == "modbus-rtu" else AsciiSupply
     return cls(port, cfg, clock)
