@@ -76,3 +76,19 @@ def test_emulate_command_prints_paths_and_serves(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+def test_spy_url_logs_the_traffic(tmp_path):
+    # docs/rig.md: 'spy://' shows every byte pihyst exchanges with a supply
+    config = make_config(supply={"readback_register": None})
+    trace = tmp_path / "trace.txt"
+    with PtyEmulators(config) as emu:
+        cfg = make_config(supply={"port": f"spy://{emu.paths['supply']}?file={trace}",
+                                  "readback_register": None}).supply
+        supply = open_supply(cfg)
+        supply.set_voltage(10.0)
+        supply.close()
+        assert emu.emulators.supply_state.last_setpoint_V == 10.0
+    lines = trace.read_text().upper().split("\n")
+    tx = [" ".join(line.split()[3:16]) for line in lines if " TX " in line]
+    assert tx == ["01 10 00 0A 00 02 04 41 20 00 00 66 26"]       # 10.0 V as float32 + CRC
