@@ -2,6 +2,7 @@
 ``pihystsim://`` for the emulated instruments, ...)."""
 
 import functools
+import sys
 
 import serial
 
@@ -59,3 +60,13 @@ def port_errors(what):
                 raise RigError(f"{what}: port error: {err}") from None
         return call
     return wrap
+
+
+def close_port(port):
+    """Close ``port``; for a ``spy://`` port also the file its log goes to (pyserial
+    leaves it open)."""
+    port.close()
+    output = getattr(getattr(port, "formatter", None), "output", None)
+    if output is not None and hasattr(output, "close") and output not in (sys.stdout,
+                                                                          sys.stderr):
+        output.close()

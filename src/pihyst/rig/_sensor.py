@@ -9,7 +9,7 @@ micrometres: a value, or none with the status 'over-range+', 'over-range-' or 'i
 """
 
 from pihyst.rig._codecs import Reading, ReplyError, parse_reply
-from pihyst.rig._ports import open_port, port_errors, read_line
+from pihyst.rig._ports import close_port, open_port, port_errors, read_line
 
 
 class KeyenceSensor:
@@ -45,7 +45,7 @@ class KeyenceSensor:
         return Reading(self.cfg.sign * self.cfg.scale_um * reading.value, "ok")
 
     def close(self):
-        self.port.close()
+        close_port(self.port)
 
     def describe(self):
         return (f"KEYENCE {self.cfg.protocol[8:].upper()} at {self.cfg.port}, output "

@@ -13,7 +13,7 @@ import minimalmodbus
 
 from pihyst.rig._clock import WallClock
 from pihyst.rig._codecs import register_count
-from pihyst.rig._ports import RigError, open_port, port_errors, read_line
+from pihyst.rig._ports import RigError, close_port, open_port, port_errors, read_line
 
 _BYTEORDER = {"big": minimalmodbus.BYTEORDER_BIG,             # ABCD: high word first
               "little": minimalmodbus.BYTEORDER_LITTLE_SWAP}  # CDAB: low word first
@@ -114,7 +114,7 @@ class ModbusRtuSupply:
         self._output(False)
 
     def close(self):
-        self.port.close()
+        close_port(self.port)
 
     def describe(self):
         c = self.cfg
@@ -190,7 +190,7 @@ class AsciiSupply:
             self._command(self.cfg.output_off_command)
 
     def close(self):
-        self.port.close()
+        close_port(self.port)
 
     def describe(self):
         return f"ASCII supply at {self.cfg.port} ({self.cfg.set_command!r})"
