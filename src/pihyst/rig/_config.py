@@ -227,6 +227,10 @@ def _validate(check, cfg):
                    "0 V (runs start and end there)")
     _positive(check, "rig", "slew_V_per_s", r.slew_V_per_s, allow_none=True)
     _positive(check, "rig", "ramp_V_per_s", r.ramp_V_per_s, allow_none=True)
+    if r.ramp_V_per_s is not None and r.slew_V_per_s is not None and \
+            r.ramp_V_per_s > r.slew_V_per_s:
+        check.fail("rig", "ramp_V_per_s", f"the start ramp ({r.ramp_V_per_s:g} V/s) must not "
+                   f"be faster than the slew limit ({r.slew_V_per_s:g} V/s)")
     for name in ("max_comm_errors", "max_invalid_readings", "max_overruns",
                  "readback_every"):
         if getattr(r, name) < 1:

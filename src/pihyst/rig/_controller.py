@@ -233,7 +233,6 @@ class Controller:
         if signals is not None:
             signals.__enter__()
         try:
-            self.t0 = self.clock.now()
             if self.use_watchdog:
                 limit = s.watchdog_periods * s.period_s
                 self._watchdog = Watchdog(limit, self._zero_from_watchdog).start()
