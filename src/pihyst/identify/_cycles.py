@@ -84,23 +84,31 @@ def turning_points(v, tolerance):
 @dataclass
 class Layout:
     """How a record is used: segments (start, stop, role) covering it in order, with role
-    "settle", "fit" or "held_back", and a description for the report."""
+    "settle", "fit" or "held_back", the kind of each ("settle", "major" or "minor"
+    cycle), and a description for the report."""
 
     segments: list
     n_cycles: int
     n_minor: int
     settle_end: int
     holdout: str
+    kinds: list = None
 
-    def indices(self, role):
-        return np.concatenate([np.arange(a, z) for a, z, r in self.segments if r == role]
+    def _chosen(self, role, kind):
+        kinds = self.kinds or [None] * len(self.segments)
+        return [(a, z) for (a, z, r), k in zip(self.segments, kinds)
+                if r == role and (kind is None or k == kind)]
+
+    def indices(self, role, kind=None):
+        """Sample indices of the segments with this role (and kind of cycle)."""
+        return np.concatenate([np.arange(a, z) for a, z in self._chosen(role, kind)]
                               or [np.zeros(0, dtype=int)])
 
-    def count(self, role):
-        return int(sum(z - a for a, z, r in self.segments if r == role))
+    def count(self, role, kind=None):
+        return int(sum(z - a for a, z in self._chosen(role, kind)))
 
-    def cycles(self, role):
-        return int(sum(1 for *_, r in self.segments if r == role))
+    def cycles(self, role, kind=None):
+        return len(self._chosen(role, kind))
 
 
 def starts_at_rest(v, span):
@@ -171,6 +179,7 @@ def layout(v, span, *, settle, holdout):
         description = "none"
     segments = ([(0, settle_end, "settle")] if settle_end else []) + \
         [(a, z, role) for (a, z), role in zip(pieces, roles)]
+    kinds = (["settle"] if settle_end else []) + ["major" if m else "minor" for m in major]
     return Layout(segments=segments, n_cycles=len(pieces),
                   n_minor=int(len(major) - sum(major)), settle_end=settle_end,
-                  holdout=description if "held_back" in roles else "none")
+                  holdout=description if "held_back" in roles else "none", kinds=kinds)
