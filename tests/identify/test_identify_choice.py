@@ -54,12 +54,13 @@ def _choose(cands, known=True, **bounds):
 
 
 def test_smallest_then_fastest_within_tolerance():
-    cands = [_cand("a", 9, 0.200), _cand("b", 4, 0.205, worst=3e-7),
-             _cand("c", 4, 0.209, worst=1e-7), _cand("d", 2, 0.300)]
+    near = 0.2 * (1 + 0.5 * TOLERANCE), 0.2 * (1 + 0.9 * TOLERANCE)
+    cands = [_cand("a", 9, 0.200), _cand("b", 4, near[0], worst=3e-7),
+             _cand("c", 4, near[1], worst=1e-7), _cand("d", 2, 0.300)]
     chosen, criterion = _choose(cands)
-    assert chosen.name == "c" and "5 %" in criterion
+    assert chosen.name == "c" and f"{100 * TOLERANCE:g} %" in criterion
     # a tighter field: only the most accurate is within tolerance
-    chosen, _ = _choose([_cand("a", 9, 0.200), _cand("b", 4, 0.250)])
+    chosen, _ = _choose([_cand("a", 9, 0.200), _cand("b", 4, 0.2 * (1 + 1.1 * TOLERANCE))])
     assert chosen.name == "a"
 
 

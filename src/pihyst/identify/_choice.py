@@ -8,7 +8,7 @@ cycles and a validation record), an operator count and a measured compensator la
 1. **Eligible**: within ``max_operators`` and ``max_latency`` (worst case), if given;
    and, when the data do not determine the minor loops, only families whose structure
    fixes them (PI-type), unless no such family was fitted.
-2. **Accurate enough**: judged RMS within ``TOLERANCE`` (5 %) of the lowest among the
+2. **Accurate enough**: judged RMS within ``TOLERANCE`` (2 %) of the lowest among the
    eligible.
 3. **Smallest, fastest**: of those, the fewest operators, then the lowest worst-case
    latency.
@@ -23,7 +23,10 @@ from dataclasses import dataclass
 
 from pihyst.exceptions import FitError
 
-TOLERANCE = 0.05
+# A judged error within 2 % of the best counts as equally good. On the simulated beams
+# (decaying triangles) a 3.6 % better held-back RMS still meant a 35 % better fit of
+# random ramps, so the tolerance is kept small: size and speed break near-ties only.
+TOLERANCE = 0.02
 
 
 @dataclass

@@ -17,7 +17,7 @@
 5. judges every family on each kind of held-back data (:mod:`pihyst.identify._assess`:
    held-back major and minor cycles, a validation record), measures its compensator's
    latency (:mod:`pihyst.identify._latency`), and returns the smallest, fastest family
-   within 5 % of the best judged error (:mod:`pihyst.identify._choice`), its weights
+   within 2 % of the best judged error (:mod:`pihyst.identify._choice`), its weights
    refitted on all the cycles, with a report (:mod:`pihyst.identify._report`) of every
    family and of what the data could not determine.
 """
@@ -73,8 +73,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         classical + monotone input function of ``segments`` pieces), ``"kp"``
         (:class:`~pihyst.identify.KrasnoselskiiPokrovskii`: a ``grid`` of kernels). A
         name stands for the family with its default options. Default: all of them,
-        compared on the held-back cycles; the one with the lowest held-back RMS is
-        returned.
+        judged on held-back data (and ``validate``); of those within 2 % of the lowest
+        judged RMS, the fewest operators, then the fastest compensator, is returned.
+        When the data do not determine the minor loops (no reversals inside the range),
+        families whose structure fixes them (all but ``kp``) are preferred.
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
         range) instead of choosing them (families with thresholds only).
