@@ -8,18 +8,26 @@ every trajectory whose speed differs. Fitting
     y[k + d] ~ H[u](k),      d = 0, 1, ..., d_max                                 (1)
 
 and judging each d on the held-back cycles finds the lag the data support. The probe
-structure is the modified PI with every candidate threshold (linear in all its
-weights, one Gram pass per d, asymmetric loops allowed), so the choice does not depend
-on a threshold search. d_max is ``MAX_FRACTION`` of the median cycle length (at most
-``MAX_SAMPLES``).
+structure is a modified PI with ``PROBE_PLAYS`` equally spaced plays and its input
+function (linear in all its weights, one Gram pass per d, asymmetric loops allowed), so
+the choice does not depend on a threshold search. d_max is ``MAX_FRACTION`` of the
+median cycle length (at most ``MAX_SAMPLES``). The record's cycles are cut once, on the
+input; each d only delays the output. To bound the cost on long records the probe runs
+on the whole cycles within the first ``WINDOW`` samples (when they include fitted and
+held-back ones), and beyond ``FULL_SCAN`` delays the scan is coarse then fine (every
+integer between the best coarse delay's neighbours).
 """
 
 import numpy as np
 
+from pihyst.exceptions import FitError
 from pihyst.identify._families import ModifiedPI
 
 MAX_FRACTION = 0.05
 MAX_SAMPLES = 50
+PROBE_PLAYS = 8
+WINDOW = 100_000
+FULL_SCAN = 12
 
 
 def max_delay(rec):
@@ -28,12 +36,24 @@ def max_delay(rec):
     return int(min(MAX_SAMPLES, max(1, MAX_FRACTION * np.median(lengths))))
 
 
+def window(rec):
+    """End of the probe's window: the end of the first cycle reaching ``WINDOW`` samples,
+    if the cycles before it include every role of the record (fitted, held back); else
+    None (the whole record)."""
+    if rec.u.size <= WINDOW:
+        return None
+    stop = next((z for a, z, role in rec.layout.segments if z >= WINDOW), rec.u.size)
+    inside = {r for a, z, r in rec.layout.segments if z <= stop} - {"settle"}
+    everywhere = {r for *_, r in rec.layout.segments} - {"settle"}
+    return stop if inside == everywhere else None
+
+
 def probe_rms(fitter):
     """Judged RMS of the probe structure on ``fitter``'s record (held-back, or fitted if
     nothing is held back)."""
     rec = fitter.rec
     fam = ModifiedPI()
-    cand = fam.candidates(rec.S, fitter.n_candidates)
+    cand = fam.candidates(rec.S, PROBE_PLAYS)
     template = fam.template(cand, rec.S)
     _, parts, rows = fitter.grams(fam, template)
     names = [f"r={r:g}" for r in cand] + [f"input segment {j}" for j in range(fam.n_fixed)]
@@ -42,7 +62,27 @@ def probe_rms(fitter):
     return np.inf if x is None else prob.judge.rms(cols, x)
 
 
-def scan(make_fitter, d_max):
-    """[{"samples": d, "rms": judged RMS of (1)}] for d = 0..d_max; ``make_fitter(d)``
-    builds a FamilyFitter of the record shifted by d."""
-    return [{"samples": d, "rms": float(probe_rms(make_fitter(d)))} for d in range(d_max + 1)]
+def scan(rec, fitter_of, d_max):
+    """[{"samples": d, "rms": judged RMS of (1)}] over the delays probed, in order;
+    ``fitter_of(record)`` builds a FamilyFitter."""
+    stop = window(rec)
+    done = {}
+
+    def probe(d):
+        if d not in done:
+            try:
+                done[d] = float(probe_rms(fitter_of(rec.shifted(d, stop))))
+            except FitError:             # too little left to fit
+                done[d] = np.inf
+        return done[d]
+
+    if d_max <= FULL_SCAN:
+        for d in range(d_max + 1):
+            probe(d)
+    else:
+        coarse = sorted({int(round(x)) for x in np.linspace(0, d_max, FULL_SCAN)})
+        best = min(coarse, key=probe)
+        k = coarse.index(best)
+        for d in range(coarse[max(k - 1, 0)], coarse[min(k + 1, len(coarse) - 1)] + 1):
+            probe(d)
+    return [{"samples": d, "rms": done[d]} for d in sorted(done)]

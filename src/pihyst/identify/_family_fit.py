@@ -7,10 +7,13 @@ Equations: the normal equations of ``_gram``, the QP of ``_qp``, the subset sear
 ``_subsets``; the frames of ``_families`` (docs/theory/identification.md).
 """
 
+import copy
+from dataclasses import replace
+
 import numpy as np
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
-from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
+from pihyst.identify._cycles import MIN_SAMPLES, checked_signals, layout, starts_at_rest
 from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._qp import solve_qp
@@ -73,6 +76,29 @@ class FramedRecord:
         self.layout = layout(self.v, self.S, settle=(mode == "settle"), holdout=holdout)
         self.has_held_back = self.layout.count("held_back") > 0
         self.through = self._through_indices(through)
+
+    def shifted(self, delay, stop=None):
+        """This record with its output ``delay`` samples later (u[k] paired with
+        y[k + delay]), cut at sample ``stop``: the same cycles (the layout follows the
+        input), the last ones shortened. A FitError if nothing is left to fit."""
+        n = self.u.size - delay if stop is None else min(stop, self.u.size - delay)
+        out = copy.copy(self)
+        out.u, out.v = self.u[:n], self.v[:n]
+        out.y = self.y[delay:delay + n]
+        out.d = out.y - self.fixed_offset
+        out.measured_range = float(np.ptp(out.y))
+        lay = self.layout
+        kept = [((a, min(z, n), r), k) for (a, z, r), k in zip(lay.segments, lay.kinds)
+                if a < n]
+        out.layout = replace(lay, segments=[s for s, _ in kept], kinds=[k for _, k in kept])
+        out.has_held_back = out.layout.count("held_back") > 0
+        if out.layout.count("fit") < MIN_SAMPLES:
+            raise FitError(f"with a delay of {delay} samples too little is left to fit")
+        late = [i for i in self.through if i >= n]
+        if late:
+            raise FitError(f"through: sample {late[0]} is beyond the record once the output "
+                           f"is delayed by {delay} samples")
+        return out
 
     def _through_indices(self, through):
         if through is None:

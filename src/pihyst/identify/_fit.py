@@ -37,7 +37,6 @@ from pihyst.identify._assess import (
     minor_loops_determined,
 )
 from pihyst.identify._choice import Candidate, choose
-from pihyst.identify._cycles import checked_signals
 from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
 from pihyst.identify._latency import measure_latency
@@ -187,12 +186,6 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     if n_operators is not None and (int(n_operators) != n_operators or n_operators < 1):
         raise FitError(f"n_operators must be a positive integer, got {n_operators}")
     _check_bounds(max_operators, max_latency, delay)
-    u, y = checked_signals(u, y)
-
-    def record(d):
-        return FramedRecord(u[:u.size - d], y[d:], input_range=input_range,
-                            initial_state=initial_state, holdout=holdout, offset=offset,
-                            through=through)
 
     def fitter_of(r):
         return FamilyFitter(r, thresholds=thresholds, candidates=candidates,
@@ -200,13 +193,14 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                             nonnegative=nonnegative, bounds=bounds,
                             max_exhaustive=max_exhaustive)
 
-    rec = record(0)
+    rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
+                       holdout=holdout, offset=offset, through=through)
     if rec.state_mode == "explicit" and thresholds is None:
         raise FitError("an explicit initial_state needs explicit thresholds (one value "
                        "per operator)")
-    delay_info = _delay_choice(rec, record, fitter_of, delay)
+    delay_info = _delay_choice(rec, fitter_of, delay)
     if delay_info["samples"]:
-        rec = record(delay_info["samples"])
+        rec = rec.shifted(delay_info["samples"])
     validation = (None if validate is None else
                   ValidationRecord.build(validate, rec.lo, rec.S, delay_info["samples"]))
     fitter = fitter_of(rec)
@@ -302,34 +296,28 @@ def _check_bounds(max_operators, max_latency, delay):
         raise FitError(f"delay must be a number of samples >= 0 or 'auto', got {delay!r}")
 
 
-def _delay_choice(rec, record, fitter_of, delay):
+def _delay_choice(rec, fitter_of, delay):
     """The delay used (given, or the best of the scan) and the scan of the record."""
-    def probe(d):
-        if rec.state_mode == "explicit":     # a state of other operators than the probe's
-            return np.inf
-        try:
-            return _delay.probe_rms(fitter_of(record(d)))
-        except FitError:                     # e.g. too little left to settle and fit
-            return np.inf
-
-    d_max = _delay.max_delay(rec)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PihystWarning)
-        tried = [{"samples": d, "rms": float(probe(d))} for d in range(d_max + 1)]
-    best = min(tried, key=lambda t: t["rms"])
-    if delay == "auto" and not np.isfinite(best["rms"]):
+    if rec.state_mode == "explicit":     # a state of other operators than the probe's
+        tried = []
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            tried = _delay.scan(rec, fitter_of, _delay.max_delay(rec))
+    finite = [t for t in tried if np.isfinite(t["rms"])]
+    best = min(finite, key=lambda t: t["rms"]) if finite else None
+    if delay == "auto" and best is None:
         raise FitError("delay='auto': no delay could be judged (the probe model cannot be "
                        "fitted to this record, e.g. with an explicit initial_state); give "
                        "the delay as a number of samples")
     if delay == "auto":
         used, rule = best["samples"], ("lowest judged RMS of the probe model (modified PI, "
-                                       "every candidate threshold)")
+                                       f"{_delay.PROBE_PLAYS} plays)")
     else:
         used, rule = int(delay), "given" if delay else "none assumed (delay=0)"
-    if used > d_max and delay != "auto":
-        tried.append({"samples": used, "rms": float(probe(used))})
-    return {"samples": used, "rule": rule, "best": best["samples"], "tried": tried,
-            "probe": "classical plays at every candidate threshold + monotone input function"}
+    return {"samples": used, "rule": rule, "best": None if best is None else best["samples"],
+            "tried": tried,
+            "probe": f"{_delay.PROBE_PLAYS} classical plays + monotone input function"}
 
 
 def _latency(model):
@@ -354,7 +342,8 @@ def _undetermined(rec, validation, known, unknown_reason, delay_info, cands):
                      "would tell")
     tried = {t["samples"]: t["rms"] for t in delay_info["tried"]}
     used, best = delay_info["samples"], delay_info["best"]
-    if best != used and tried[best] < (1 - DELAY_NOTE_GAIN) * tried.get(used, np.inf):
+    if best is not None and best != used and \
+            tried[best] < (1 - DELAY_NOTE_GAIN) * tried.get(used, np.inf):
         out.append(f"the input-output delay: the record fits best with the output lagging "
                    f"by {best} samples (probe RMS {tried[best]:.4g} against "
                    f"{tried[used]:.4g} at {used}); the models assume {used}. A delay is not "
