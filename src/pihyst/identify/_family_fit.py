@@ -100,6 +100,35 @@ class FramedRecord:
                            f"is delayed by {delay} samples")
         return out
 
+    def subsampled(self, max_samples):
+        """This record on at most about ``max_samples`` samples plus every local extremum
+        of the input, or itself if it is that short. The operators are rate-independent:
+        their outputs at the kept samples depend only on the input's extrema before them,
+        which are all kept, so they are exactly those of the full record; only the sums
+        of squares are taken over fewer samples. For searches that need many passes
+        (the multislope shape), with one full pass at the end."""
+        n = self.u.size
+        step = int(np.ceil(n / max_samples))
+        if step <= 1:
+            return self
+        dv = np.diff(self.v)
+        turns = np.flatnonzero(dv[1:] * dv[:-1] <= 0) + 1       # local extrema, plateaus
+        bounds = [a for a, z, r in self.layout.segments] + [n - 1]
+        keep = np.unique(np.concatenate([np.arange(0, n, step), turns, bounds,
+                                         np.asarray(self.through, dtype=int)]))
+        if keep.size > n // 2:
+            return self
+        out = copy.copy(self)
+        out.kept = keep
+        out.u, out.v, out.y, out.d = self.u[keep], self.v[keep], self.y[keep], self.d[keep]
+        at = np.searchsorted(keep, [a for a, z, r in self.layout.segments] + [n])
+        out.layout = replace(
+            self.layout, settle_end=int(np.searchsorted(keep, self.layout.settle_end)),
+            segments=[(int(a), int(z), r) for (_, _, r), a, z in
+                      zip(self.layout.segments, at[:-1], at[1:])])
+        out.through = [int(np.searchsorted(keep, i)) for i in self.through]
+        return out
+
     def _through_indices(self, through):
         if through is None:
             return []
