@@ -123,7 +123,7 @@ def minor_loops_determined(rec, validation):
 def errors_by_kind(fitter, model, validation):
     """{kind: error summary} for every kind of held-back data present."""
     rec = fitter.rec
-    y_hat = model.predict(rec.u)
+    y_hat = fitter.predict(model)
     out = {}
     for kind in ("major", "minor"):
         i = rec.layout.indices("held_back", kind)

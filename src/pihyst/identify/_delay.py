@@ -14,8 +14,10 @@ the choice does not depend on a threshold search. d_max is ``MAX_FRACTION`` of t
 median cycle length (at most ``MAX_SAMPLES``). The record's cycles are cut once, on the
 input; each d only delays the output. To bound the cost on long records the probe runs
 on the whole cycles within the first ``WINDOW`` samples (when they include fitted and
-held-back ones), and beyond ``FULL_SCAN`` delays the scan is coarse then fine (every
-integer between the best coarse delay's neighbours).
+held-back ones), each delayed record subsampled to about ``PROBE_SAMPLES`` samples plus
+every input extremum (exact operator outputs, fewer squares summed), and beyond
+``FULL_SCAN`` delays the scan is coarse then fine (every integer between the best
+coarse delay's neighbours).
 """
 
 import numpy as np
@@ -27,6 +29,7 @@ MAX_FRACTION = 0.05
 MAX_SAMPLES = 50
 PROBE_PLAYS = 8
 WINDOW = 100_000
+PROBE_SAMPLES = 50_000
 FULL_SCAN = 12
 
 
@@ -71,7 +74,8 @@ def scan(rec, fitter_of, d_max):
     def probe(d):
         if d not in done:
             try:
-                done[d] = float(probe_rms(fitter_of(rec.shifted(d, stop))))
+                shifted = rec.shifted(d, stop).subsampled(PROBE_SAMPLES)
+                done[d] = float(probe_rms(fitter_of(shifted)))
             except FitError:             # too little left to fit
                 done[d] = np.inf
         return done[d]

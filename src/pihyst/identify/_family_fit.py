@@ -29,6 +29,8 @@ INITIAL_STATES = ("auto", "cycled", "settle", "zero")
 KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
 KP_DEFAULT_LAMBDA = 1e-2
 CONSTANT_COLUMN = 1e-9  # an operator whose output varies less than this * S never moved
+PREDICTIONS_KEPT = 8
+KERNEL_SAMPLES = 100_000
 
 
 class FramedRecord:
@@ -182,6 +184,20 @@ class FamilyFitter:
         self.nonnegative, self.bounds = nonnegative, bounds
         self.max_exhaustive = max_exhaustive
         self.notes = []
+        self._predictions = []
+
+    def subsampled(self, max_samples):
+        """This fitter on the record subsampled to about ``max_samples`` samples and
+        every input extremum (``FramedRecord.subsampled``: exact operator outputs, fewer
+        squares summed), or itself for a record that short; a note says so."""
+        rec = self.rec.subsampled(max_samples)
+        if rec is self.rec:
+            return self
+        out = copy.copy(self)
+        out.rec, out._predictions = rec, []
+        self.notes.append(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly "
+                          f"spaced, and every input extremum); errors on all")
+        return out
 
     def fit(self, family):
         """``family`` fitted to the record (notes collected afresh)."""
@@ -343,18 +359,20 @@ class FamilyFitter:
             raise FitError(f"{fam.name}: has no thresholds (a grid of kernels, regularized); "
                            f"drop thresholds/candidates/n_operators")
         rec = self.rec
+        # a Gram pass costs (kernels)^2 per sample: long records are subsampled
+        on = self.subsampled(KERNEL_SAMPLES)
         pairs = fam.pairs()
         template = fam.template(pairs, rec.S)
-        state0, parts, rows = self.grams(fam, template)
+        state0, parts, rows = on.grams(fam, template)
         const = self._constant_columns(parts, len(pairs))
         if const.size:
             # e.g. the widest kernel: after a full cycle it stays at 1/2 for good
             pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
             template = fam.template(pairs, rec.S)
-            state0, parts, rows = self.grams(fam, template)
+            state0, parts, rows = on.grams(fam, template)
             self.notes.append(f"{const.size} kernels dropped: the input never moves them")
         names = [f"kernel {p}" for p in pairs]
-        prob = self.problem(fam, parts, rows, len(pairs), names)
+        prob = on.problem(fam, parts, rows, len(pairs), names)
         n_ops = len(pairs)
         P = fam.penalty(pairs)
         scale = np.trace(prob.fit.G[:n_ops, :n_ops]) / max(np.trace(P), 1e-300)
@@ -419,11 +437,21 @@ class FamilyFitter:
                          n_params=int(np.count_nonzero(w)) + int(rec.fit_offset),
                          notes=tuple(self.notes), refit=refit, **how)
 
+    def predict(self, model):
+        """``model``'s prediction of the record (the last few kept: the report asks for
+        the same model's several times)."""
+        for m, y_hat in self._predictions:
+            if m is model:
+                return y_hat
+        # the model's initial state is the state the record was processed from
+        y_hat = model.predict(self.rec.u)
+        self._predictions = [(model, y_hat)] + self._predictions[:PREDICTIONS_KEPT - 1]
+        return y_hat
+
     def errors(self, model):
         """Error summaries of ``model`` on the fitted and the held-back samples."""
         rec = self.rec
-        # the model's initial state is the state the record was processed from
-        y_hat = model.predict(rec.u)
+        y_hat = self.predict(model)
         out = {}
         for role in ("fit", "held_back"):
             i = rec.layout.indices(role)

@@ -13,8 +13,6 @@ samples plus every input extremum (exact operator outputs there, fewer squares s
 the weights of the shape found are then fitted on the full record.
 """
 
-import copy
-
 import numpy as np
 
 from pihyst.model import InvalidModelError
@@ -26,15 +24,13 @@ SEARCH_SAMPLES = 20_000
 
 def _search_fitter(fitter):
     """``fitter`` on the subsampled record (itself for a short record)."""
-    rec = fitter.rec.subsampled(SEARCH_SAMPLES)
-    if rec is fitter.rec:
-        return fitter
-    out = copy.copy(fitter)
-    out.rec = rec
-    note = (f"shape searched on {rec.u.size} of {fitter.rec.u.size} samples (evenly spaced, "
-            f"and every input extremum), the weights then fitted on all")
-    if note not in fitter.notes:
-        fitter.notes.append(note)
+    notes = list(fitter.notes)
+    out = fitter.subsampled(SEARCH_SAMPLES)
+    if out is not fitter:
+        fitter.notes[:] = notes + [f"shape searched on {out.rec.u.size} of "
+                                   f"{fitter.rec.u.size} samples (evenly spaced, and every "
+                                   f"input extremum), the weights then fitted on all"]
+        fitter.notes[:] = list(dict.fromkeys(fitter.notes))
     return out
 
 
