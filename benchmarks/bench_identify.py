@@ -240,9 +240,8 @@ def speed_large(n=1_000_000):
     S = 150.0
     cand = np.arange(16) * S / 32
     model = ClassicalPI(cand, np.ones(16), input_range=(0.0, S))
-    lay = layout(u[:100_000], S, settle=False, holdout="alternate")
-    parts, _ = accumulate(model, u[:100_000], y[:100_000], lay.segments,
-                          cycled_state(model, S))
+    lay = layout(u, S, settle=False, holdout="alternate")
+    parts, _ = accumulate(model, u, y, lay.segments, cycled_state(model, S))
 
     def problem():
         return SubsetProblem(fit=parts["fit"], judge=parts["held_back"], n_candidates=16,

@@ -31,6 +31,7 @@ PROBE_PLAYS = 8
 WINDOW = 100_000
 PROBE_SAMPLES = 50_000
 FULL_SCAN = 12
+MIN_PROBE_SAMPLES = 20
 
 
 def max_delay(rec):
@@ -68,16 +69,22 @@ def probe_rms(fitter):
 def scan(rec, fitter_of, d_max):
     """[{"samples": d, "rms": judged RMS of (1)}] over the delays probed, in order;
     ``fitter_of(record)`` builds a FamilyFitter."""
-    stop = window(rec)
+    base = rec.shifted(0, window(rec))
+    keep = base.sample_indices(PROBE_SAMPLES)
+    if keep is None:
+        keep = np.arange(base.u.size)
     done = {}
 
     def probe(d):
         if d not in done:
-            try:
-                shifted = rec.shifted(d, stop).subsampled(PROBE_SAMPLES)
-                done[d] = float(probe_rms(fitter_of(shifted)))
-            except FitError:             # too little left to fit
-                done[d] = np.inf
+            delayed = base.taken(keep, d)
+            if delayed.layout.count("fit") < MIN_PROBE_SAMPLES:
+                done[d] = np.inf             # too little left to fit
+            else:
+                try:
+                    done[d] = float(probe_rms(fitter_of(delayed)))
+                except FitError:
+                    done[d] = np.inf
         return done[d]
 
     if d_max <= FULL_SCAN:

@@ -109,26 +109,43 @@ class FramedRecord:
         which are all kept, so they are exactly those of the full record; only the sums
         of squares are taken over fewer samples. For searches that need many passes
         (the multislope shape), with one full pass at the end."""
+        keep = self.sample_indices(max_samples)
+        return self if keep is None else self.taken(keep)
+
+    def sample_indices(self, max_samples):
+        """The samples :meth:`subsampled` keeps (None: all of them)."""
         n = self.u.size
         step = int(np.ceil(n / max_samples))
         if step <= 1:
-            return self
+            return None
         dv = np.diff(self.v)
         turns = np.flatnonzero(dv[1:] * dv[:-1] <= 0) + 1       # local extrema, plateaus
         bounds = [a for a, z, r in self.layout.segments] + [n - 1]
         keep = np.unique(np.concatenate([np.arange(0, n, step), turns, bounds,
                                          np.asarray(self.through, dtype=int)]))
-        if keep.size > n // 2:
-            return self
+        return None if keep.size > n // 2 else keep
+
+    def taken(self, keep, delay=0):
+        """This record at the samples ``keep`` (sorted indices, every input extremum
+        among them), the output ``delay`` samples later: u[keep] with y[keep + delay]
+        (those beyond the record dropped)."""
+        n = self.y.size - delay
+        keep = keep[keep < n]
         out = copy.copy(self)
         out.kept = keep
-        out.u, out.v, out.y, out.d = self.u[keep], self.v[keep], self.y[keep], self.d[keep]
+        out.u, out.v = self.u[keep], self.v[keep]
+        out.y = self.y[keep + delay]
+        out.d = out.y - self.fixed_offset
+        if delay:
+            out.measured_range = float(np.ptp(out.y))
         at = np.searchsorted(keep, [a for a, z, r in self.layout.segments] + [n])
+        kept = [((int(a), int(z), r), k) for (_, _, r), k, a, z in
+                zip(self.layout.segments, self.layout.kinds, at[:-1], at[1:]) if z > a]
         out.layout = replace(
             self.layout, settle_end=int(np.searchsorted(keep, self.layout.settle_end)),
-            segments=[(int(a), int(z), r) for (_, _, r), a, z in
-                      zip(self.layout.segments, at[:-1], at[1:])])
-        out.through = [int(np.searchsorted(keep, i)) for i in self.through]
+            segments=[s for s, _ in kept], kinds=[k for _, k in kept])
+        out.has_held_back = out.layout.count("held_back") > 0
+        out.through = [int(np.searchsorted(keep, i)) for i in self.through if i < n]
         return out
 
     def _through_indices(self, through):
