@@ -217,3 +217,26 @@ def test_latency_is_measured_on_both_trajectories():
     lat = measure_latency(TRUE)
     assert 0 < lat.typical < 1e-2 and 0 < lat.worst < 1e-2
     assert set(lat.to_dict()) == {"typical_us", "worst_us", "measured"}
+
+
+def test_long_record_paths_subsample_and_still_find_the_delay(monkeypatch):
+    # the long-record paths (delay probe window and subsampling, a coarse-then-fine scan,
+    # kernels on a subsampled record) exercised on a short record by shrinking their limits
+    from pihyst.identify import _delay, _family_fit
+    monkeypatch.setattr(_delay, "WINDOW", 1500)
+    monkeypatch.setattr(_delay, "PROBE_SAMPLES", 800)
+    monkeypatch.setattr(_delay, "FULL_SCAN", 3)
+    monkeypatch.setattr(_family_fit, "KERNEL_SAMPLES", 1000)
+    u = ramps([0, 150, 0, 110, 40, 150, 0, 90, 20, 150, 0, 130, 60, 150, 0] * 2, n=120)
+    d = 3
+    y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]
+    res = fit(u, y, family=["classical", "kp"], delay="auto")
+    rep = res.report.to_dict()
+    assert rep["data"]["delay"]["samples"] == d
+    probed = [t["samples"] for t in rep["data"]["delay"]["tried"]]
+    assert probed != list(range(max(probed) + 1))          # coarse, then fine
+    kp = res.report.family("kp")
+    assert any("every input extremum" in n for n in kp["notes"])
+    assert rep["data"]["n_samples"] == u.size - d          # errors on the full record
+    e = res.models["kp"].predict(u)[:-d] - y[d:]
+    assert np.sqrt(np.mean(e ** 2)) < 0.01 * np.ptp(y)
