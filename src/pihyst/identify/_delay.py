@@ -8,9 +8,10 @@ every trajectory whose speed differs. Fitting
     y[k + d] ~ H[u](k),      d = 0, 1, ..., d_max                                 (1)
 
 and judging each d on the held-back cycles finds the lag the data support. The probe
-structure is a modified PI with ``PROBE_PLAYS`` equally spaced plays and its input
-function (linear in all its weights, one Gram pass per d, asymmetric loops allowed), so
-the choice does not depend on a threshold search. d_max is ``MAX_FRACTION`` of the
+structure is a classical PI with ``PROBE_PLAYS`` equally spaced plays (linear in all its
+weights, one fast Gram pass per d), so the choice does not depend on a threshold
+search. (On the P-885 record a modified PI probe, which also fits asymmetric loops,
+finds the same delay at 3x the cost.) d_max is ``MAX_FRACTION`` of the
 median cycle length (at most ``MAX_SAMPLES``). The record's cycles are cut once, on the
 input; each d only delays the output. To bound the cost on long records the probe runs
 on the whole cycles within the first ``WINDOW`` samples (when they include fitted and
@@ -23,15 +24,16 @@ coarse delay's neighbours).
 import numpy as np
 
 from pihyst.exceptions import FitError
-from pihyst.identify._families import ModifiedPI
+from pihyst.identify._families import Classical
 
 MAX_FRACTION = 0.05
 MAX_SAMPLES = 50
 PROBE_PLAYS = 8
 WINDOW = 100_000
-PROBE_SAMPLES = 50_000
+PROBE_SAMPLES = 20_000
 FULL_SCAN = 12
 MIN_PROBE_SAMPLES = 20
+PROBE = Classical
 
 
 def max_delay(rec):
@@ -56,11 +58,11 @@ def probe_rms(fitter):
     """Judged RMS of the probe structure on ``fitter``'s record (held-back, or fitted if
     nothing is held back)."""
     rec = fitter.rec
-    fam = ModifiedPI()
+    fam = PROBE()
     cand = fam.candidates(rec.S, PROBE_PLAYS)
     template = fam.template(cand, rec.S)
     _, parts, rows = fitter.grams(fam, template)
-    names = [f"r={r:g}" for r in cand] + [f"input segment {j}" for j in range(fam.n_fixed)]
+    names = [f"r={r:g}" for r in cand] + [f"fixed {j}" for j in range(fam.n_fixed)]
     prob = fitter.problem(fam, parts, rows, len(cand), names)
     cols, x = prob.solve(tuple(range(len(cand))))
     return np.inf if x is None else prob.judge.rms(cols, x)

@@ -311,13 +311,13 @@ def _delay_choice(rec, fitter_of, delay):
                        "fitted to this record, e.g. with an explicit initial_state); give "
                        "the delay as a number of samples")
     if delay == "auto":
-        used, rule = best["samples"], ("lowest judged RMS of the probe model (modified PI, "
+        used, rule = best["samples"], ("lowest judged RMS of the probe model (classical PI, "
                                        f"{_delay.PROBE_PLAYS} plays)")
     else:
         used, rule = int(delay), "given" if delay else "none assumed (delay=0)"
     return {"samples": used, "rule": rule, "best": None if best is None else best["samples"],
             "tried": tried,
-            "probe": f"{_delay.PROBE_PLAYS} classical plays + monotone input function"}
+            "probe": f"classical PI, {_delay.PROBE_PLAYS} equally spaced plays"}
 
 
 def _latency(model):
