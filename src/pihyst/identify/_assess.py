@@ -32,11 +32,12 @@ KINDS = {"major": "held-back major cycles", "minor": "held-back minor cycles",
          "validation": "validation record"}
 
 
-def interior_reversals(v, S, indices=None):
+def interior_reversals(v, S, indices=None, points=None):
     """Number of turning points of v (on [0, S]) inside the range by more than
     MAJOR_TOLERANCE of the span: the reversals that make minor loops. ``indices``:
-    count only those among these samples."""
-    points = turning_points(v, REVERSAL_TOLERANCE * S)
+    count only those among these samples; ``points``: v's turning points if known."""
+    if points is None:
+        points = turning_points(v, REVERSAL_TOLERANCE * S)
     inner = [i for i, kind in points
              if (kind > 0 and v[i] < (1 - MAJOR_TOLERANCE) * S)
              or (kind < 0 and v[i] > MAJOR_TOLERANCE * S)]
@@ -106,8 +107,8 @@ class ValidationRecord:
 def minor_loops_determined(rec, validation):
     """Whether the data say how the actuator behaves inside the range, and why not."""
     lay = rec.layout
-    fitted = interior_reversals(rec.v, rec.S, lay.indices("fit"))
-    held = interior_reversals(rec.v, rec.S, lay.indices("held_back"))
+    fitted = interior_reversals(rec.v, rec.S, lay.indices("fit"), lay.points)
+    held = interior_reversals(rec.v, rec.S, lay.indices("held_back"), lay.points)
     if validation is not None and validation.minor_reversals:
         return True, None
     if fitted and held:

@@ -131,6 +131,7 @@ class Layout:
     settle_end: int
     holdout: str
     kinds: list = None
+    points: list = None      # the turning points the cycles were cut at
 
     def _chosen(self, role, kind):
         kinds = self.kinds or [None] * len(self.segments)
@@ -220,4 +221,5 @@ def layout(v, span, *, settle, holdout):
     kinds = (["settle"] if settle_end else []) + ["major" if m else "minor" for m in major]
     return Layout(segments=segments, n_cycles=len(pieces),
                   n_minor=int(len(major) - sum(major)), settle_end=settle_end,
-                  holdout=description if "held_back" in roles else "none", kinds=kinds)
+                  holdout=description if "held_back" in roles else "none", kinds=kinds,
+                  points=points)

@@ -143,7 +143,7 @@ class FramedRecord:
                 zip(self.layout.segments, self.layout.kinds, at[:-1], at[1:]) if z > a]
         out.layout = replace(
             self.layout, settle_end=int(np.searchsorted(keep, self.layout.settle_end)),
-            segments=[s for s, _ in kept], kinds=[k for _, k in kept])
+            segments=[s for s, _ in kept], kinds=[k for _, k in kept], points=None)
         out.has_held_back = out.layout.count("held_back") > 0
         out.through = [int(np.searchsorted(keep, i)) for i in self.through if i < n]
         return out
