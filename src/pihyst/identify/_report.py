@@ -171,7 +171,7 @@ class FitReport:
             f"{d['output_range'][1]:.6g} {uout} (range {d['measured_range']:.4g} {uout})",
             f"initial state: {_STATE_TEXT.get(d['initial_state'], d['initial_state'])}"
             + (f" ({d['settle_samples']} samples)" if d["settle_samples"] else ""),
-            f"{d['cycles']} cycles ({d['minor_cycles']} with reversals inside the range); "
+            f"{d['cycles']} cycles ({d['minor_cycles']} not spanning the whole range: minor); "
             f"fitted: {d['fit_cycles']} cycles, {d['fit_samples']} samples; held back: "
             + (f"{d['held_back_cycles']} cycles, {d['held_back_samples']} samples "
                f"({d['holdout']})" if d["held_back_samples"] else "none") +
