@@ -54,9 +54,9 @@ class ArraySource:
         shape = self.variables[name].shape
         if col:
             if not col.isdigit() or len(shape) != 2 or not 1 <= int(col) <= shape[1]:
+                columns = shape[1] if len(shape) == 2 else 0
                 raise RecordError(self.path, f"--{quantity} {text}: {name!r} has shape "
-                                  f"{shape}; column K must be 1..{shape[1] if len(shape) == 2 else 0} "
-                                  "of a matrix")
+                                  f"{shape}; column K must be 1..{columns} of a matrix")
             return name, int(col) - 1
         if len(shape) == 2 and 1 in shape:
             return name, 0
