@@ -13,7 +13,8 @@ from pihyst.exceptions import CSVError, RecordError
 from pihyst.io._csv import ColumnWriter, column_number, read_columns, write_columns
 from pihyst.io._model_files import load_model, save_model
 from pihyst.io._records import Record, RecordReader, open_record, read_record
+from pihyst.io._validation import Validation, validate_model
 
 __all__ = ["CSVError", "ColumnWriter", "Record", "RecordError", "RecordReader",
            "column_number", "load_model", "open_record", "read_columns", "read_record",
-           "save_model", "write_columns"]
+           "save_model", "validate_model", "Validation", "write_columns"]
