@@ -39,7 +39,7 @@ def run(args):
     rec = read_from_args(args, args.data, need=("voltage", "displacement"))
     u, y = rec.voltage, rec.displacement
     if np.ptp(u) <= 0:
-        raise rec.error(0, "voltage", "the voltage is constant: there is no loop to fit")
+        raise rec.error(0, "voltage", "voltage_V is constant: there is no loop to fit")
     t = rec.time if rec.time is not None else np.arange(u.size, dtype=float)
     out = args.out or os.path.splitext(args.data)[0] + "-report"
     if os.path.exists(out) and not os.path.isdir(out):
