@@ -191,9 +191,24 @@ def _open_hdf5(path, transpose, kind="hdf5"):
 
     def visit(name, obj):
         if isinstance(obj, h5py.Dataset) and obj.ndim in (1, 2) and obj.dtype.kind in "fiub":
-            variables[name] = _Transposed(obj) if transpose and obj.ndim == 2 else obj
+            if obj.ndim == 2 and 1 in obj.shape:
+                variables[name] = _Flat(obj)
+            else:
+                variables[name] = _Transposed(obj) if transpose and obj.ndim == 2 else obj
     f.visititems(visit)
     return ArraySource(path, kind, variables, {"_close": f.close})
+
+
+class _Flat:
+    """A 2-D HDF5 dataset of one row or one column, read as a vector."""
+
+    def __init__(self, dataset):
+        self.dataset = dataset
+        self.shape = (max(dataset.shape),)
+
+    def __getitem__(self, key):
+        row = self.dataset.shape[0] == 1
+        return np.asarray(self.dataset[0, key] if row else self.dataset[key, 0])
 
 
 class _Transposed:

@@ -9,7 +9,7 @@ import math
 import re
 
 _PATTERNS = {
-    mark: re.compile(r"[+-]?(?:\d+(?:%s\d*)?|%s\d+)(?:[eE][+-]?\d+)?\Z"
+    mark: re.compile(r"[+-]?(?:[0-9]+(?:%s[0-9]*)?|%s[0-9]+)(?:[eE][+-]?[0-9]+)?\Z"
                      % (re.escape(mark), re.escape(mark)))
     for mark in ".,"
 }
@@ -20,14 +20,14 @@ def parse_number(text, decimal="."):
     """The float written in ``text`` (surrounding spaces ignored), or raise ``ValueError``
     with a reason that fits after the quoted field: ``'abc' is not a number``."""
     field = text.strip()
+    shown = repr(field) if len(field) <= 40 else repr(field[:37] + "...")
     if _PATTERNS[decimal].match(field):
         value = float(field.replace(",", ".") if decimal == "," else field)
         if math.isinf(value):
-            raise ValueError(f"{field!r:.40} is too large to be a finite number")
+            raise ValueError(f"{shown} is too large to be a finite number")
         return value
     if not field:
         raise ValueError("missing value")
-    shown = repr(field) if len(field) <= 40 else repr(field[:37] + "...")
     if _NON_FINITE.match(field):
         raise ValueError(f"{shown} is not a finite number")
     if decimal == "." and _PATTERNS[","].match(field):

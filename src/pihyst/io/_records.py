@@ -166,13 +166,13 @@ class RecordReader:
         for values in blocks:
             yield {q: values[:, j] for j, q in enumerate(order)}
 
-    def chunks(self, block_rows=BLOCK_ROWS, progress=None):
+    def chunks(self, block_rows=None, progress=None):
         """The record as consecutive :class:`Record` blocks (about ``block_rows`` samples
         each for array files; text files are read in blocks of bytes).
         ``progress(done, total)`` is called after each block."""
         transform = _Transform(self)
         start = 0
-        for raw in self._raw_blocks(block_rows, progress):
+        for raw in self._raw_blocks(block_rows or BLOCK_ROWS, progress):
             out = transform.feed(raw)
             n = max((len(a) for a in out.values() if a is not None), default=0)
             if n:

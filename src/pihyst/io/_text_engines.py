@@ -59,6 +59,8 @@ def _read_arrow(block, dialect, wanted):
             return None
         block = _EDGE_SPACES.sub(b"", _BLANK_RUNS.sub(b" ", block))
         sep = " "
+    elif b'"' in block and not _quotes_paired_per_line(block):
+        return None
     names = [f"f{i}" for i in range(dialect.n_fields)]
     picked = [names[i] for i in wanted]
     try:
@@ -106,13 +108,25 @@ def _read_numpy(block, dialect, wanted):
     return values
 
 
-def _same_field_counts(block, sep, n_fields):
-    """Whether every non-blank line of the block has ``n_fields`` fields."""
+def _per_line_counts(block, byte):
+    """Occurrences of ``byte`` on each line of ``block``, and each line's length."""
     b = np.frombuffer(block if block.endswith(b"\n") else block + b"\n", dtype=np.uint8)
     ends = np.flatnonzero(b == 10)
-    seps = np.concatenate(([0], np.cumsum(b == ord(sep))[ends]))
+    seen = np.concatenate(([0], np.cumsum(b == byte)[ends]))
     starts = np.concatenate(([0], ends[:-1] + 1))
-    counts, lengths = np.diff(seps), ends - starts
+    return np.diff(seen), ends - starts
+
+
+def _quotes_paired_per_line(block):
+    """Whether no quoted field of the block goes on past its line (the careful reader
+    refuses those; pyarrow would join the lines)."""
+    counts, _ = _per_line_counts(block, ord('"'))
+    return not np.any(counts % 2)
+
+
+def _same_field_counts(block, sep, n_fields):
+    """Whether every non-blank line of the block has ``n_fields`` fields."""
+    counts, lengths = _per_line_counts(block, ord(sep))
     # a line of only spaces is blank (skipped) in the careful reader too
     blank = lengths == 0
     return bool(np.all(blank | (counts == n_fields - 1)))

@@ -138,15 +138,34 @@ def _first_count(line, separator):
         return 0
 
 
-def choose_separator(lines):
-    """The separator of a list of meaningful lines (see the module's rules)."""
-    for sep in ("\t", ";", ","):
-        if _consistent(lines, sep) > 1:
+def _numeric(lines, separator):
+    """Whether every non-empty field of ``lines`` is a number (either decimal mark unless
+    the separator is the comma)."""
+    for text in lines:
+        try:
+            fields = split_fields(text, separator)
+        except FieldError:
+            return False
+        for f in fields:
+            if f.strip() and not (is_number(f) or (separator != "," and is_number(f, ","))):
+                return False
+    return True
+
+
+def choose_separator(lines, decimal=None):
+    """The separator of a list of meaningful lines (see the module's rules): of the
+    separators that split every line alike, the first that leaves only numbers below the
+    first line, else the first of them."""
+    candidates = ("\t", ";", None) if decimal == "," else ("\t", ";", ",", None)
+    consistent = [sep for sep in candidates if _consistent(lines, sep) > 1]
+    data = lines[1:] or lines
+    for sep in consistent:
+        if _numeric(data, sep):
             return sep
-    if _consistent(lines, None) > 1:
-        return None
-    for sep in (",", ";", "\t"):
-        if _first_count(lines[0], sep) > 1:
+    if consistent:
+        return consistent[0]
+    for sep in candidates:
+        if sep is not None and _first_count(lines[0], sep) > 1:
             return sep
     return None if len(lines[0].split()) > 1 else ","
 
@@ -175,7 +194,7 @@ def sniff(head, at_eof, *, separator=AUTO, decimal=None):
     if not meaningful:
         return None
     texts = [t for _, _, t in meaningful]
-    sep = choose_separator(texts) if separator == AUTO else separator
+    sep = choose_separator(texts, decimal) if separator == AUTO else separator
     data_texts = texts[1:] or texts
     dec = decimal or choose_decimal(data_texts, sep)
     first_number, first_end, first = meaningful[0]

@@ -16,9 +16,9 @@ class TextSource:
 
     kind = "text"
 
-    def __init__(self, path, *, separator=None, decimal_comma=None, block_bytes=BLOCK_BYTES):
+    def __init__(self, path, *, separator=None, decimal_comma=None, block_bytes=None):
         self.path = os.fspath(path)
-        self.block_bytes = block_bytes
+        self.block_bytes = block_bytes or BLOCK_BYTES
         if separator is not None and separator not in SEPARATOR_NAMES:
             raise ValueError(f"unknown separator {separator!r}: use one of "
                              "',', ';', 'tab', 'whitespace'")
