@@ -86,10 +86,14 @@ def reachable(model, state, lo, hi):
     return float(down), float(up)
 
 
-def reach_hint(model, y_lo, y_hi, d_lo, d_hi):
+def reach_hint(model, y_lo, y_hi, d_lo=None, d_hi=None):
+    """Why a desired displacement may be out of reach, and (given the trajectory's span)
+    whether a shift would bring it in."""
     unit = model.units.get("output", "um")
     hint = (f"the displacement's zero is the sensor zero of the record the model was fitted "
             f"on (model offset {model.offset:.4g} {unit})")
+    if d_lo is None:
+        return hint
     if d_hi - d_lo <= y_hi - y_lo:
         shift = y_lo - d_lo if d_lo < y_lo else y_hi - d_hi
         hint += f"; shifted by {shift:+.4g} {unit} the trajectory would be in reach"
@@ -129,7 +133,7 @@ def run(args):
                                     f"displacement_um = {y_d[i]:g} is out of reach: the "
                                     f"model reaches [{y_lo:.4g}, {y_hi:.4g}] {unit} with the "
                                     f"voltage in [{lo:g}, {hi:g}] V; "
-                                    + reach_hint(model, y_lo, y_hi, y_d[i], y_d[i]))
+                                    + reach_hint(model, y_lo, y_hi))
                 if writer is None:
                     writer = _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit)
                 t = rec.time if rec.time is not None else \

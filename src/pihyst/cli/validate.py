@@ -60,8 +60,8 @@ def run(args):
 
 
 def _line(name, e):
-    return (f"  {name:<26}{e.mean_abs:>10.4g}{e.rms:>10.4g}{e.max_abs:>10.4g}"
-            f"{e.pct(e.mean_abs):>9.3g} %{e.pct(e.rms):>7.3g} %{e.pct(e.max_abs):>7.3g} %")
+    pct = "".join(f" {e.pct(v):>8.3g} %" for v in (e.mean_abs, e.rms, e.max_abs))
+    return f"  {name:<26}{e.mean_abs:>10.4g}{e.rms:>10.4g}{e.max_abs:>10.4g}{pct}"
 
 
 def _print(args, model, rec, result, limits):
@@ -75,8 +75,8 @@ def _print(args, model, rec, result, limits):
     if limits.note():
         print(f"note: {limits.note()}")
     print(f"\nerrors (measured - predicted) in {unit}, and in % of the measured range:")
-    print(f"  {'':<26}{'mean |e|':>10}{'RMS':>10}{'max |e|':>10}{'mean':>11}{'RMS':>9}"
-          f"{'max':>9}")
+    print(f"  {'':<26}{'mean |e|':>10}{'RMS':>10}{'max |e|':>10}{'mean':>11}{'RMS':>11}"
+          f"{'max':>11}")
     print(_line("as the model is", e))
     print(_line(f"offset re-fitted ({result.shift:+.3g})", result.shifted))
     where = rec.error(e.at, "displacement", "").args[0].rstrip(": ")
@@ -84,8 +84,7 @@ def _print(args, model, rec, result, limits):
     if abs(result.shift) > 2 * result.shifted.rms:
         print(f"note: the errors are mostly an offset of {result.shift:+.4g} {unit}: this "
               f"record's sensor zero differs from the fitted record's")
-    print(f"\nper cycle (cut at upward crossings of the middle of the voltage range), "
-          f"{len(result.cycles)} cycles:")
+    print(f"\nper cycle (cut at the valleys of the voltage), {len(result.cycles)} cycles:")
     print(f"  {'cycle':>5}{'samples':>9}{'from':>9}{'mean |e|':>10}{'RMS':>10}{'max |e|':>10}")
     shown = result.cycles if len(result.cycles) <= 40 else \
         result.cycles[:20] + [None] + result.cycles[-19:]

@@ -24,7 +24,7 @@ class Errors:
         a = np.abs(e)
         i = int(np.argmax(a))
         return cls(int(e.size), float(a.mean()), float(np.sqrt(np.mean(e * e))),
-                   float(a[i]), offset + i, float(span))
+                   float(a[i]), int(offset + i), float(span))
 
     def pct(self, value):
         return 100.0 * value / self.span if self.span > 0 else float("nan")
@@ -58,8 +58,9 @@ class Validation:
 
 
 def cycle_starts(u, band=SCHMITT_BAND):
-    """Indices where a cycle of the input starts: upward crossings of the middle of its
-    range, with a band of ``band`` x the range against noise (a Schmitt trigger)."""
+    """Indices where a cycle of the input starts: the valley before each upward crossing
+    of the middle of its range (crossings with a band of ``band`` x the range against
+    noise, a Schmitt trigger); 0 first."""
     lo, hi = float(u.min()), float(u.max())
     mid, half = (lo + hi) / 2, band * (hi - lo) / 2
     level = np.where(u > mid + half, 1, np.where(u < mid - half, -1, 0))
@@ -68,7 +69,15 @@ def cycle_starts(u, band=SCHMITT_BAND):
         return np.array([0])
     held = level[idx]
     ups = idx[1:][(held[1:] == 1) & (held[:-1] == -1)]
-    return np.r_[0, ups]
+    if held[0] == 1:   # the record starts high: its first rise is cut too
+        ups = np.r_[idx[0], ups]
+    starts, previous = [0], 0
+    for up in ups:
+        valley = previous + int(np.argmin(u[previous:up]))
+        if valley > starts[-1]:
+            starts.append(valley)
+        previous = up
+    return np.array(starts)
 
 
 def validate_model(model, voltage, displacement, *, initial_state=None, first=0):
@@ -83,7 +92,7 @@ def validate_model(model, voltage, displacement, *, initial_state=None, first=0)
     errors = Errors.of(e[judged], span, first)
     shift = float(np.mean(e[judged]))
     shifted = Errors.of(e[judged] - shift, span, first)
-    starts = [s for s in cycle_starts(u[judged]) + first]
+    starts = [int(s) for s in cycle_starts(u[judged]) + first]
     bounds = list(zip(starts, starts[1:] + [u.size]))
     cycles = [(int(a), int(b), Errors.of(e[a:b], span, a)) for a, b in bounds if b > a]
     return Validation(errors, shifted, shift, cycles, predicted, first)
