@@ -139,7 +139,7 @@ def run(args):
         raise UsageError(f"--candidates must be at least 2, got {args.candidates}")
     input_range = _input_range(args.input_range)
     record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json)
+                            say=not args.json, optional=())
     u, y = record.voltage, record.displacement
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PihystWarning)

@@ -48,25 +48,28 @@ def add_record_options(p, what="the record"):
                         "dict of arrays voltage, displacement, time and a metadata dict")
 
 
-def open_from_args(args, path, need):
-    """A :class:`pihyst.io.RecordReader` for ``path`` with the options of ``args``."""
+def open_from_args(args, path, need, optional=("time",)):
+    """A :class:`pihyst.io.RecordReader` for ``path`` with the options of ``args``;
+    ``optional`` quantities are read when the record has them."""
     try:
         return open_record(path, voltage=args.voltage, displacement=args.displacement,
                            time=args.time, rate=args.rate,
                            displacement_unit=args.displacement_unit,
                            voltage_gain=args.voltage_gain, lag=args.lag,
                            skip_until=args.skip_until, separator=args.separator,
-                           decimal_comma=args.decimal_comma, reader=args.reader, need=need)
+                           decimal_comma=args.decimal_comma, reader=args.reader, need=need,
+                           optional=optional)
     except ValueError as err:
         if isinstance(err, UsageError) or type(err) is not ValueError:
             raise
         raise UsageError(f"{path}: {err}") from None
 
 
-def read_from_args(args, path, need, say=True):
+def read_from_args(args, path, need, say=True, optional=("time",)):
     """All of a record (a :class:`pihyst.io.Record`) with the options of ``args``;
     prints what was read (unless ``say`` is False)."""
-    with open_from_args(args, path, need) as reader, progress_bar(f"reading {path}") as bar:
+    with open_from_args(args, path, need, optional) as reader, \
+            progress_bar(f"reading {path}") as bar:
         record = reader.read(progress=bar)
         if say:
             print(reader.describe(), flush=True)

@@ -66,8 +66,9 @@ class ColumnWriter:
     Values are written as the shortest decimal that reads back exactly (pyarrow's
     writer when installed, else Python's ``repr``)."""
 
-    def __init__(self, path, names, comments=()):
+    def __init__(self, path, names, comments=(), engine=None):
         self.path = os.fspath(path)
+        self.engine = engine
         self.names = list(names)
         folder = os.path.dirname(os.path.abspath(self.path))
         fd, self._tmp = tempfile.mkstemp(dir=folder, prefix=".pihyst-", suffix=".tmp")
@@ -81,7 +82,8 @@ class ColumnWriter:
         data = [np.ascontiguousarray(columns[n], dtype=np.float64) for n in self.names]
         n = len(data[0])
         for start in range(0, n, WRITE_ROWS):
-            self._file.write(format_rows([a[start:start + WRITE_ROWS] for a in data]))
+            self._file.write(format_rows([a[start:start + WRITE_ROWS] for a in data],
+                                         self.engine))
         self.rows += n
 
     def close(self):
@@ -106,9 +108,12 @@ class ColumnWriter:
             self.abort()
 
 
-def format_rows(columns):
-    """CSV bytes of equal-length float columns, no header."""
+def format_rows(columns, engine=None):
+    """CSV bytes of equal-length float columns, no header: with pyarrow's writer when
+    installed (or ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
     try:
+        if engine == "numpy":
+            raise ImportError
         import pyarrow as pa
         import pyarrow.csv as pcsv
     except ImportError:

@@ -65,9 +65,10 @@ class RecordReader:
     def __init__(self, path, *, voltage=None, displacement=None, time=None, rate=None,
                  displacement_unit=None, voltage_gain=None, lag=0, skip_until=None,
                  separator=None, decimal_comma=None, reader=None,
-                 need=("voltage", "displacement")):
+                 need=("voltage", "displacement"), optional=("time",)):
         self.path = os.fspath(path)
         self.need = tuple(need)
+        self.optional = tuple(optional) + (("time",) if skip_until is not None else ())
         unknown = set(self.need) - set(QUANTITIES)
         if unknown:
             raise ValueError(f"unknown quantities {sorted(unknown)}")
@@ -105,7 +106,7 @@ class RecordReader:
                 if q in self.need:
                     raise ValueError(f"--{q} none: this command needs the {q}")
                 continue
-            if q not in self.need and spec is None and q != "time":
+            if q not in self.need and spec is None and q not in self.optional:
                 continue
             ref = self._ref(q, spec)
             if ref is not None:
@@ -189,10 +190,15 @@ class RecordReader:
 
     def read(self, progress=None):
         """All samples as one :class:`Record`."""
-        parts = list(self.chunks(progress=progress))
-        joined = {q: (np.concatenate([getattr(p, q) for p in parts])
-                      if getattr(parts[0], q) is not None else None)
-                  for q in QUANTITIES}
+        parts = {q: [] for q in QUANTITIES}
+        for rec in self.chunks(progress=progress):
+            for q in QUANTITIES:
+                parts[q].append(getattr(rec, q))
+        joined = {}
+        for q in QUANTITIES:   # one at a time, so that the blocks are freed as we go
+            blocks = parts.pop(q)
+            joined[q] = None if blocks[0] is None else np.concatenate(blocks)
+            del blocks
         return Record(**joined, source=self.path, metadata=self.metadata(), start=0,
                       reader=self)
 

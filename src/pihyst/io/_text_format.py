@@ -110,14 +110,19 @@ class Dialect:
         return "the header" if self.header_line else f"line {self.first_line}"
 
 
-def head_lines(head, at_eof):
-    """(line number, byte offset after the line, text) of the complete lines of ``head``."""
+def head_lines(head, at_eof, limit=SAMPLE_LINES):
+    """(line number, byte offset after the line, text) of the complete lines of ``head``,
+    up to the ``limit``-th meaningful one."""
     start = len(BOM) if head.startswith(BOM) else 0
-    out, number, pos = [], 1, start
+    out, number, pos, meaningful = [], 1, start, 0
     for m in _LINE.finditer(head, start):
-        out.append((number, m.end(), decode_line(m.group(1))))
+        text = decode_line(m.group(1))
+        out.append((number, m.end(), text))
         number += 1
         pos = m.end()
+        meaningful += not is_skipped(text)
+        if meaningful >= limit:
+            return start, out
     if at_eof and pos < len(head):
         out.append((number, len(head), decode_line(head[pos:])))
     return start, out
