@@ -112,9 +112,11 @@ def _per_line_counts(block, byte):
     """Occurrences of ``byte`` on each line of ``block``, and each line's length."""
     b = np.frombuffer(block if block.endswith(b"\n") else block + b"\n", dtype=np.uint8)
     ends = np.flatnonzero(b == 10)
-    seen = np.concatenate(([0], np.cumsum(b == byte)[ends]))
-    starts = np.concatenate(([0], ends[:-1] + 1))
-    return np.diff(seen), ends - starts
+    hits = np.flatnonzero(b == byte)
+    before = np.searchsorted(hits, ends)
+    counts = np.diff(before, prepend=0)
+    lengths = np.diff(ends, prepend=-1) - 1
+    return counts, lengths
 
 
 def _quotes_paired_per_line(block):
