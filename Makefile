@@ -8,9 +8,11 @@ BIN = $(VENV)/bin
 
 .PHONY: demo test install ctest lint pytest bench clean
 $(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*.pyx)
+	@echo "make: installing pihyst and its dependencies into $(VENV) (first time only, a few minutes: pip's progress follows)"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e ".[test]"
+	$(BIN)/pip install --progress-bar on -e ".[test]"
+	@echo "make: pihyst is installed in $(VENV)"
 	touch $@
 
 install: $(BIN)/pihyst
