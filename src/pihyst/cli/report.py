@@ -23,8 +23,18 @@ def register(sub):
                    help="record with the voltage and the displacement (time optional)")
     p.add_argument("--out", metavar="DIR", default=None,
                    help="output folder (default: DATA-report next to DATA)")
+    add_figure_format_option(p)
+    p.add_argument("--paper", action="store_true",
+                   help="show the paper's numbers (its own beam's) beside this record's")
     add_record_options(p, "DATA")
     p.set_defaults(run=run)
+
+
+def add_figure_format_option(p):
+    """--figure-format svg|pdf (shared with pihyst demo)."""
+    p.add_argument("--figure-format", metavar="FORMAT", action="append", default=[],
+                   choices=("svg", "pdf"),
+                   help="also write the figures as svg or pdf (repeatable); PNG always")
 
 
 def run(args):
@@ -56,6 +66,7 @@ def run(args):
         raise UsageError(f"{args.data}: {err}") from None
     try:
         files = write_report(study, out, command=f"pihyst report {args.data} --out {out}",
+                             figure_formats=args.figure_format, paper=args.paper,
                              progress=say)
     except OSError as err:
         raise UsageError(f"--out {out}: cannot write the report: {err.strerror}") from None
