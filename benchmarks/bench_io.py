@@ -147,8 +147,8 @@ def predict_end_to_end(folder, path):
 def memory(folder, pihyst_cmd, sizes, fit):
     print("\npeak memory (max RSS of the process) against rows:")
     print("  (MB: max RSS; s: wall / CPU seconds)")
-    print(f"  {'rows':>10}{'file (MB)':>11}{'predict (MB)':>14}{'s':>13}"
-          f"{'compensate (MB)':>17}{'s':>13}" + (f"{'fit classical (MB)':>20}{'s':>13}"
+    print(f"  {'rows':>10}{'file (MB)':>11}{'predict (MB)':>14}{'s':>14}"
+          f"{'compensate (MB)':>17}{'s':>14}" + (f"{'fit classical (MB)':>20}{'s':>14}"
                                                   if fit else ""))
     for n in sizes:
         path = folder / f"m{n}.csv"
@@ -158,11 +158,11 @@ def memory(folder, pihyst_cmd, sizes, fit):
         comp, tc, cc = child([pihyst_cmd, "compensate", str(MODEL), str(out), "-o",
                               str(folder / "comp.csv")])
         line = (f"  {n:>10.1e}{path.stat().st_size / 1e6:>11.0f}{pred:>14.0f}"
-                f"{tp:>7.1f} /{cp:>4.0f}{comp:>17.0f}{tc:>7.1f} /{cc:>4.0f}")
+                f"{tp:>7.1f} /{cp:>5.1f}{comp:>17.0f}{tc:>7.1f} /{cc:>5.1f}")
         if fit:
             mem, tf, cf = child([pihyst_cmd, "fit", str(path), "--model", "classical",
                                  "-o", str(folder / "m.json")])
-            line += f"{mem:>20.0f}{tf:>7.1f} /{cf:>4.0f}"
+            line += f"{mem:>20.0f}{tf:>7.1f} /{cf:>5.1f}"
         print(line, flush=True)
         for p in (path, out, folder / "comp.csv"):
             p.unlink(missing_ok=True)

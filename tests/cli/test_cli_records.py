@@ -188,3 +188,38 @@ def test_no_progress_bar_in_a_pipe(tmp_path, capsys):
     triangle(src)
     assert run("predict", CLASSICAL, src, "-o", tmp_path / "o.csv") == 0
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["validate", CLASSICAL, "{src}", "--figure", "{tmp}/f.txt"], "use a .png, .svg or .pdf"),
+    (["fit", "{src}", "-o", "{tmp}/m.json", "--input-range", "0-150"], "expected LO,HI"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--lag", "-2"], "--lag must be"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--rate", "10"],
+     "--rate is for records without a time column"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--reader", "nothing"],
+     "expected MODULE:FUNCTION"),
+])
+def test_bad_options_are_one_line_errors(tmp_path, capsys, argv, message):
+    src = tmp_path / "in.csv"
+    triangle(src, extra="")
+    argv = [a.format(src=src, tmp=tmp_path) for a in argv]
+    assert run(*argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pihyst: error: ") and message in err and err.count("\n") == 1
+    assert not [p for p in os.listdir(tmp_path) if p not in ("in.csv",)]
+
+
+def test_reader_function_on_the_command_line(tmp_path, capsys):
+    (tmp_path / "rig.py").write_text(
+        "import numpy as np\n"
+        "def load(path):\n"
+        "    v = np.loadtxt(path)\n"
+        "    return {'voltage': v, 'metadata': {'rate': 2.0}}\n")
+    data = tmp_path / "volts.raw"
+    data.write_text("0\n150\n0\n")
+    out = tmp_path / "o.csv"
+    assert run("predict", CLASSICAL, data, "--reader", f"{tmp_path / 'rig.py'}:load",
+               "-o", out) == 0
+    cols, _ = read_columns(out, ["time_s", "displacement_um"])
+    np.testing.assert_array_equal(cols["time_s"], [0, 0.5, 1.0])
+    assert "python function" in capsys.readouterr().out
