@@ -441,7 +441,7 @@ def read_record(path, **options):
     >>> with open(path, "w") as f:
     ...     _ = f.write("0\\t0,0\\t12\\n1\\t0,5\\t13\\n2\\t1,0\\t15\\n")
     >>> rec = read_record(path, voltage=2, displacement=3, time=1, displacement_unit="nm")
-    >>> rec.voltage.tolist(), rec.displacement.tolist()
+    >>> rec.voltage.tolist(), rec.displacement.round(9).tolist()
     ([0.0, 0.5, 1.0], [0.012, 0.013, 0.015])
     """
     with open_record(path, **options) as reader:
