@@ -43,6 +43,8 @@ def read_block(block, dialect, wanted, engine=None):
         block = _COMMENT_LINES.sub(b"", block)
     if not block.strip():
         return np.empty((0, len(wanted)))
+    if dialect.decimal == "," and b"." in block:
+        return None   # '1.5' in a decimal-comma file: the careful reader says where
     engine = engine or engine_name()
     values = (_read_arrow(block, dialect, wanted) if engine == "pyarrow"
               else _read_numpy(block, dialect, wanted))
