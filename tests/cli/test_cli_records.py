@@ -126,8 +126,12 @@ def test_fit_input_range(tmp_path, capsys):
     y = pihyst.load_model(CLASSICAL).replace(input_range=(0, 149.99)).predict(u)
     pihyst.io.write_columns(src, {"time_s": t, "voltage_V": u, "displacement_um": y})
     model = tmp_path / "m.json"
-    assert run("fit", src, "--model", "classical", "--input-range", "0,150", "-o", model) == 0
-    assert pihyst.load_model(model).input_range == (0.0, 150.0)
+    assert run("fit", src, "--model", "classical", "--input-range", "0,150", "-o", model,
+               "--voltage", "voltage_V") == 0
+    fitted = pihyst.load_model(model)
+    assert fitted.input_range == (0.0, 150.0)
+    assert fitted.metadata["source"]["command"].endswith("fit --voltage voltage_V")
+    assert fitted.metadata["source"]["record"]["samples"] == u.size
     assert run("fit", src, "--model", "classical", "--input-range", "0,100", "-o", model) == 2
     assert "is outside --input-range 0,100" in capsys.readouterr().err
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
-from pihyst.cli.record_options import add_record_options, read_from_args
+from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 from pihyst.exceptions import FitError, InvalidModelError, PihystWarning
 from pihyst.identify import INITIAL_STATES, fit
 from pihyst.identify._families import FAMILY_NAMES
@@ -156,7 +156,8 @@ def run(args):
         model = _with_input_range(model, input_range, record)
     model = model.replace(metadata={
         **model.metadata,
-        "source": {"data": args.data, "command": f"pihyst {__version__} fit",
+        "source": {"data": args.data, "command": f"pihyst {__version__} fit "
+                                                 + options_text(args),
                    "record": _plain(record.metadata)}})
     save_model(model, args.output)
     for w in caught:

@@ -48,6 +48,23 @@ def add_record_options(p, what="the record"):
                         "dict of arrays voltage, displacement, time and a metadata dict")
 
 
+OPTIONS = (("voltage", "--voltage"), ("displacement", "--displacement"), ("time", "--time"),
+           ("rate", "--rate"), ("displacement_unit", "--displacement-unit"),
+           ("voltage_gain", "--voltage-gain"), ("lag", "--lag"),
+           ("skip_until", "--skip-until"), ("separator", "--separator"),
+           ("reader", "--reader"))
+
+
+def options_text(args):
+    """The reading options given, as they would be typed (for reports and metadata)."""
+    words = [f"{flag} {value:g}" if isinstance(value, float) else f"{flag} {value}"
+             for name, flag in OPTIONS
+             if (value := getattr(args, name)) is not None and value != 0]
+    if args.decimal_comma:
+        words.append("--decimal-comma")
+    return " ".join(words)
+
+
 def open_from_args(args, path, need, optional=("time",)):
     """A :class:`pihyst.io.RecordReader` for ``path`` with the options of ``args``;
     ``optional`` quantities are read when the record has them."""

@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from pihyst.cli.errors import UsageError
-from pihyst.cli.record_options import add_record_options, read_from_args
+from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 
 
 def register(sub):
@@ -60,12 +60,14 @@ def run(args):
         print(f"pihyst report: {line}", flush=True)
 
     try:
-        study = loop_study(t, u, y, source=f"Measured record {args.data}: {u.size} samples",
-                           progress=say)
+        source = rec.reader.describe().replace("read ", "Measured record ", 1)
+        study = loop_study(t, u, y, source=source, progress=say)
     except FitError as err:
         raise UsageError(f"{args.data}: {err}") from None
     try:
-        files = write_report(study, out, command=f"pihyst report {args.data} --out {out}",
+        given = options_text(args)
+        files = write_report(study, out, command=f"pihyst report {args.data} --out {out}"
+                                                 + (f" {given}" if given else ""),
                              figure_formats=args.figure_format, paper=args.paper,
                              progress=say)
     except OSError as err:
