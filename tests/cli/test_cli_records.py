@@ -227,3 +227,20 @@ def test_reader_function_on_the_command_line(tmp_path, capsys):
     cols, _ = read_columns(out, ["time_s", "displacement_um"])
     np.testing.assert_array_equal(cols["time_s"], [0, 0.5, 1.0])
     assert "python function" in capsys.readouterr().out
+
+
+def test_progress_bar_on_a_terminal(monkeypatch):
+    pytest.importorskip("tqdm")
+    import io
+
+    from pihyst.cli.record_options import progress_bar
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+    term = Terminal()
+    monkeypatch.setattr("sys.stderr", term)
+    with progress_bar("reading big.csv") as bar:
+        bar(50, 100)
+        bar(100, 100)
+    assert "reading big.csv" in term.getvalue() and "100" in term.getvalue()
