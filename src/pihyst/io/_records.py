@@ -189,16 +189,36 @@ class RecordReader:
                               + (f" after --lag {self.lag}" if self.lag else ""))
 
     def read(self, progress=None):
-        """All samples as one :class:`Record`."""
-        parts = {q: [] for q in QUANTITIES}
-        for rec in self.chunks(progress=progress):
+        """All samples as one :class:`Record`, gathered into arrays sized from the part
+        of the file read so far (so that the record is held about once, not twice)."""
+        seen = [0, 0]
+
+        def track(done, total):
+            seen[:] = done, total
+            if progress is not None:
+                progress(done, total)
+        gathered = {}
+        n = 0
+        for rec in self.chunks(progress=track):
+            k = len(rec)
             for q in QUANTITIES:
-                parts[q].append(getattr(rec, q))
-        joined = {}
-        for q in QUANTITIES:   # one at a time, so that the blocks are freed as we go
-            blocks = parts.pop(q)
-            joined[q] = None if blocks[0] is None else np.concatenate(blocks)
-            del blocks
+                a = getattr(rec, q)
+                if a is None:
+                    continue
+                buf = gathered.get(q)
+                if buf is None or n + k > buf.size:
+                    done, total = seen
+                    expected = int((n + k) * total / done * 1.02) + 1 if done else 0
+                    grown = np.empty(max(expected, int((n + k) * 1.25) + 1))
+                    if buf is not None:
+                        grown[:n] = buf[:n]
+                    buf = gathered[q] = grown
+                buf[n:n + k] = a
+            n += k
+        joined = {q: None for q in QUANTITIES}
+        for q, buf in gathered.items():
+            buf.resize(n, refcheck=False)   # in place: nothing else refers to it
+            joined[q] = buf
         return Record(**joined, source=self.path, metadata=self.metadata(), start=0,
                       reader=self)
 
