@@ -1,6 +1,7 @@
 """Every Python example of the README runs as written (in order, in one namespace, in a
 scratch folder holding a copy of examples/). The few names the text leaves to the reader
-(a measured record u, y, a second one u2, y2 and a desired trajectory y_desired) are provided first."""
+(a measured record u, y, a second one u2, y2 and a desired trajectory y_desired) are
+provided first."""
 
 import re
 import shutil

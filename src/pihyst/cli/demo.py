@@ -4,6 +4,7 @@ import os
 import time
 
 from pihyst.cli.errors import UsageError
+from pihyst.cli.report import add_figure_format_option
 from pihyst.sim import PLANT_NAMES
 
 DEFAULT_OUT = "pihyst-demo"
@@ -26,6 +27,7 @@ def register(sub):
                    help="simulated beam (default: paper-beam, calibrated to the paper)")
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="noise seed of the first record (default 0)")
+    add_figure_format_option(p)
     p.add_argument("--no-variants", action="store_true",
                    help="skip the comparison on the other simulated beams")
     p.add_argument("--no-rig", action="store_true",
@@ -56,7 +58,8 @@ def run(args):
     command = f"pihyst demo --out {args.out} --plant {args.plant} --seed {args.seed}" + \
         (" --no-variants" if args.no_variants else "") + (" --no-rig" if args.no_rig else "")
     try:
-        files = write_report(study, args.out, command=command, progress=say)
+        files = write_report(study, args.out, command=command, progress=say,
+                             figure_formats=args.figure_format)
     except OSError as err:
         raise UsageError(f"--out {args.out}: cannot write the report: {err.strerror}") from None
     h = study.metrics["headline"]
