@@ -26,5 +26,6 @@ def test_demo_with_the_rig(tmp_path):
     from pihyst.study import paper_study, write_report
     study = paper_study(dt=2.0, variants=False, rig=True, progress=None)
     files = write_report(study, tmp_path, command="test")
-    assert {"fig17_rig_tracking.png", "rig_record.csv", "rig_feedback.csv"} <= set(files)
+    assert {"rig_record.csv", "rig_feedback.csv"} <= set(files)
+    assert any(f.startswith("fig") and f.endswith("_rig_tracking.png") for f in files)
     assert "rig" in study.metrics and "Loop timing" in (tmp_path / "report.html").read_text()

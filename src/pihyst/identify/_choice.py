@@ -10,8 +10,10 @@ cycles and a validation record), an operator count and a measured compensator la
    fixes them (PI-type), unless no such family was fitted.
 2. **Accurate enough**: judged RMS within ``TOLERANCE`` (2 %) of the lowest among the
    eligible.
-3. **Smallest, fastest**: of those, the fewest operators, then the lowest worst-case
-   latency.
+3. **Smallest**: of those, the fewest operators, then the lowest judged error. The
+   measured latency bounds the choice (``max_latency``) and is reported, but breaks no
+   tie: timings vary from run to run, and the same record must give the same model.
+   (A ``max_latency`` close to a candidate's measured latency can still go either way.)
 
 With nothing held back and no validation record, step 2 compares the BIC on the fitted
 data, n ln(RMS^2) + p ln n, instead (the lowest wins; p counts non-zero weights and the
@@ -70,10 +72,10 @@ def choose(candidates, *, minor_loops_known, unknown_reason, judged_on_held_back
     if judged_on_held_back:
         best = min(c.judged_rms for c in eligible)
         near = [c for c in eligible if c.judged_rms <= best * (1 + TOLERANCE)]
-        chosen = min(near, key=lambda c: (c.fitted.n_operators, c.worst_latency))
-        criterion = (f"the fewest operators, then the lowest worst-case compensator latency, "
-                     f"among the families within {100 * TOLERANCE:g} % of the lowest judged "
-                     f"RMS error (the worst of held-back cycles and validation record)")
+        chosen = min(near, key=lambda c: (c.fitted.n_operators, c.judged_rms, c.name))
+        criterion = (f"the fewest operators, then the lowest judged error, among the "
+                     f"families within {100 * TOLERANCE:g} % of the lowest judged RMS error "
+                     f"(the worst of held-back cycles and validation record)")
     else:
         chosen = min(eligible, key=lambda c: n_fitted * math.log(max(c.judged_rms, 1e-300) ** 2)
                      + c.fitted.n_params * math.log(n_fitted))

@@ -73,7 +73,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         (:class:`~pihyst.identify.KrasnoselskiiPokrovskii`: a ``grid`` of kernels). A
         name stands for the family with its default options. Default: all of them,
         judged on held-back data (and ``validate``); of those within 2 % of the lowest
-        judged RMS, the fewest operators, then the fastest compensator, is returned.
+        judged RMS, the fewest operators, then the lowest judged error, is returned.
         When the data do not determine the minor loops (no reversals inside the range),
         families whose structure fixes them (all but ``kp``) are preferred.
     thresholds : array_like, optional
