@@ -3,7 +3,9 @@
 #include "pihyst.h"
 #include "pihyst_internal.h"
 
+#include <stdint.h>
 #include <string.h>
+
 
 /* Operators are processed in lanes of PIHYST_LANES partial sums, which lets the
  * compiler vectorize the weighted sum without reassociating it (no fast-math). */
@@ -293,6 +295,128 @@ static void run_classical(size_t K, const real *restrict w, const real *restrict
     }
 }
 
+/* Small banks, K <= PIHYST_SMALL = 16 (GCC and clang): the operators are padded to 16
+ * (padding: envelope constants 0 and weight 0, so a padded operator follows u and adds a
+ * zero) and held for the whole block in four vector variables of four lanes each
+ * (compiler vector extensions), which the compiler keeps in registers: no state store
+ * and reload between samples. min and max are the scalar loops' v < h ? v : h per lane
+ * (NaN included), which compiles to one vector min/max. The weighted sum is a fixed tree,
+ * ((a0 + a1) + (a2 + a3)) over the vectors then (s0 + s2) + (s1 + s3) over the lanes:
+ * a short dependency chain whose order depends on neither n nor the data, so step and
+ * run still give the same bits. The vectors are 4 x real (32 bytes in double, 16 in
+ * single): one AVX2 register, or two SSE2 ones in the default clone of PIHYST_HOT.
+ * Other compilers use the generic loops below. */
+#define PIHYST_SMALL 16
+#if defined(__GNUC__) && !defined(PIHYST_NO_VECTOR_EXT)
+#define PIHYST_HAVE_SMALL 1
+typedef real vreal __attribute__((vector_size(4 * sizeof(real))));
+
+/* Lane updates as macros on named vectors (no vector passed by value: that would depend
+ * on the ABI of the clone). The per-lane selects v < h ? v : h are those of the scalar
+ * loops (NaN included) and compile to one vector min/max each. */
+#define PIHYST_CLAMP_LANES(fj, hj, lj)                                \
+    do {                                                              \
+        int i_;                                                       \
+        for (i_ = 0; i_ < 4; ++i_) {                                  \
+            real v_ = (fj)[i_];                                       \
+            v_ = v_ < (hj)[i_] ? v_ : (hj)[i_];                       \
+            (fj)[i_] = v_ > (lj)[i_] ? v_ : (lj)[i_];                 \
+        }                                                             \
+    } while (0)
+#define PIHYST_MAX_LANES(r, x, z)                                     \
+    do {                                                              \
+        int i_;                                                       \
+        for (i_ = 0; i_ < 4; ++i_) (r)[i_] = (x)[i_] > (z)[i_] ? (x)[i_] : (z)[i_]; \
+    } while (0)
+#define PIHYST_MIN_LANES(r, x, z)                                     \
+    do {                                                              \
+        int i_;                                                       \
+        for (i_ = 0; i_ < 4; ++i_) (r)[i_] = (x)[i_] < (z)[i_] ? (x)[i_] : (z)[i_]; \
+    } while (0)
+/* the fixed tree of the weighted sum */
+#define PIHYST_TREE_SUM(s, a0, a1, a2, a3) \
+    ((s) = ((a0) + (a1)) + ((a2) + (a3)), ((s)[0] + (s)[2]) + ((s)[1] + (s)[3]))
+
+/* 16 values (K of x, then zeros) into four vectors */
+static void load_padded(vreal *v, const real *x, size_t K)
+{
+    real tmp[PIHYST_SMALL];
+    size_t k;
+    for (k = 0; k < PIHYST_SMALL; ++k) tmp[k] = k < K ? x[k] : RC(0.0);
+    memcpy(v, tmp, sizeof tmp);
+}
+
+static void store_state(real *f, const vreal *v, size_t K)
+{
+    real tmp[PIHYST_SMALL];
+    memcpy(tmp, v, sizeof tmp);
+    memcpy(f, tmp, K * sizeof *f);
+}
+
+PIHYST_HOT
+static void run_classical_small(size_t K, const real *restrict w, const real *restrict c,
+                                real *restrict f, real offset, const real *restrict u,
+                                real *restrict y, size_t n)
+{
+    vreal fv[4], lo[4], hi[4], wv[4];
+    vreal f0, f1, f2, f3;
+    size_t t;
+    load_padded(fv, f, K);
+    load_padded(lo, c, K);
+    load_padded(hi, c + K, K);
+    load_padded(wv, w, K);
+    f0 = fv[0]; f1 = fv[1]; f2 = fv[2]; f3 = fv[3];
+    for (t = 0; t < n; ++t) {
+        const vreal ut = {u[t], u[t], u[t], u[t]};
+        vreal h0 = ut + hi[0], h1 = ut + hi[1], h2 = ut + hi[2], h3 = ut + hi[3];
+        vreal l0 = ut + lo[0], l1 = ut + lo[1], l2 = ut + lo[2], l3 = ut + lo[3], s;
+        PIHYST_CLAMP_LANES(f0, h0, l0);
+        PIHYST_CLAMP_LANES(f1, h1, l1);
+        PIHYST_CLAMP_LANES(f2, h2, l2);
+        PIHYST_CLAMP_LANES(f3, h3, l3);
+        y[t] = offset + PIHYST_TREE_SUM(s, wv[0] * f0, wv[1] * f1, wv[2] * f2, wv[3] * f3);
+    }
+    fv[0] = f0; fv[1] = f1; fv[2] = f2; fv[3] = f3;
+    store_state(f, fv, K);
+}
+
+PIHYST_HOT
+static void run_multislope_small(size_t K, real a, real b, const real *restrict w,
+                                 const real *restrict c, real *restrict f, real offset,
+                                 const real *restrict u, real *restrict y, size_t n)
+{
+    vreal fv[4], c1[4], c2[4], c3[4], wv[4];
+    vreal f0, f1, f2, f3;
+    size_t t;
+    load_padded(fv, f, K);
+    load_padded(c1, c, K);
+    load_padded(c2, c + K, K);
+    load_padded(c3, c + 2 * K, K);
+    load_padded(wv, w, K);
+    f0 = fv[0]; f1 = fv[1]; f2 = fv[2]; f3 = fv[3];
+    for (t = 0; t < n; ++t) {
+        const real aus = a * u[t], bus = b * u[t];
+        const vreal au = {aus, aus, aus, aus}, bu = {bus, bus, bus, bus};
+        vreal s;
+#define PIHYST_MS_LANE(fj, j)                                 \
+    do {                                                      \
+        vreal r1 = au + c1[j], r2 = bu + c2[j], f2_ = au + c3[j], l_, h_; \
+        PIHYST_MAX_LANES(l_, r1, r2);                         \
+        PIHYST_MIN_LANES(h_, bu, f2_);                        \
+        PIHYST_CLAMP_LANES(fj, h_, l_);                       \
+    } while (0)
+        PIHYST_MS_LANE(f0, 0);
+        PIHYST_MS_LANE(f1, 1);
+        PIHYST_MS_LANE(f2, 2);
+        PIHYST_MS_LANE(f3, 3);
+#undef PIHYST_MS_LANE
+        y[t] = offset + PIHYST_TREE_SUM(s, wv[0] * f0, wv[1] * f1, wv[2] * f2, wv[3] * f3);
+    }
+    fv[0] = f0; fv[1] = f1; fv[2] = f2; fv[3] = f3;
+    store_state(f, fv, K);
+}
+#endif
+
 /* multislope: f_k = max(max(a u - a r_k, b u - r_k - (b-1)U),
  *                       min(min(b u, a u + (1-a)U - (1-ah) r_k), f_k)) */
 PIHYST_HOT
@@ -375,9 +499,22 @@ void pihyst_model_run(pihyst_model *m, const real *u, real *y, size_t n)
 {
     switch (m->family) {
     case PIHYST_CLASSICAL:
+#ifdef PIHYST_HAVE_SMALL
+        if (m->n_ops <= PIHYST_SMALL) {
+            run_classical_small(m->n_ops, m->weights, m->coef, m->state, m->offset, u, y, n);
+            break;
+        }
+#endif
         run_classical(m->n_ops, m->weights, m->coef, m->state, m->offset, u, y, n);
         break;
     case PIHYST_MULTISLOPE:
+#ifdef PIHYST_HAVE_SMALL
+        if (m->n_ops <= PIHYST_SMALL) {
+            run_multislope_small(m->n_ops, m->shape.a, m->shape.b, m->weights, m->coef,
+                                 m->state, m->offset, u, y, n);
+            break;
+        }
+#endif
         run_multislope(m->n_ops, m->shape.a, m->shape.b, m->weights, m->coef, m->state,
                        m->offset, u, y, n);
         break;

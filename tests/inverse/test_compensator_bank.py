@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from tests.strategies import U, any_model
 
 import pihyst
 from pihyst.inverse import FLAG_SATURATED_HIGH, FLAG_SLEW, CompensatorBank
-from tests.strategies import U, any_model
 
 
 @st.composite

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from tests.strategies import U, any_model
 
 import pihyst
 from pihyst.model import ModelBank
-from tests.strategies import U, any_model
 
 
 @settings(max_examples=40, deadline=None)

@@ -18,5 +18,5 @@ from pihyst.inverse._compensator import (
 from pihyst.model import classical_inverse, reachable_output_range
 
 __all__ = ["FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW", "FLAG_SLEW",
-           "CompensationResult", "Compensator", "CompensatorBank", "classical_inverse", "compensate",
-           "reachable_output_range"]
+           "CompensationResult", "Compensator", "CompensatorBank", "classical_inverse",
+           "compensate", "reachable_output_range"]
