@@ -6,6 +6,12 @@
 #include <stdint.h>
 #include <string.h>
 
+#if defined(__GNUC__)
+#define PIHYST_INLINE __attribute__((always_inline)) inline
+#else
+#define PIHYST_INLINE
+#endif
+
 
 /* Operators are processed in lanes of PIHYST_LANES partial sums, which lets the
  * compiler vectorize the weighted sum without reassociating it (no fast-math). */
@@ -337,20 +343,28 @@ typedef real vreal __attribute__((vector_size(4 * sizeof(real))));
 #define PIHYST_TREE_SUM(s, a0, a1, a2, a3) \
     ((s) = ((a0) + (a1)) + ((a2) + (a3)), ((s)[0] + (s)[2]) + ((s)[1] + (s)[3]))
 
-/* 16 values (K of x, then zeros) into four vectors */
-static void load_padded(vreal *v, const real *x, size_t K)
+/* 16 values (K of x, then zeros) into four vectors; K = 16 is a plain copy of constant
+ * size (four vector loads: a single-sample call, as the compensator makes, stays cheap) */
+static PIHYST_INLINE void load_padded(vreal *v, const real *x, size_t K)
 {
-    real tmp[PIHYST_SMALL];
-    size_t k;
-    for (k = 0; k < PIHYST_SMALL; ++k) tmp[k] = k < K ? x[k] : RC(0.0);
-    memcpy(v, tmp, sizeof tmp);
+    if (K == PIHYST_SMALL) {
+        memcpy(v, x, PIHYST_SMALL * sizeof *x);
+    } else {
+        real tmp[PIHYST_SMALL] = {RC(0.0)};
+        memcpy(tmp, x, K * sizeof *x);
+        memcpy(v, tmp, sizeof tmp);
+    }
 }
 
-static void store_state(real *f, const vreal *v, size_t K)
+static PIHYST_INLINE void store_state(real *f, const vreal *v, size_t K)
 {
-    real tmp[PIHYST_SMALL];
-    memcpy(tmp, v, sizeof tmp);
-    memcpy(f, tmp, K * sizeof *f);
+    if (K == PIHYST_SMALL) {
+        memcpy(f, v, PIHYST_SMALL * sizeof *f);
+    } else {
+        real tmp[PIHYST_SMALL];
+        memcpy(tmp, v, sizeof tmp);
+        memcpy(f, tmp, K * sizeof *f);
+    }
 }
 
 PIHYST_HOT
