@@ -55,6 +55,8 @@ cdef extern from "pihyst.h" nogil:
     const char *pihyst_status_text(pihyst_status status)
 
 ABI_VERSION = PIHYST_ABI_VERSION
+# rows of the operator matrix per BLAS update in Bank.gram (K x 2048 doubles: 256 KiB at K = 16)
+GRAM_BLOCK = 2048
 FAMILIES = {"classical": PIHYST_CLASSICAL, "multislope": PIHYST_MULTISLOPE, "pwl": PIHYST_PWL}
 
 
@@ -177,20 +179,47 @@ cdef class Bank:
                 pihyst_model_operators(&self.m, &u_v[0], &phi_v[0, 0], u_v.shape[0])
         return phi
 
-    def gram(self, u, d):
-        """(Phi^T Phi, Phi^T d, Phi^T 1) over the record, advancing the state."""
+    def gram(self, u, d, block=None):
+        """(Phi^T Phi, Phi^T d, Phi^T 1) over the record, advancing the state.
+
+        ``block=None``: pihyst_model_gram, the C core's sample-by-sample accumulation (as
+        firmware calls it). ``block=n`` (e.g. GRAM_BLOCK): blocked, the C core writes the
+        operator matrix of n samples at a time into one reused buffer and NumPy's BLAS
+        accumulates G += Phi_b^T Phi_b (a symmetric rank-n update, exactly symmetric),
+        rhs += Phi_b^T d_b and the column sums; the same sums ordered by block, so equal
+        to rounding, not bit for bit."""
         cdef const double[::1] u_v = _vector(u, name="u")
         cdef const double[::1] d_v = _vector(d, u_v.shape[0], "d")
+        cdef Py_ssize_t n = u_v.shape[0], a, z, nb
+        cdef double[:, ::1] phi_v
         gram = np.zeros((self.n_ops, self.n_ops))
         rhs = np.zeros(self.n_ops)
         sums = np.zeros(self.n_ops)
         cdef double[:, ::1] g_v = gram
         cdef double[::1] r_v = rhs
         cdef double[::1] s_v = sums
-        if u_v.shape[0]:
+        if block is None:
+            if n:
+                with nogil:
+                    pihyst_model_gram(&self.m, &u_v[0], &d_v[0], n, &g_v[0, 0], &r_v[0],
+                                      &s_v[0])
+            return gram, rhs, sums
+        nb = block
+        if nb < 1:
+            raise ValueError("block must be >= 1")
+        if n == 0:
+            return gram, rhs, sums
+        d_arr = np.asarray(d_v)
+        buf = np.empty((min(nb, n), self.n_ops))
+        phi_v = buf
+        for a in range(0, n, nb):
+            z = min(a + nb, n)
             with nogil:
-                pihyst_model_gram(&self.m, &u_v[0], &d_v[0], u_v.shape[0], &g_v[0, 0], &r_v[0],
-                                  &s_v[0])
+                pihyst_model_operators(&self.m, &u_v[a], &phi_v[0, 0], z - a)
+            phi = buf[:z - a]
+            gram += phi.T @ phi
+            rhs += phi.T @ d_arr[a:z]
+            sums += phi.sum(axis=0)
         return gram, rhs, sums
 
     def envelopes(self, double u):
