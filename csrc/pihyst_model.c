@@ -23,7 +23,15 @@
  *   multislope: coef[k]      = -a r_k                     R_k(u) = max(a u + coef[k],
  *               coef[K + k]  = -r_k - (b - 1)U                          b u + coef[K + k])
  *               coef[2K + k] = (1 - a)U - (1 - a h) r_k   F_k(u) = min(b u, a u + coef[2K + k])
- *   pwl:        unused. */
+ *   pwl:        coef[0] = 1 if every polyline is a saturated ramp (below), else 0;
+ *               the rest unused.
+ *
+ * Saturated ramps: a polyline of 4 points with y[0] == y[1] and y[2] == y[3] (flat, a
+ * rising segment, flat: the Krasnosel'skii-Pokrovskii kernels of pihyst.identify). A
+ * model whose polylines all have that shape is detected at init; its operators are then
+ * updated by a branch-free loop over the operators (update_ramps) instead of a binary
+ * search per polyline, with the same value: y[0] below x[1], y[2] from x[2] on, and
+ * between them the generic formula y1 + (y2 - y1)(u - x1)/(x2 - x1) of that segment. */
 
 static real max2(real x, real y) { return x > y ? x : y; }
 static real min2(real x, real y) { return x < y ? x : y; }
@@ -127,6 +135,20 @@ static pihyst_status check_pwl(const pihyst_pwl *p, size_t n_ops)
         if (s != PIHYST_OK) return s;
     }
     return PIHYST_OK;
+}
+
+/* every polyline a saturated ramp (see the coef layout): operator k's points at 4k */
+static int all_ramps(const pihyst_pwl *p, size_t K)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        const real *ry = p->rise_y + 4 * k, *fy = p->fall_y + 4 * k;
+        if (p->rise_start[k + 1] != 4 * (k + 1) || p->fall_start[k + 1] != 4 * (k + 1))
+            return 0;
+        if (!(ry[0] == ry[1] && ry[2] == ry[3] && fy[0] == fy[1] && fy[2] == fy[3]))
+            return 0;
+    }
+    return 1;
 }
 
 /* R_k <= F_k on [u_min, u_max]: both are piecewise linear, so it suffices to check
@@ -249,6 +271,8 @@ pihyst_status pihyst_model_init(pihyst_model *m, const pihyst_params *params, re
         s = check_pwl(&params->pwl, n_ops);
         if (s != PIHYST_OK) return s;
         m->pwl = params->pwl;
+        for (k = 0; k < PIHYST_COEF_LEN(n_ops); ++k) coef[k] = RC(0.0);
+        coef[0] = all_ramps(&m->pwl, n_ops) ? RC(1.0) : RC(0.0);
         break;
     }
     if (!envelopes_ordered(m)) return PIHYST_EENVELOPE;
@@ -471,6 +495,28 @@ static void run_multislope(size_t K, real a, real b, const real *restrict w,
     }
 }
 
+/* Saturated-ramp polylines (see the coef layout): every polyline has 4 points, so
+ * operator k's are at 4k. The value equals polyline_eval's (up to the sign of a zero). */
+#define PIHYST_RAMP(x, y, u)                                                          \
+    ((u) < (x)[1] ? (y)[0]                                                            \
+                  : ((u) >= (x)[2] ? (y)[2]                                           \
+                                   : (y)[1] + ((y)[2] - (y)[1]) * ((u) - (x)[1]) /    \
+                                                  ((x)[2] - (x)[1])))
+
+PIHYST_HOT
+static void update_ramps(size_t K, const real *restrict rx, const real *restrict ry,
+                         const real *restrict fx, const real *restrict fy, real *restrict f,
+                         real u)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        const real r = PIHYST_RAMP(rx + 4 * k, ry + 4 * k, u);
+        const real h = PIHYST_RAMP(fx + 4 * k, fy + 4 * k, u);
+        const real v = h < f[k] ? h : f[k]; /* max2(r, min2(h, f)) as the generic loop */
+        f[k] = r > v ? r : v;
+    }
+}
+
 /* One sample of (1) for every operator, any family (used by the slow paths). */
 static void update_operators(pihyst_model *m, real u)
 {
@@ -488,6 +534,10 @@ static void update_operators(pihyst_model *m, real u)
         break;
     }
     default:
+        if (c[0] == RC(1.0)) {
+            update_ramps(K, m->pwl.rise_x, m->pwl.rise_y, m->pwl.fall_x, m->pwl.fall_y, f, u);
+            break;
+        }
         for (k = 0; k < K; ++k)
             f[k] = max2(rise_pwl(&m->pwl, k, u), min2(fall_pwl(&m->pwl, k, u), f[k]));
         break;
