@@ -544,14 +544,28 @@ static void update_operators(pihyst_model *m, real u)
     }
 }
 
+/* y = offset + sum_k w_k f_k in PIHYST_LANES partial sums (as run_classical): a chain of
+ * K dependent additions would cost K times the adder's latency per sample */
+PIHYST_HOT
+static real weighted_sum(size_t K, const real *restrict w, const real *restrict f, real offset)
+{
+    size_t k, j;
+    const size_t K_lanes = K - K % PIHYST_LANES;
+    real acc[PIHYST_LANES] = {RC(0.0)};
+    real sum = offset;
+    for (k = 0; k < K_lanes; k += PIHYST_LANES)
+        for (j = 0; j < PIHYST_LANES; ++j) acc[j] += w[k + j] * f[k + j];
+    for (k = K_lanes; k < K; ++k) sum += w[k] * f[k];
+    for (j = 0; j < PIHYST_LANES; ++j) sum += acc[j];
+    return sum;
+}
+
 static void run_pwl(pihyst_model *m, const real *u, real *y, size_t n)
 {
-    size_t t, k;
+    size_t t;
     for (t = 0; t < n; ++t) {
-        real sum = m->offset;
         update_operators(m, u[t]);
-        for (k = 0; k < m->n_ops; ++k) sum += m->weights[k] * m->state[k];
-        y[t] = sum;
+        y[t] = weighted_sum(m->n_ops, m->weights, m->state, m->offset);
     }
 }
 
