@@ -223,3 +223,27 @@ PIHYST_REAL PIHYST_NAME(pihyst_compensator_step)(PIHYST_NAME(pihyst_compensator)
 size_t PIHYST_NAME(pihyst_compensator_run)(PIHYST_NAME(pihyst_compensator) *c,
                                            const PIHYST_REAL *y_desired, PIHYST_REAL *u,
                                            PIHYST_REAL *y, pihyst_flags *flags, size_t n);
+
+/* ======================================================================
+ * Banks: many independent models or compensators per sample vector
+ * ======================================================================
+ *
+ * Deformable mirrors and multi-axis stages drive N actuators per tick, each with its own
+ * model (parameters, state) and compensator. A bank call steps channel i with its own
+ * object on the i-th value of a sample vector, in one call per tick; the result is
+ * bit for bit that of N separate step calls (csrc/pihyst_bank.c). The channels are given
+ * as an array of N pointers, so they may be allocated anywhere (one static array of
+ * structs: fill the pointer array once). Channels must be distinct objects.
+ */
+
+/** y[i] = pihyst_model_step(models[i], u[i]) for i < n. u and y may not overlap. */
+void PIHYST_NAME(pihyst_bank_step)(PIHYST_NAME(pihyst_model) *const *models, size_t n,
+                                   const PIHYST_REAL *u, PIHYST_REAL *y);
+
+/** u[i] = pihyst_compensator_step(comps[i], y_desired[i], &flags[i]) for i < n;
+ *  y[i] (if y != NULL) = comps[i]->y_last, flags (may be NULL) the PIHYST_COMP_* bits.
+ *  @return the number of channels with a flag set. */
+size_t PIHYST_NAME(pihyst_bank_compensate)(PIHYST_NAME(pihyst_compensator) *const *comps,
+                                           size_t n, const PIHYST_REAL *y_desired,
+                                           PIHYST_REAL *u, PIHYST_REAL *y,
+                                           pihyst_flags *flags);

@@ -22,6 +22,8 @@
 #define pihyst_compensator_reset pihyst_compensator_reset_f32
 #define pihyst_compensator_step pihyst_compensator_step_f32
 #define pihyst_compensator_run pihyst_compensator_run_f32
+#define pihyst_bank_step pihyst_bank_step_f32
+#define pihyst_bank_compensate pihyst_bank_compensate_f32
 #undef PIHYST_COMPENSATOR_SCRATCH_LEN
 #define PIHYST_COMPENSATOR_SCRATCH_LEN PIHYST_COMPENSATOR_SCRATCH_LEN_F32
 

@@ -3,7 +3,15 @@
 #include "pihyst.h"
 #include "pihyst_internal.h"
 
+#include <stdint.h>
 #include <string.h>
+
+#if defined(__GNUC__)
+#define PIHYST_INLINE __attribute__((always_inline)) inline
+#else
+#define PIHYST_INLINE
+#endif
+
 
 /* Operators are processed in lanes of PIHYST_LANES partial sums, which lets the
  * compiler vectorize the weighted sum without reassociating it (no fast-math). */
@@ -15,7 +23,15 @@
  *   multislope: coef[k]      = -a r_k                     R_k(u) = max(a u + coef[k],
  *               coef[K + k]  = -r_k - (b - 1)U                          b u + coef[K + k])
  *               coef[2K + k] = (1 - a)U - (1 - a h) r_k   F_k(u) = min(b u, a u + coef[2K + k])
- *   pwl:        unused. */
+ *   pwl:        coef[0] = 1 if every polyline is a saturated ramp (below), else 0;
+ *               the rest unused.
+ *
+ * Saturated ramps: a polyline of 4 points with y[0] == y[1] and y[2] == y[3] (flat, a
+ * rising segment, flat: the Krasnosel'skii-Pokrovskii kernels of pihyst.identify). A
+ * model whose polylines all have that shape is detected at init; its operators are then
+ * updated by a branch-free loop over the operators (update_ramps) instead of a binary
+ * search per polyline, with the same value: y[0] below x[1], y[2] from x[2] on, and
+ * between them the generic formula y1 + (y2 - y1)(u - x1)/(x2 - x1) of that segment. */
 
 static real max2(real x, real y) { return x > y ? x : y; }
 static real min2(real x, real y) { return x < y ? x : y; }
@@ -119,6 +135,20 @@ static pihyst_status check_pwl(const pihyst_pwl *p, size_t n_ops)
         if (s != PIHYST_OK) return s;
     }
     return PIHYST_OK;
+}
+
+/* every polyline a saturated ramp (see the coef layout): operator k's points at 4k */
+static int all_ramps(const pihyst_pwl *p, size_t K)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        const real *ry = p->rise_y + 4 * k, *fy = p->fall_y + 4 * k;
+        if (p->rise_start[k + 1] != 4 * (k + 1) || p->fall_start[k + 1] != 4 * (k + 1))
+            return 0;
+        if (!(ry[0] == ry[1] && ry[2] == ry[3] && fy[0] == fy[1] && fy[2] == fy[3]))
+            return 0;
+    }
+    return 1;
 }
 
 /* R_k <= F_k on [u_min, u_max]: both are piecewise linear, so it suffices to check
@@ -241,6 +271,8 @@ pihyst_status pihyst_model_init(pihyst_model *m, const pihyst_params *params, re
         s = check_pwl(&params->pwl, n_ops);
         if (s != PIHYST_OK) return s;
         m->pwl = params->pwl;
+        for (k = 0; k < PIHYST_COEF_LEN(n_ops); ++k) coef[k] = RC(0.0);
+        coef[0] = all_ramps(&m->pwl, n_ops) ? RC(1.0) : RC(0.0);
         break;
     }
     if (!envelopes_ordered(m)) return PIHYST_EENVELOPE;
@@ -293,6 +325,136 @@ static void run_classical(size_t K, const real *restrict w, const real *restrict
     }
 }
 
+/* Small banks, K <= PIHYST_SMALL = 16 (GCC and clang): the operators are padded to 16
+ * (padding: envelope constants 0 and weight 0, so a padded operator follows u and adds a
+ * zero) and held for the whole block in four vector variables of four lanes each
+ * (compiler vector extensions), which the compiler keeps in registers: no state store
+ * and reload between samples. min and max are the scalar loops' v < h ? v : h per lane
+ * (NaN included), which compiles to one vector min/max. The weighted sum is a fixed tree,
+ * ((a0 + a1) + (a2 + a3)) over the vectors then (s0 + s2) + (s1 + s3) over the lanes:
+ * a short dependency chain whose order depends on neither n nor the data, so step and
+ * run still give the same bits. The vectors are 4 x real (32 bytes in double, 16 in
+ * single): one AVX2 register, or two SSE2 ones in the default clone of PIHYST_HOT.
+ * Other compilers use the generic loops below. */
+#define PIHYST_SMALL 16
+#if defined(__GNUC__) && !defined(PIHYST_NO_VECTOR_EXT)
+#define PIHYST_HAVE_SMALL 1
+typedef real vreal __attribute__((vector_size(4 * sizeof(real))));
+
+/* Lane updates as macros on named vectors (no vector passed by value: that would depend
+ * on the ABI of the clone). The per-lane selects v < h ? v : h are those of the scalar
+ * loops (NaN included) and compile to one vector min/max each. */
+#define PIHYST_CLAMP_LANES(fj, hj, lj)                                \
+    do {                                                              \
+        int i_;                                                       \
+        for (i_ = 0; i_ < 4; ++i_) {                                  \
+            real v_ = (fj)[i_];                                       \
+            v_ = v_ < (hj)[i_] ? v_ : (hj)[i_];                       \
+            (fj)[i_] = v_ > (lj)[i_] ? v_ : (lj)[i_];                 \
+        }                                                             \
+    } while (0)
+#define PIHYST_MAX_LANES(r, x, z)                                     \
+    do {                                                              \
+        int i_;                                                       \
+        for (i_ = 0; i_ < 4; ++i_) (r)[i_] = (x)[i_] > (z)[i_] ? (x)[i_] : (z)[i_]; \
+    } while (0)
+#define PIHYST_MIN_LANES(r, x, z)                                     \
+    do {                                                              \
+        int i_;                                                       \
+        for (i_ = 0; i_ < 4; ++i_) (r)[i_] = (x)[i_] < (z)[i_] ? (x)[i_] : (z)[i_]; \
+    } while (0)
+/* the fixed tree of the weighted sum */
+#define PIHYST_TREE_SUM(s, a0, a1, a2, a3) \
+    ((s) = ((a0) + (a1)) + ((a2) + (a3)), ((s)[0] + (s)[2]) + ((s)[1] + (s)[3]))
+
+/* 16 values (K of x, then zeros) into four vectors; K = 16 is a plain copy of constant
+ * size (four vector loads: a single-sample call, as the compensator makes, stays cheap) */
+static PIHYST_INLINE void load_padded(vreal *v, const real *x, size_t K)
+{
+    if (K == PIHYST_SMALL) {
+        memcpy(v, x, PIHYST_SMALL * sizeof *x);
+    } else {
+        real tmp[PIHYST_SMALL] = {RC(0.0)};
+        memcpy(tmp, x, K * sizeof *x);
+        memcpy(v, tmp, sizeof tmp);
+    }
+}
+
+static PIHYST_INLINE void store_state(real *f, const vreal *v, size_t K)
+{
+    if (K == PIHYST_SMALL) {
+        memcpy(f, v, PIHYST_SMALL * sizeof *f);
+    } else {
+        real tmp[PIHYST_SMALL];
+        memcpy(tmp, v, sizeof tmp);
+        memcpy(f, tmp, K * sizeof *f);
+    }
+}
+
+PIHYST_HOT
+static void run_classical_small(size_t K, const real *restrict w, const real *restrict c,
+                                real *restrict f, real offset, const real *restrict u,
+                                real *restrict y, size_t n)
+{
+    vreal fv[4], lo[4], hi[4], wv[4];
+    vreal f0, f1, f2, f3;
+    size_t t;
+    load_padded(fv, f, K);
+    load_padded(lo, c, K);
+    load_padded(hi, c + K, K);
+    load_padded(wv, w, K);
+    f0 = fv[0]; f1 = fv[1]; f2 = fv[2]; f3 = fv[3];
+    for (t = 0; t < n; ++t) {
+        const vreal ut = {u[t], u[t], u[t], u[t]};
+        vreal h0 = ut + hi[0], h1 = ut + hi[1], h2 = ut + hi[2], h3 = ut + hi[3];
+        vreal l0 = ut + lo[0], l1 = ut + lo[1], l2 = ut + lo[2], l3 = ut + lo[3], s;
+        PIHYST_CLAMP_LANES(f0, h0, l0);
+        PIHYST_CLAMP_LANES(f1, h1, l1);
+        PIHYST_CLAMP_LANES(f2, h2, l2);
+        PIHYST_CLAMP_LANES(f3, h3, l3);
+        y[t] = offset + PIHYST_TREE_SUM(s, wv[0] * f0, wv[1] * f1, wv[2] * f2, wv[3] * f3);
+    }
+    fv[0] = f0; fv[1] = f1; fv[2] = f2; fv[3] = f3;
+    store_state(f, fv, K);
+}
+
+PIHYST_HOT
+static void run_multislope_small(size_t K, real a, real b, const real *restrict w,
+                                 const real *restrict c, real *restrict f, real offset,
+                                 const real *restrict u, real *restrict y, size_t n)
+{
+    vreal fv[4], c1[4], c2[4], c3[4], wv[4];
+    vreal f0, f1, f2, f3;
+    size_t t;
+    load_padded(fv, f, K);
+    load_padded(c1, c, K);
+    load_padded(c2, c + K, K);
+    load_padded(c3, c + 2 * K, K);
+    load_padded(wv, w, K);
+    f0 = fv[0]; f1 = fv[1]; f2 = fv[2]; f3 = fv[3];
+    for (t = 0; t < n; ++t) {
+        const real aus = a * u[t], bus = b * u[t];
+        const vreal au = {aus, aus, aus, aus}, bu = {bus, bus, bus, bus};
+        vreal s;
+#define PIHYST_MS_LANE(fj, j)                                 \
+    do {                                                      \
+        vreal r1 = au + c1[j], r2 = bu + c2[j], f2_ = au + c3[j], l_, h_; \
+        PIHYST_MAX_LANES(l_, r1, r2);                         \
+        PIHYST_MIN_LANES(h_, bu, f2_);                        \
+        PIHYST_CLAMP_LANES(fj, h_, l_);                       \
+    } while (0)
+        PIHYST_MS_LANE(f0, 0);
+        PIHYST_MS_LANE(f1, 1);
+        PIHYST_MS_LANE(f2, 2);
+        PIHYST_MS_LANE(f3, 3);
+#undef PIHYST_MS_LANE
+        y[t] = offset + PIHYST_TREE_SUM(s, wv[0] * f0, wv[1] * f1, wv[2] * f2, wv[3] * f3);
+    }
+    fv[0] = f0; fv[1] = f1; fv[2] = f2; fv[3] = f3;
+    store_state(f, fv, K);
+}
+#endif
+
 /* multislope: f_k = max(max(a u - a r_k, b u - r_k - (b-1)U),
  *                       min(min(b u, a u + (1-a)U - (1-ah) r_k), f_k)) */
 PIHYST_HOT
@@ -333,6 +495,28 @@ static void run_multislope(size_t K, real a, real b, const real *restrict w,
     }
 }
 
+/* Saturated-ramp polylines (see the coef layout): every polyline has 4 points, so
+ * operator k's are at 4k. The value equals polyline_eval's (up to the sign of a zero). */
+#define PIHYST_RAMP(x, y, u)                                                          \
+    ((u) < (x)[1] ? (y)[0]                                                            \
+                  : ((u) >= (x)[2] ? (y)[2]                                           \
+                                   : (y)[1] + ((y)[2] - (y)[1]) * ((u) - (x)[1]) /    \
+                                                  ((x)[2] - (x)[1])))
+
+PIHYST_HOT
+static void update_ramps(size_t K, const real *restrict rx, const real *restrict ry,
+                         const real *restrict fx, const real *restrict fy, real *restrict f,
+                         real u)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        const real r = PIHYST_RAMP(rx + 4 * k, ry + 4 * k, u);
+        const real h = PIHYST_RAMP(fx + 4 * k, fy + 4 * k, u);
+        const real v = h < f[k] ? h : f[k]; /* max2(r, min2(h, f)) as the generic loop */
+        f[k] = r > v ? r : v;
+    }
+}
+
 /* One sample of (1) for every operator, any family (used by the slow paths). */
 static void update_operators(pihyst_model *m, real u)
 {
@@ -350,20 +534,38 @@ static void update_operators(pihyst_model *m, real u)
         break;
     }
     default:
+        if (c[0] == RC(1.0)) {
+            update_ramps(K, m->pwl.rise_x, m->pwl.rise_y, m->pwl.fall_x, m->pwl.fall_y, f, u);
+            break;
+        }
         for (k = 0; k < K; ++k)
             f[k] = max2(rise_pwl(&m->pwl, k, u), min2(fall_pwl(&m->pwl, k, u), f[k]));
         break;
     }
 }
 
+/* y = offset + sum_k w_k f_k in PIHYST_LANES partial sums (as run_classical): a chain of
+ * K dependent additions would cost K times the adder's latency per sample */
+PIHYST_HOT
+static real weighted_sum(size_t K, const real *restrict w, const real *restrict f, real offset)
+{
+    size_t k, j;
+    const size_t K_lanes = K - K % PIHYST_LANES;
+    real acc[PIHYST_LANES] = {RC(0.0)};
+    real sum = offset;
+    for (k = 0; k < K_lanes; k += PIHYST_LANES)
+        for (j = 0; j < PIHYST_LANES; ++j) acc[j] += w[k + j] * f[k + j];
+    for (k = K_lanes; k < K; ++k) sum += w[k] * f[k];
+    for (j = 0; j < PIHYST_LANES; ++j) sum += acc[j];
+    return sum;
+}
+
 static void run_pwl(pihyst_model *m, const real *u, real *y, size_t n)
 {
-    size_t t, k;
+    size_t t;
     for (t = 0; t < n; ++t) {
-        real sum = m->offset;
         update_operators(m, u[t]);
-        for (k = 0; k < m->n_ops; ++k) sum += m->weights[k] * m->state[k];
-        y[t] = sum;
+        y[t] = weighted_sum(m->n_ops, m->weights, m->state, m->offset);
     }
 }
 
@@ -375,9 +577,22 @@ void pihyst_model_run(pihyst_model *m, const real *u, real *y, size_t n)
 {
     switch (m->family) {
     case PIHYST_CLASSICAL:
+#ifdef PIHYST_HAVE_SMALL
+        if (m->n_ops <= PIHYST_SMALL) {
+            run_classical_small(m->n_ops, m->weights, m->coef, m->state, m->offset, u, y, n);
+            break;
+        }
+#endif
         run_classical(m->n_ops, m->weights, m->coef, m->state, m->offset, u, y, n);
         break;
     case PIHYST_MULTISLOPE:
+#ifdef PIHYST_HAVE_SMALL
+        if (m->n_ops <= PIHYST_SMALL) {
+            run_multislope_small(m->n_ops, m->shape.a, m->shape.b, m->weights, m->coef,
+                                 m->state, m->offset, u, y, n);
+            break;
+        }
+#endif
         run_multislope(m->n_ops, m->shape.a, m->shape.b, m->weights, m->coef, m->state,
                        m->offset, u, y, n);
         break;

@@ -15,10 +15,11 @@
  *   - the flags are PIHYST_COMP_* bits; NaN is flagged exactly when the desired value
  *     is NaN, and holds the voltage; a saturation flag puts the voltage at its limit,
  *     a slew flag moves it by max_step (to an ulp);
- *   - step equals run: cb's blocks give ca's voltages, outputs and flags bit for bit,
- *     and run returns the number of flagged samples;
- *   - y_last equals a separate model: R's output for the chosen voltage is ca.y_last bit
- *     for bit, and model A's state array equals R's after every call;
+ *   - step equals run and the bank: cb's blocks (through run, or sample by sample
+ *     through pihyst_bank_compensate) give ca's voltages, outputs and flags bit for bit,
+ *     and both return the number of flagged samples;
+ *   - y_last equals a separate model: R's output for the chosen voltage (every other
+ *     sample through pihyst_bank_step) is ca.y_last bit for bit, and model A's state array equals R's after every call;
  *   - a sample without flags meets the desired value: |y_last - y_d| <= 16 tol plus the
  *     output change of a few ulps of voltage at the steepest slope, plus underflow
  *     (when sane).
@@ -34,14 +35,21 @@ typedef struct {
     size_t n;
 } samples;
 
-/* B runs the samples ca has stepped since the last flush; both must agree */
-static void flush(pihyst_compensator *cb, samples *ref)
+/* B runs the samples ca has stepped since the last flush, through run or (bank != 0)
+ * through pihyst_bank_compensate one sample at a time; both must agree */
+static void flush(pihyst_compensator *cb, samples *ref, int bank)
 {
     static real u[N_MAX], y[N_MAX];
     static pihyst_flags fl[N_MAX];
-    size_t t, flagged = 0, count;
+    size_t t, flagged = 0, count = 0;
     if (ref->n == 0) return;
-    count = pihyst_compensator_run(cb, ref->yd, u, y, fl, ref->n);
+    if (bank) {
+        pihyst_compensator *const channels[1] = {cb};
+        for (t = 0; t < ref->n; ++t)
+            count += pihyst_bank_compensate(channels, 1, &ref->yd[t], &u[t], &y[t], &fl[t]);
+    } else {
+        count = pihyst_compensator_run(cb, ref->yd, u, y, fl, ref->n);
+    }
     for (t = 0; t < ref->n; ++t) flagged += ref->fl[t] != 0;
     REQUIRE(count == flagged);
     REQUIRE(same_bits(u, ref->u, ref->n));
@@ -102,7 +110,12 @@ static void check(const uint8_t *data, size_t size)
             const real yd = (real)take_num(&in, ca.y_last - y_scale, ca.y_last + y_scale);
             pihyst_flags fl = 0xff;
             const real u = pihyst_compensator_step(&ca, yd, &fl);
-            const real y_r = pihyst_model_step(&mr, u);
+            pihyst_model *const plain[1] = {&mr};
+            real y_r;
+            if (steps & 1) /* every other sample through the model bank */
+                pihyst_bank_step(plain, 1, &u, &y_r);
+            else
+                y_r = pihyst_model_step(&mr, u);
             ++steps;
             REQUIRE(u == ca.u_last && ma.state == state_a);
             REQUIRE(isfinite(u) && u >= ca.u_min && u <= ca.u_max);
@@ -136,20 +149,20 @@ static void check(const uint8_t *data, size_t size)
                             (double)ca.y_last, (double)ca.tol, ulp_y);
                 REQUIRE(fabs((double)ca.y_last - (double)yd) <= 16.0 * (double)ca.tol + ulp_y);
             }
-            if (ref.n == N_MAX) flush(&cb, &ref);
+            if (ref.n == N_MAX) flush(&cb, &ref, 0);
             ref.yd[ref.n] = yd;
             ref.u[ref.n] = u;
             ref.y[ref.n] = ca.y_last;
             ref.fl[ref.n] = fl;
             ++ref.n;
-        } else if (op < 15) { /* flush: B catches up through run */
-            flush(&cb, &ref);
+        } else if (op < 15) { /* flush: B catches up through run, or the bank */
+            flush(&cb, &ref, op == 14);
             REQUIRE(same_bits(state_b, state_a, K) && cb.u_last == ca.u_last);
         } else { /* reset both (B after catching up) and R */
             const int with_state = take_u8(&in) & 1;
             const real u_last = (real)take_num(&in, ca.u_min, ca.u_max);
             for (k = 0; k < K; ++k) reset_state[k] = (real)take_num(&in, -300.0, 300.0);
-            flush(&cb, &ref);
+            flush(&cb, &ref, 0);
             sa = pihyst_compensator_reset(&ca, with_state ? reset_state : NULL, u_last);
             sb = pihyst_compensator_reset(&cb, with_state ? reset_state : NULL, u_last);
             REQUIRE(known_status(sa) && sa == sb);
@@ -164,7 +177,7 @@ static void check(const uint8_t *data, size_t size)
             REQUIRE(same_bits(state_a, state_r, K) && same_bits(state_b, state_r, K));
         }
     }
-    flush(&cb, &ref);
+    flush(&cb, &ref, 0);
     REQUIRE(same_bits(state_b, state_a, K));
 }
 

@@ -42,6 +42,8 @@ int main(void)
 {
     run_model_tests();
     run_inverse_tests();
+    run_bank_tests();
+    run_kernel_tests();
 #ifdef PIHYST_TEST_F32
     run_twin_tests();
     printf("single precision: %d passed, %d failed\n", test_passed, test_failed);

@@ -55,6 +55,8 @@ cdef extern from "pihyst.h" nogil:
     const char *pihyst_status_text(pihyst_status status)
 
 ABI_VERSION = PIHYST_ABI_VERSION
+# rows of the operator matrix per BLAS update in Bank.gram (K x 2048 doubles: 256 KiB at K = 16)
+GRAM_BLOCK = 2048
 FAMILIES = {"classical": PIHYST_CLASSICAL, "multislope": PIHYST_MULTISLOPE, "pwl": PIHYST_PWL}
 
 
@@ -177,20 +179,47 @@ cdef class Bank:
                 pihyst_model_operators(&self.m, &u_v[0], &phi_v[0, 0], u_v.shape[0])
         return phi
 
-    def gram(self, u, d):
-        """(Phi^T Phi, Phi^T d, Phi^T 1) over the record, advancing the state."""
+    def gram(self, u, d, block=None):
+        """(Phi^T Phi, Phi^T d, Phi^T 1) over the record, advancing the state.
+
+        ``block=None``: pihyst_model_gram, the C core's sample-by-sample accumulation (as
+        firmware calls it). ``block=n`` (e.g. GRAM_BLOCK): blocked, the C core writes the
+        operator matrix of n samples at a time into one reused buffer and NumPy's BLAS
+        accumulates G += Phi_b^T Phi_b (a symmetric rank-n update, exactly symmetric),
+        rhs += Phi_b^T d_b and the column sums; the same sums ordered by block, so equal
+        to rounding, not bit for bit."""
         cdef const double[::1] u_v = _vector(u, name="u")
         cdef const double[::1] d_v = _vector(d, u_v.shape[0], "d")
+        cdef Py_ssize_t n = u_v.shape[0], a, z, nb
+        cdef double[:, ::1] phi_v
         gram = np.zeros((self.n_ops, self.n_ops))
         rhs = np.zeros(self.n_ops)
         sums = np.zeros(self.n_ops)
         cdef double[:, ::1] g_v = gram
         cdef double[::1] r_v = rhs
         cdef double[::1] s_v = sums
-        if u_v.shape[0]:
+        if block is None:
+            if n:
+                with nogil:
+                    pihyst_model_gram(&self.m, &u_v[0], &d_v[0], n, &g_v[0, 0], &r_v[0],
+                                      &s_v[0])
+            return gram, rhs, sums
+        nb = block
+        if nb < 1:
+            raise ValueError("block must be >= 1")
+        if n == 0:
+            return gram, rhs, sums
+        d_arr = np.asarray(d_v)
+        buf = np.empty((min(nb, n), self.n_ops))
+        phi_v = buf
+        for a in range(0, n, nb):
+            z = min(a + nb, n)
             with nogil:
-                pihyst_model_gram(&self.m, &u_v[0], &d_v[0], u_v.shape[0], &g_v[0, 0], &r_v[0],
-                                  &s_v[0])
+                pihyst_model_operators(&self.m, &u_v[a], &phi_v[0, 0], z - a)
+            phi = buf[:z - a]
+            gram += phi.T @ phi
+            rhs += phi.T @ d_arr[a:z]
+            sums += phi.sum(axis=0)
         return gram, rhs, sums
 
     def envelopes(self, double u):
@@ -355,3 +384,115 @@ cdef class Compensator:
                 pihyst_compensator_run(&self.c, &d_v[0], &u_v[0], &y_v[0], &f_v[0], n)
             self.last_flags = f_v[n - 1]
         return u, y, flags
+
+
+# ---------------------------------------------------------------- banks of channels
+
+cdef extern from "pihyst.h" nogil:
+    void pihyst_bank_step(pihyst_model *const *models, size_t n, const double *u, double *y)
+    size_t pihyst_bank_compensate(pihyst_compensator *const *comps, size_t n,
+                                  const double *y_desired, double *u, double *y,
+                                  pihyst_flags *flags)
+
+
+cdef class BankArray:
+    """N :class:`Bank` objects stepped together, one input per channel per call.
+
+    Steps the banks' own C structs (no copies), so a channel's state is its bank's.
+    """
+    cdef readonly tuple banks
+    cdef object _ptrs
+    cdef readonly Py_ssize_t n
+
+    def __init__(self, banks):
+        cdef Bank b
+        cdef size_t[::1] p_v
+        self.banks = tuple(banks)
+        self.n = len(self.banks)
+        if len({id(b) for b in self.banks}) != self.n:
+            raise ValueError("the channels must be distinct banks")
+        self._ptrs = np.zeros(max(self.n, 1), dtype=np.uintp)
+        p_v = self._ptrs
+        for i, obj in enumerate(self.banks):
+            b = <Bank?>obj
+            p_v[i] = <size_t>&b.m
+
+    def run(self, u):
+        """y[t, i] for u[t, i] (T x N, row t one tick), advancing every channel."""
+        u_a = np.ascontiguousarray(u, dtype=np.float64)
+        if u_a.ndim != 2 or u_a.shape[1] != self.n:
+            raise ValueError(f"input must have shape (T, {self.n}), got {u_a.shape}")
+        cdef const double[:, ::1] u_v = u_a
+        y = np.empty(u_a.shape)
+        cdef double[:, ::1] y_v = y
+        cdef size_t[::1] p_v = self._ptrs
+        cdef Py_ssize_t t, T = u_a.shape[0]
+        if self.n:
+            with nogil:
+                for t in range(T):
+                    pihyst_bank_step(<pihyst_model *const *>&p_v[0], self.n, &u_v[t, 0],
+                                     &y_v[t, 0])
+        return y
+
+
+cdef class CompensatorArray:
+    """N :class:`Compensator` objects run together, one desired value per channel per
+    call. Steps the compensators' own C structs (no copies)."""
+    cdef readonly tuple compensators
+    cdef object _ptrs
+    cdef readonly Py_ssize_t n
+
+    def __init__(self, compensators):
+        cdef Compensator c
+        cdef size_t[::1] p_v
+        self.compensators = tuple(compensators)
+        self.n = len(self.compensators)
+        if len({id(c) for c in self.compensators}) != self.n:
+            raise ValueError("the channels must be distinct compensators")
+        self._ptrs = np.zeros(max(self.n, 1), dtype=np.uintp)
+        p_v = self._ptrs
+        for i, obj in enumerate(self.compensators):
+            c = <Compensator?>obj
+            p_v[i] = <size_t>&c.c
+
+    def step_into(self, y_desired, double[::1] u, double[::1] y, pihyst_flags[::1] flags):
+        """One tick into caller-owned arrays (N each); returns the count flagged."""
+        cdef const double[::1] d_v = _vector(y_desired, self.n, "y_desired")
+        cdef size_t[::1] p_v = self._ptrs
+        cdef size_t count = 0
+        if u.shape[0] != self.n or y.shape[0] != self.n or flags.shape[0] != self.n:
+            raise ValueError(f"u, y and flags must have {self.n} values")
+        if self.n:
+            with nogil:
+                count = pihyst_bank_compensate(<pihyst_compensator *const *>&p_v[0], self.n,
+                                               &d_v[0], &u[0], &y[0], &flags[0])
+            self._set_last_flags(flags)
+        return count
+
+    def run(self, y_desired):
+        """(u, y, flags), each T x N, for desired values T x N (row t one tick)."""
+        d_a = np.ascontiguousarray(y_desired, dtype=np.float64)
+        if d_a.ndim != 2 or d_a.shape[1] != self.n:
+            raise ValueError(f"y_desired must have shape (T, {self.n}), got {d_a.shape}")
+        cdef const double[:, ::1] d_v = d_a
+        u = np.empty(d_a.shape)
+        y = np.empty(d_a.shape)
+        flags = np.zeros(d_a.shape, dtype=np.uint8)
+        cdef double[:, ::1] u_v = u
+        cdef double[:, ::1] y_v = y
+        cdef pihyst_flags[:, ::1] f_v = flags
+        cdef size_t[::1] p_v = self._ptrs
+        cdef Py_ssize_t t, T = d_a.shape[0]
+        if self.n and T:
+            with nogil:
+                for t in range(T):
+                    pihyst_bank_compensate(<pihyst_compensator *const *>&p_v[0], self.n,
+                                           &d_v[t, 0], &u_v[t, 0], &y_v[t, 0], &f_v[t, 0])
+            self._set_last_flags(flags[T - 1])
+        return u, y, flags
+
+    def _set_last_flags(self, flags):
+        cdef Compensator c
+        for i, obj in enumerate(self.compensators):
+            c = <Compensator>obj
+            c.last_flags = flags[i]

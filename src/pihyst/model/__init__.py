@@ -6,6 +6,7 @@ imports nothing else of the package. Theory: docs/theory/operators.md.
 """
 
 from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.model._bank import ModelBank
 from pihyst.model._classical_inverse import classical_inverse, reachable_output_range
 from pihyst.model._models import (
     DEFAULT_INPUT_RANGE,
@@ -24,6 +25,7 @@ __all__ = [
     "ClassicalPI",
     "InputRangeError",
     "InvalidModelError",
+    "ModelBank",
     "MultislopePI",
     "PIModel",
     "PiecewiseLinearPI",

@@ -1,0 +1,103 @@
+"""Benchmark of the KP (Krasnosel'skii-Pokrovskii) operator kernel (issue items 2-3):
+a piecewise-linear model of K = 132 saturated ramps built as pihyst.identify builds its
+KP kernels (R = sat((v - c_j)/w + 1/2), F = sat((v - c_i)/w + 1/2), c_i <= c_j on a
+16-point grid over [0, 150]). The core detects the ramp shape at init and updates the
+operators with a branch-free loop; the reference in the same run is the same model with
+one extra point on the flat part of every polyline (the same function, which the core
+runs through its generic polyline path: binary search per polyline, as before).
+
+Rows (best CPU time of 5): forward model (predict) per sample; compensator per sample
+while tracking (ramps between random levels at 0.25 V per sample, as
+bench_compensate.py) and in the worst case (a random
+reachable value every sample); also a random walk of 0.5 V steps, a reversal about
+every other sample. Targets (issue item 2): compensator <= 200 ns per sample
+tracking and <= 2 us worst case at K ~ 130.
+
+Run: python benchmarks/bench_kp.py
+"""
+
+import time
+
+import numpy as np
+
+import pihyst
+
+U = 150.0
+N = 20_000
+
+
+def best_time(fn, repeats):
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.thread_time()
+        fn()
+        best = min(best, time.thread_time() - t0)
+    return best
+
+
+def kp_models(grid=16, k=132, seed=0):
+    rng = np.random.default_rng(seed)
+    centres = np.linspace(0, U, grid)
+    w = U / (grid - 1)
+    pairs = [(i, j) for i in range(grid) for j in range(i, grid)][:k]
+
+    def ramp(c, extra):
+        x = np.array([c - 1.5 * w, c - 0.5 * w, c + 0.5 * w, c + 1.5 * w])
+        y = np.array([0.0, 0.0, 1.0, 1.0])
+        if extra:  # the same function with a point on the low flat part
+            x, y = np.r_[x[0], x[0] + 0.25 * w, x[1:]], np.r_[0.0, y]
+        return x, y
+
+    weights = rng.uniform(0.0, 0.1, len(pairs))
+    models = []
+    for extra in (False, True):
+        rising = [ramp(centres[j], extra) for _, j in pairs]
+        falling = [ramp(centres[i], extra) for i, _ in pairs]
+        models.append(pihyst.PiecewiseLinearPI(rising, falling, weights,
+                                               input_range=(0.0, U)))
+    return models
+
+
+def ramps(n, rng, step=0.25):
+    """Ramps between random levels at `step` volts per sample (as bench_compensate.py):
+    tracking with a reversal at every level, minor loops of every size."""
+    pieces, total, level = [], 0, 0.0
+    while total < n:
+        target = rng.uniform(0, U)
+        m = max(int(abs(target - level) / step), 1)
+        pieces.append(np.linspace(level, target, m + 1)[1:])
+        total += m
+        level = target
+    return np.concatenate(pieces)[:n]
+
+
+def main():
+    fast, generic = kp_models()
+    rng = np.random.default_rng(1)
+    walk = np.abs(np.cumsum(rng.normal(0, 0.5, N)) % (2 * U) - U)
+    walk = U - walk
+    noise = rng.uniform(0, U, N)
+    tracking = ramps(N, rng)
+    k = fast.n_operators
+    print(f"KP model, K = {k} saturated ramps, {N} samples, best CPU time of 5 "
+          "(ns per sample)")
+    print(f"   {'':<22} {'ramp kernel':>12} {'generic':>12}   ratio")
+    t_f = best_time(lambda: fast.predict(walk), 5) / N
+    t_g = best_time(lambda: generic.predict(walk), 5) / N
+    same = np.array_equal(fast.predict(walk), generic.predict(walk))
+    print(f"   {'predict':<22} {1e9 * t_f:>12.0f} {1e9 * t_g:>12.0f}   {t_g / t_f:.1f}x"
+          f"   (outputs equal: {same})")
+    for name, u in (("compensate, tracking", tracking), ("compensate, walk", walk),
+                    ("compensate, noise", noise)):
+        yd = fast.predict(u)
+        t_f = best_time(lambda yd=yd: pihyst.compensate(fast, yd), 5) / N
+        t_g = best_time(lambda yd=yd: pihyst.compensate(generic, yd), 5) / N
+        r = pihyst.compensate(fast, yd)
+        err = np.max(np.abs(r.displacement - yd))
+        target = "<= 200 ns" if "tracking" in name else "<= 2000 ns (worst case)"
+        print(f"   {name:<22} {1e9 * t_f:>12.0f} {1e9 * t_g:>12.0f}   {t_g / t_f:.1f}x"
+              f"   (max |y - y_d| {err:.1e}; target {target})")
+
+
+if __name__ == "__main__":
+    main()

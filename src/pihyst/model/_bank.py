@@ -1,0 +1,95 @@
+"""Many models stepped together: one input vector per tick (deformable mirrors,
+multi-axis stages). Each channel is its own model with its own running state; the bank
+steps them all in one call of the C core (pihyst_bank_step), with bit for bit the
+outputs of the channels' own steppers."""
+
+import numpy as np
+
+from pihyst import _core
+from pihyst.exceptions import InputRangeError
+from pihyst.model._models import PIModel
+
+
+class ModelBank:
+    """N independent models (any families, sizes, input ranges) run sample vector by
+    sample vector. Owns one running state per channel (a :class:`Stepper` each, in
+    ``channels``), so the models themselves never change.
+
+    Parameters
+    ----------
+    models : sequence of PIModel
+        One model per channel; the same model may drive several channels.
+    initial_states : sequence, optional
+        One initial operator state per channel (None entries: that model's own).
+
+    Examples
+    --------
+    >>> import numpy as np, pihyst
+    >>> from pihyst.model import ModelBank
+    >>> a = pihyst.ClassicalPI([0, 10], [1.0, 0.5])
+    >>> b = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+    >>> bank = ModelBank([a, b, a])
+    >>> y = bank.step([20.0, 100.0, 5.0])      # one tick: one voltage per channel
+    >>> bool(np.array_equal(y, [a.predict([20.0])[0], b.predict([100.0])[0],
+    ...                         a.predict([5.0])[0]]))
+    True
+    """
+
+    def __init__(self, models, initial_states=None):
+        models = tuple(models)
+        for i, m in enumerate(models):
+            if not isinstance(m, PIModel):
+                raise TypeError(f"models[{i}] must be a pihyst model, not {type(m).__name__}")
+        if initial_states is None:
+            initial_states = [None] * len(models)
+        initial_states = list(initial_states)
+        if len(initial_states) != len(models):
+            raise ValueError(f"initial_states must have {len(models)} entries, got "
+                             f"{len(initial_states)}")
+        self.models = models
+        self.channels = tuple(m.stepper(s) for m, s in zip(models, initial_states, strict=True))
+        self._array = _core.BankArray([s._bank for s in self.channels])
+        self._lo = np.array([m.input_range[0] for m in models], dtype=np.float64)
+        self._hi = np.array([m.input_range[1] for m in models], dtype=np.float64)
+
+    def __len__(self):
+        return len(self.models)
+
+    @property
+    def states(self):
+        """The running operator state of every channel (a list of copies)."""
+        return [s.state for s in self.channels]
+
+    def reset(self, states=None):
+        """Every channel back to its initial state, or to ``states`` (one per channel,
+        None entries: the channel's initial state)."""
+        states = [None] * len(self) if states is None else list(states)
+        if len(states) != len(self):
+            raise ValueError(f"states must have {len(self)} entries, got {len(states)}")
+        for s, state in zip(self.channels, states, strict=True):
+            s.reset(state)
+
+    def _checked(self, u):
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        if u.ndim != 2 or u.shape[1] != len(self):
+            raise ValueError(f"input must have shape (T, {len(self)}), got {u.shape}")
+        ok = (u >= self._lo) & (u <= self._hi)  # NaN fails too
+        if not ok.all():
+            t, i = np.argwhere(~ok)[0]
+            raise InputRangeError(int(t), float(u[t, i]),
+                                  (float(self._lo[i]), float(self._hi[i])))
+        return u
+
+    def step(self, u):
+        """One tick: advance channel i by the input u[i]; returns the N outputs."""
+        u = np.asarray(u, dtype=np.float64)
+        if u.shape != (len(self),):
+            raise ValueError(f"input must have {len(self)} values, got shape {u.shape}")
+        return self._array.run(self._checked(u[None, :]))[0]
+
+    def run(self, u):
+        """T ticks: u has shape (T, N), row t one tick; returns the outputs (T, N)."""
+        return self._array.run(self._checked(u))
+
+    def __repr__(self):
+        return f"ModelBank({len(self)} channels)"
