@@ -3,7 +3,7 @@
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, number, positive_number
 from pihyst.inverse import Compensator
 from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
 
@@ -30,13 +30,27 @@ def register(sub):
 
 def add_limit_options(p, default_range):
     """--u-min, --u-max and --slew-rate (shared with pihyst track)."""
-    p.add_argument("--u-min", type=float, default=None, metavar="V",
+    p.add_argument("--u-min", type=number, default=None, metavar="V",
                    help=f"lowest voltage (default: {default_range})")
-    p.add_argument("--u-max", type=float, default=None, metavar="V",
+    p.add_argument("--u-max", type=number, default=None, metavar="V",
                    help=f"highest voltage (default: {default_range})")
-    p.add_argument("--slew-rate", type=float, default=None, metavar="V/S",
+    p.add_argument("--slew-rate", type=positive_number, default=None, metavar="V/S",
                    help="largest voltage rate in volts per second; needs time_s (applied as "
                         "rate x the smallest time step, per sample)")
+
+
+def check_limits(u_min, u_max, model, model_path):
+    """--u-min and --u-max inside the model's input range and in order (UsageError)."""
+    lo, hi = model.input_range
+    for option, v in (("--u-min", u_min), ("--u-max", u_max)):
+        if v is not None and not lo <= v <= hi:
+            raise UsageError(f"{model_path}: {option} {v:g} is outside the model's input "
+                             f"range [{lo:g}, {hi:g}]")
+    low = lo if u_min is None else u_min
+    high = hi if u_max is None else u_max
+    if not low < high:
+        raise UsageError(f"{model_path}: --u-min {low:g} must be below --u-max {high:g} "
+                         f"(the model's input range is [{lo:g}, {hi:g}])")
 
 
 def max_step_per_sample(slew_rate, t, path, lines):
@@ -61,6 +75,7 @@ def max_step_per_sample(slew_rate, t, path, lines):
 
 def run(args):
     model = load_model(args.model)
+    check_limits(args.u_min, args.u_max, model, args.model)
     columns, lines = read_columns(args.desired, ["displacement_um"], optional=["time_s"])
     y_desired = columns["displacement_um"]
     t = columns.get("time_s")

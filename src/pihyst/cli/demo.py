@@ -3,7 +3,7 @@
 import os
 import time
 
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, seed
 from pihyst.sim import PLANT_NAMES
 
 DEFAULT_OUT = "pihyst-demo"
@@ -24,7 +24,7 @@ def register(sub):
                    help=f"output folder (created if needed; default {DEFAULT_OUT})")
     p.add_argument("--plant", choices=PLANT_NAMES, default="paper-beam",
                    help="simulated beam (default: paper-beam, calibrated to the paper)")
-    p.add_argument("--seed", type=int, default=0, metavar="N",
+    p.add_argument("--seed", type=seed, default=0, metavar="N",
                    help="noise seed of the first record (default 0)")
     p.add_argument("--no-variants", action="store_true",
                    help="skip the comparison on the other simulated beams")

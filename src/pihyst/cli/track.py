@@ -7,7 +7,7 @@ inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.compensate import add_limit_options, max_step_per_sample
+from pihyst.cli.compensate import add_limit_options, check_limits, max_step_per_sample
 from pihyst.cli.errors import UsageError
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.inverse import Compensator
@@ -40,13 +40,15 @@ def _limits(args, model, plant):
     lo = max(model.input_range[0], plant.u_min) if args.u_min is None else args.u_min
     hi = min(model.input_range[1], plant.u_max) if args.u_max is None else args.u_max
     if not (plant.u_min <= lo < hi <= plant.u_max):
-        raise UsageError(f"voltage limits [{lo:g}, {hi:g}] V must lie in the beam's drive "
-                         f"range [{plant.u_min:g}, {plant.u_max:g}] V with u_min < u_max")
+        raise UsageError(f"voltage limits --u-min {lo:g} and --u-max {hi:g} must lie in the "
+                         f"beam's drive range [{plant.u_min:g}, {plant.u_max:g}] V with "
+                         f"--u-min below --u-max")
     return lo, hi
 
 
 def run(args):
     model = load_model(args.model)
+    check_limits(args.u_min, args.u_max, model, args.model)
     columns, lines = read_columns(args.desired, ["time_s", "displacement_um"])
     t, y_d = columns["time_s"], columns["displacement_um"]
     back = np.flatnonzero(np.diff(t) < 0)
