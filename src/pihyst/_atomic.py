@@ -48,6 +48,13 @@ def write_atomically(path, data):
         raise _named(err, path) from None
 
 
+def check_target(path):
+    """OSError (naming ``path``) now if ``path`` cannot be written later: its folder is
+    missing or not a folder, or it is a folder itself. Lets a command fail before its
+    work instead of after."""
+    _checked_folder(os.fspath(path))
+
+
 def _named(err, path):
     """``err`` reported under the path the caller asked for."""
     if isinstance(err, BrokenPipeError) or err.filename == path:

@@ -3,7 +3,7 @@
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError, number, positive_number
+from pihyst.cli.errors import UsageError, check_output, number, positive_number
 from pihyst.inverse import Compensator
 from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
 
@@ -74,6 +74,7 @@ def max_step_per_sample(slew_rate, t, path, lines):
 
 
 def run(args):
+    check_output(args.output)
     model = load_model(args.model)
     check_limits(args.u_min, args.u_max, model, args.model)
     columns, lines = read_columns(args.desired, ["displacement_um"], optional=["time_s"])

@@ -157,6 +157,13 @@ def run_command(run, args, *, debug=False):
     return EXIT_OK
 
 
+def check_output(path):
+    """Fail now, before any work, if the output ``path`` cannot be written (its folder
+    does not exist, it is a folder): the error names the path."""
+    from pihyst._atomic import check_target
+    check_target(path)
+
+
 def os_error_message(err):
     """``FILE: reason`` for an OSError (the file the user named)."""
     reason = err.strerror or str(err)

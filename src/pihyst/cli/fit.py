@@ -6,7 +6,7 @@ import sys
 import warnings
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError, count
+from pihyst.cli.errors import UsageError, check_output, count
 from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify import INITIAL_STATES, fit
 from pihyst.identify._families import FAMILY_NAMES
@@ -104,6 +104,7 @@ def _error(err, path, lines):
 
 
 def run(args):
+    check_output(args.output)
     thresholds = _thresholds(args.thresholds)
     holdout = _holdout(args.holdout)
     if args.n_operators is not None and args.n_operators > args.candidates:

@@ -3,6 +3,7 @@
 import numpy as np
 
 from pihyst._version import __version__
+from pihyst.cli.errors import check_output
 from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
 
 
@@ -30,6 +31,7 @@ def _in_range_or_error(model, u, lines, path, column):
 
 
 def run(args):
+    check_output(args.output)
     model = load_model(args.model)
     columns, lines = read_columns(args.input, ["voltage_V"], optional=["time_s"])
     u = columns["voltage_V"]

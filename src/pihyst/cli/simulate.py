@@ -1,7 +1,14 @@
 """pihyst simulate --plant NAME --signal KIND [options] -o DATA.csv"""
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError, count, number, open_fraction, positive_number
+from pihyst.cli.errors import (
+    UsageError,
+    check_output,
+    count,
+    number,
+    open_fraction,
+    positive_number,
+)
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.io import write_columns
 from pihyst.sim import signals
@@ -82,6 +89,7 @@ def make_signal(args, u_max):
 
 
 def run(args):
+    check_output(args.output)
     plant = plant_from_options(args)
     u_max = plant.u_max if args.u_max is None else args.u_max
     if not (plant.u_min <= args.u_min < u_max <= plant.u_max):

@@ -8,7 +8,7 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.compensate import add_limit_options, check_limits, max_step_per_sample
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.inverse import Compensator
 from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
@@ -47,6 +47,7 @@ def _limits(args, model, plant):
 
 
 def run(args):
+    check_output(args.output)
     model = load_model(args.model)
     check_limits(args.u_min, args.u_max, model, args.model)
     columns, lines = read_columns(args.desired, ["time_s", "displacement_um"])

@@ -34,6 +34,7 @@ from pihyst.identify._families import (
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
 from pihyst.identify._report import FitReport, FitResult
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE, SubsetProblem
+from pihyst.identify._sufficiency import check_fit, check_record
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
 
@@ -154,6 +155,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     """
     rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
                   holdout=holdout, offset=offset, through=through)
+    check_record(rec.u, rec.y)
     if family is None:
         names = list(FAMILY_NAMES)
         explicit_family = False
@@ -216,7 +218,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         criterion = "lowest held-back RMS error"
     else:
         n = rec.layout.count("fit")
-        best = min(results, key=lambda r: n * math.log(max(r["judged_rms"], 1e-300) ** 2)
+        best = min(results, key=lambda r: 2 * n * math.log(max(r["judged_rms"], 1e-300))
                    + r["n_params"] * math.log(n))
         criterion = "lowest BIC on the fitted data (nothing held back)"
     for x in caught[best["family"]]:
@@ -233,6 +235,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                 warnings.warn(f"{best['family']} (refit): {x.message}", x.category,
                               stacklevel=2)
         final_errors = best["fitter"]._errors(model)
+    check_fit(rec, best["judged_rms"], model)
     report = FitReport.build(rec, results, skipped, best["family"], criterion,
                              refit=bool(refit and rec.has_held_back),
                              final_errors=final_errors)

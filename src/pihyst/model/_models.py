@@ -490,6 +490,9 @@ class MultislopePI(PIModel):
                 and self.a * self.h < 1):
             raise InvalidModelError(f"multislope shape needs U > 0, 0 < a < b, 0 <= h <= 1 "
                                     f"and a h < 1; got U={U:g}, a={a:g}, b={b:g}, h={h:g}")
+        if not np.isfinite(self.b * self.U):
+            raise InvalidModelError(f"multislope shape U={self.U:g}, b={self.b:g}: b U "
+                                    f"overflows floating point")
         if input_range is None:
             input_range = (0.0, self.U)
         super().__init__(weights, input_range=input_range, **kwargs)
