@@ -60,7 +60,7 @@ def _finite_vector(values, name, length=None):
         isinstance(v, (bool, np.bool_, str)) for v in values)
     if mixed or raw.dtype.kind not in "iuf":
         # mixed or exotic items: each must be a real number (a huge int is too large)
-        for i, v in enumerate(raw.tolist()):
+        for i, v in enumerate(values if mixed else raw.tolist()):
             _finite_number(v, f"{name}[{i}]")
     try:
         a = np.array(raw, dtype=np.float64)
