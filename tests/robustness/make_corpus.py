@@ -307,6 +307,8 @@ def records():
            "csv/decimal-comma.csv:2", note="a European decimal comma")
     record("huge-field.csv", "time_s,voltage_V,displacement_um\n0,0,0\n1," + "1" * 200000
            + ",0\n", "csv/huge-field.csv:3")
+    record("bare-cr.csv", "\r" + good[1:], "csv/bare-cr.csv:1",
+           note="a carriage return alone inside a line (found by the fuzz)")
     record("nul-byte.csv", good.replace("\n", "\n\x00", 1), "csv/nul-byte.csv:2",
            expect={"predict": 2, "fit": 0, "compensate": 2, "track": 2},
            note="a NUL byte in the time_s field of line 2 (fit does not read time_s)")

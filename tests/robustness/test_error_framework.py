@@ -78,7 +78,7 @@ def test_non_pihyst_warnings_are_one_line(capsys):
     import warnings
 
     def run(args):
-        warnings.warn("overflow encountered", RuntimeWarning)
+        warnings.warn("overflow encountered", RuntimeWarning, stacklevel=2)
     with warnings.catch_warnings():
         warnings.simplefilter("default")    # as in a plain interpreter, not pytest's "error"
         assert run_command(run, None) == 0

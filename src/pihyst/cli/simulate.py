@@ -70,8 +70,9 @@ def make_signal(args, u_max):
     it is made) raise UsageError naming the options."""
     kind = args.signal
     common = {"u_min": args.u_min, "u_max": u_max, "dt": args.dt}
-    options = ", ".join(f"{o} {getattr(args, o[2:].replace('-', '_'))}"
-                        for o in _OPTIONS_OF_SIGNAL[kind] + ("--dt",))
+    values = {o: getattr(args, o[2:].replace("-", "_")) for o in _OPTIONS_OF_SIGNAL[kind]
+              + ("--dt",)}
+    options = ", ".join(f"{o} {v:g}" for o, v in values.items() if v is not None)
     try:
         if kind == "triangle":
             return signals.triangle(period_s=args.period, n_cycles=args.cycles, **common)

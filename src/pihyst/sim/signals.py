@@ -38,6 +38,8 @@ def _check_common(u_min, u_max, dt):
     if not u_max > u_min:
         raise InvalidArgumentError(f"u_max must be above u_min, got u_min={u_min:g}, "
                                    f"u_max={u_max:g}")
+    if not np.isfinite(u_max - u_min):
+        raise InvalidArgumentError(f"u_min={u_min:g} and u_max={u_max:g}: the span overflows")
     if not dt > 0:
         raise InvalidArgumentError(f"dt must be positive, got {dt:g}")
 
@@ -180,9 +182,12 @@ def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT
     _check_samples(n_ramps + 1.0, f"{n_ramps} ramps")
     rng = np.random.default_rng(checked_seed(seed))
     levels = np.concatenate(([u_min], rng.uniform(u_min, u_max, n_ramps)))
-    steps = np.maximum(1, np.ceil(np.abs(np.diff(levels)) / rate / dt - 1e-9))
+    with np.errstate(over="ignore"):   # a huge count is refused just below
+        steps = np.maximum(1, np.ceil(np.abs(np.diff(levels)) / rate / dt - 1e-9))
+        times = np.concatenate(([0.0], np.cumsum(steps) * dt))
     _check_samples(steps.sum() + 1, f"{n_ramps} ramps at {rate:g} per second, dt = {dt:g} s")
-    times = np.concatenate(([0.0], np.cumsum(steps) * dt))
+    if not np.isfinite(times[-1]):
+        raise InvalidArgumentError(f"dt = {dt:g} s: the signal's duration overflows")
     return _piecewise_linear(times, levels, dt)
 
 
