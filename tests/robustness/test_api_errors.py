@@ -127,3 +127,22 @@ def test_fit_a_million_repeated_samples():
     res = pihyst.fit(np.r_[u, np.full(n, u[-1])], np.r_[y, np.full(n, y[-1])],
                      family="classical")
     assert np.sqrt(np.mean((res.model.predict(u) - y) ** 2)) < 0.05
+
+
+@pytest.mark.parametrize("call", [
+    lambda m: m.predict("abc"), lambda m: m.predict([[0.0, 1.0]]),
+    lambda m: m.stepper().step("x"),
+    lambda m: pihyst.Compensator("model.json"), lambda m: pihyst.Compensator(m, u_min="x"),
+    lambda m: pihyst.Compensator(m, u_min=100, u_max=50),
+    lambda m: pihyst.Compensator(m, slew_rate=float("nan")),
+    lambda m: pihyst.Compensator(m, slew_rate=0), lambda m: pihyst.Compensator(m).step("x"),
+    lambda m: pihyst.compensate(m, "abc"), lambda m: pihyst.compensate(m, [[1.0]]),
+])
+def test_running_models_with_bad_arguments(call):
+    with pytest.raises(InvalidArgumentError):
+        call(pihyst.ClassicalPI(**CLASSICAL))
+
+
+def test_a_missing_input_sample_is_out_of_range():
+    with pytest.raises(pihyst.InputRangeError, match="sample 1"):
+        pihyst.ClassicalPI(**CLASSICAL).predict([0.0, None])

@@ -25,7 +25,7 @@ import numpy as np
 
 from pihyst import _core, paper
 from pihyst._atomic import write_atomically
-from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
 
 PAPER_SHAPE = paper.SHAPE
@@ -190,9 +190,12 @@ class PIModel(ABC):
 
     # ---------------------------------------------------------------- batch
     def _checked_input(self, u):
-        u = np.ascontiguousarray(u, dtype=np.float64)
+        try:
+            u = np.ascontiguousarray(u, dtype=np.float64)
+        except (TypeError, ValueError, OverflowError):
+            raise InvalidArgumentError("input must be a sequence of numbers") from None
         if u.ndim != 1:
-            raise ValueError(f"input must be one-dimensional, got shape {u.shape}")
+            raise InvalidArgumentError(f"input must be one-dimensional, got shape {u.shape}")
         lo, hi = self.input_range
         # min/max first: two fast passes; NaN makes the comparison fail too
         if u.size and not (u.min() >= lo and u.max() <= hi):
@@ -409,7 +412,10 @@ class Stepper:
 
     def step(self, u):
         """One sample: advance the running state by the input ``u``, return y."""
-        u = float(u)
+        try:
+            u = float(u)
+        except (TypeError, ValueError, OverflowError):
+            raise InvalidArgumentError(f"input must be a number, got {u!r:.40}") from None
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
