@@ -12,6 +12,7 @@ from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.inverse import Compensator
 from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
+from pihyst.sim.signals import MAX_SAMPLES
 
 
 def register(sub):
@@ -52,6 +53,9 @@ def run(args):
     check_limits(args.u_min, args.u_max, model, args.model)
     columns, lines = read_columns(args.desired, ["time_s", "displacement_um"])
     t, y_d = columns["time_s"], columns["displacement_um"]
+    if y_d.size > MAX_SAMPLES:  # the beam's state per sample would not fit in memory
+        raise UsageError(f"{args.desired}: {y_d.size:,} samples, more than the "
+                         f"{MAX_SAMPLES:,} a simulated beam runs at once: split the file")
     back = np.flatnonzero(np.diff(t) < 0)
     if back.size:
         i = back[0] + 1
