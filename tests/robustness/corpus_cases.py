@@ -19,7 +19,7 @@ READER_FILES = {
     "csv/bare-cr.csv"}
 
 # a whole fit that succeeds takes seconds; one of each kind stays in the default suite
-QUICK_FITS = {"csv/ok-loop.csv", "csv/pure-noise.csv", "csv/no-hysteresis.csv"}
+QUICK_FITS = {"csv/pure-noise.csv"}
 
 
 def params(kind, reader):
@@ -27,7 +27,8 @@ def params(kind, reader):
     for name, k, command, expect, says, warns in corpus_cases():
         if k != kind or (name in READER_FILES) != reader:
             continue
-        slow = command == "fit" and expect == 0 and name not in QUICK_FITS
+        slow = command == "fit" and (expect == 0 or name in READER_FILES) \
+            and name not in QUICK_FITS
         marks = [pytest.mark.slow] if slow else []
         out.append(pytest.param(name, command, expect, says, warns, marks=marks,
                                 id=f"{command}-{name}"))

@@ -91,19 +91,25 @@ def test_invalid_argument_error_is_both_value_and_type_error():
     assert issubclass(ResourceLimitError, InvalidArgumentError)
 
 
-def test_fit_reports_what_the_data_cannot_support():
-    u = np.tile(np.r_[np.linspace(0, 150, 151), np.linspace(149, 1, 149)], 4)
-    rng = np.random.default_rng(3)
-    with pytest.raises(pihyst.FitError, match="does not follow the voltage"):
-        pihyst.fit(u, rng.normal(0, 1, u.size))
-    with pytest.raises(pihyst.FitError, match="too large to fit"):
-        pihyst.fit(u * 1e200, u * 1e200)
-    with pytest.raises(pihyst.FitError, match="never reverses"):
-        pihyst.fit(np.linspace(0, 150, 300), np.linspace(0, 45, 300) ** 1.1)
-    with pytest.raises(pihyst.FitError, match="distinct values"):
-        pihyst.fit(np.tile([0.0, 150.0], 50), np.tile([0.0, 45.0], 50))
+LOOPS = np.tile(np.r_[np.linspace(0, 150, 151), np.linspace(149, 1, 149)], 4)
+
+
+@pytest.mark.parametrize("u, y, says", [
+    (LOOPS, np.random.default_rng(3).normal(0, 1, LOOPS.size), "does not follow the voltage"),
+    (LOOPS * 1e200, LOOPS * 1e200, "too large to fit"),
+    (LOOPS * 1e-200, LOOPS * 1e-200, "too little for floating point"),
+    (LOOPS * 1e-3 + 1e9, LOOPS, "too little for floating point"),
+    (np.linspace(0, 150, 300), np.linspace(0, 45, 300) ** 1.1, "never reverses"),
+    (np.tile([0.0, 150.0], 50), np.tile([0.0, 45.0], 50), "distinct values"),
+])
+def test_fit_reports_what_the_data_cannot_support(u, y, says):
+    with pytest.raises(pihyst.FitError, match=says):
+        pihyst.fit(u, y, family="classical")
+
+
+def test_fit_warns_when_the_record_has_no_hysteresis():
     with pytest.warns(pihyst.exceptions.InsufficientDataWarning, match="no hysteresis"):
-        pihyst.fit(u, 0.3 * u)
+        pihyst.fit(LOOPS, 0.3 * LOOPS, family="classical")
 
 
 def test_fit_exact_record_from_the_top_without_holdout():
@@ -112,7 +118,7 @@ def test_fit_exact_record_from_the_top_without_holdout():
     true = pihyst.ClassicalPI([0, 20, 50], [0.2, 0.1, 0.05])
     u = np.r_[np.linspace(150, 0, 151), np.linspace(0, 150, 151)[1:]]
     y = true.predict(u, initial_state=[150, 130, 100])
-    res = pihyst.fit(u, y, holdout=None)
+    res = pihyst.fit(u, y, holdout=None, family=["classical", "multislope"])
     assert res.report.family(res.report.chosen)["errors"]["fit"]["rms"] < 0.01 * np.ptp(y)
 
 
