@@ -94,3 +94,24 @@ def test_real_process_statuses(tmp_path):
                           capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1
     assert "Traceback" not in proc.stderr
+
+
+def test_unreadable_files(tmp_path, capsys):
+    """chmod 000: one line naming the file (as root, which reads anything, it runs)."""
+    import os
+    import shutil
+
+    from harness import GOOD_MODEL, VOLTS
+    model, record = tmp_path / "m.json", tmp_path / "in.csv"
+    shutil.copy(GOOD_MODEL, model)
+    shutil.copy(VOLTS, record)
+    for path in (model, record):
+        path.chmod(0)
+    out = tmp_path / "out.csv"
+    status = main(["predict", str(model), str(record), "-o", str(out)])
+    err = capsys.readouterr().err
+    if os.geteuid() == 0:
+        assert status == 0 and out.exists()
+    else:
+        assert status == 2 and err.count("\n") == 1 and "m.json" in err
+        assert "Permission denied" in err and not out.exists()
