@@ -5,9 +5,14 @@
 - :class:`RecordError`: a record (data file) that cannot be used, and its subclass
   :class:`CSVError` for delimited text (file, line and column named);
 - :class:`FitError`, :class:`InfeasibleConstraintsError`: data that cannot be fitted as asked;
-- :class:`PihystWarning`, :class:`IllConditionedWarning`: warnings.
+- :class:`InvalidArgumentError`, :class:`ResourceLimitError`: any other invalid argument of
+  a pihyst function (wrong type, out of range, too large to process);
+- :class:`PihystWarning`, :class:`IllConditionedWarning`, :class:`InsufficientDataWarning`:
+  warnings.
 
-Each is a ``ValueError`` (or a ``UserWarning``), so ``except ValueError`` still catches them.
+Each is a ``ValueError`` (or a ``UserWarning``), so ``except ValueError`` still catches them;
+:class:`InvalidArgumentError` is also a ``TypeError``, for arguments of the wrong type.
+The rules (and the command line's exit statuses) are in docs/errors.md.
 """
 
 
@@ -19,6 +24,21 @@ class IllConditionedWarning(PihystWarning):
     """The least-squares problem is ill-conditioned: some weights are not determined by
     the data. The solution returned is still the best admissible one (with a tiny
     regularization that picks the smallest such weights), but those weights mean little."""
+
+
+class InsufficientDataWarning(PihystWarning):
+    """The record supports the fitted model only weakly: it shows no hysteresis, or the
+    model explains the displacement poorly. The model is still the best fit of the data."""
+
+
+class InvalidArgumentError(ValueError, TypeError):
+    """An argument of a pihyst function has the wrong type or an invalid value; the
+    message names the argument. Both a ``ValueError`` and a ``TypeError``."""
+
+
+class ResourceLimitError(InvalidArgumentError):
+    """The arguments ask for more than pihyst will allocate (e.g. a signal of billions of
+    samples); checked before anything is allocated. The message says the limit."""
 
 
 class FitError(ValueError):

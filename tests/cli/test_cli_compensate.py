@@ -82,7 +82,7 @@ def test_without_time_column_uses_sample_index(tmp_path):
     ("time_s,displacement_um\n0,0\n", ("--slew-rate", "-5"), "", "must be a positive"),
     ("time_s,displacement_um\n0,0\n", ("--u-min", "-10"), "json:", "input range"),
     ("time_s,displacement_um\n0,0\n", ("--u-min", "100", "--u-max", "50"), "json:",
-     "u_min < u_max"),
+     "must be below --u-max"),
 ])
 def test_bad_input_one_line_error_exit_2_no_output(tmp_path, capsys, content, options, where,
                                                     what):

@@ -53,7 +53,7 @@ def test_track_is_deterministic_for_a_seed(tmp_path, desired):
     ("displacement_um\n1\n2\n", (), "missing column 'time_s'"),
     ("time_s,displacement_um\n0,1\n2,2\n1,3\n", (), "d.csv:4:1: time_s = 1 goes back"),
     ("time_s,displacement_um\n0,1\n1,nan\n", (), "d.csv:3:2:"),
-    ("time_s,displacement_um\n0,1\n", ("--u-max", "200"), "beam's drive range"),
+    ("time_s,displacement_um\n0,1\n", ("--u-max", "200"), "--u-max 200 is outside"),
     ("time_s,displacement_um\n0,1\n1,2\n", ("--slew-rate", "0"), "must be a positive"),
 ])
 def test_bad_input(tmp_path, capsys, content, options, what):

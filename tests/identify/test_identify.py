@@ -90,6 +90,7 @@ def test_automatic_size_stops_at_the_generating_size():
 @given(idx=st.lists(st.integers(0, 15), min_size=1, max_size=5, unique=True),
        w=st.lists(st.floats(0.01, 1.0), min_size=5, max_size=5),
        offset=st.floats(-50, 50), seed=st.integers(0, 1000))
+@pytest.mark.filterwarnings("ignore::pihyst.exceptions.InsufficientDataWarning")  # idx=[0]: linear
 def test_recovery_property(idx, w, offset, seed):
     r = GRID[sorted(idx)]
     true = at_rest(ClassicalPI(r, w[:len(r)], offset=offset))
@@ -367,6 +368,7 @@ def test_no_warning_on_a_well_posed_fit():
         fit(u, true.predict(u), family="classical", thresholds=[0, 30])
 
 
+@pytest.mark.filterwarnings("ignore::pihyst.exceptions.InsufficientDataWarning")  # no loop
 def test_inputs_are_not_modified():
     u = rich_signal(seed=17)
     y = 0.3 * u + np.sin(u / 9)

@@ -107,8 +107,8 @@ def test_choice_property(specs, known, max_ops):
     assert chosen.judged_rms <= best * (1 + TOLERANCE)
     for c in eligible:
         if c.judged_rms <= best * (1 + TOLERANCE):
-            assert (c.fitted.n_operators, c.worst_latency) >= (chosen.fitted.n_operators,
-                                                               chosen.worst_latency)
+            assert (c.fitted.n_operators, c.judged_rms) >= (chosen.fitted.n_operators,
+                                                            chosen.judged_rms)
     if max_ops is not None:
         assert chosen.fitted.n_operators <= max_ops
 

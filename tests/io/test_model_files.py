@@ -43,7 +43,8 @@ def test_examples_load(tmp_path):
     ({"family": "classical", "thresholds": [0]}, "missing required key 'weights'"),
     ({"family": "classical", "thresholds": [0], "weights": [1], "treshold": 2},
      "unknown key 'treshold'"),
-    ({"family": "classical", "thresholds": [0], "weights": ["x"]}, "weights must be a list"),
+    ({"family": "classical", "thresholds": [0], "weights": ["x"]},
+     "weights\\[0\\] must be a number"),
     ({"family": "pwl", "rising": [{"x": [0]}], "falling": [], "weights": [1]},
      "rising\\[0\\] must be an object"),
 ])

@@ -7,7 +7,7 @@ smallest step."""
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, check_output, number, positive_number
 from pihyst.cli.model_inputs import add_initial_state_option, initial_state
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
 from pihyst.inverse import Compensator
@@ -41,11 +41,11 @@ def register(sub):
 
 def add_limit_options(p, default_range):
     """--u-min, --u-max and --slew-rate (shared with pihyst track)."""
-    p.add_argument("--u-min", type=float, default=None, metavar="V",
+    p.add_argument("--u-min", type=number, default=None, metavar="V",
                    help=f"lowest voltage (default: {default_range})")
-    p.add_argument("--u-max", type=float, default=None, metavar="V",
+    p.add_argument("--u-max", type=number, default=None, metavar="V",
                    help=f"highest voltage (default: {default_range})")
-    p.add_argument("--slew-rate", type=float, default=None, metavar="V/S",
+    p.add_argument("--slew-rate", type=positive_number, default=None, metavar="V/S",
                    help="largest voltage rate in volts per second; needs time_s (applied as "
                         "rate x the smallest time step, per sample)")
 
@@ -103,8 +103,24 @@ def reach_hint(model, y_lo, y_hi, d_lo=None, d_hi=None):
     return hint
 
 
+def check_limits(u_min, u_max, model, model_path):
+    """--u-min and --u-max inside the model's input range and in order (UsageError)."""
+    lo, hi = model.input_range
+    for option, v in (("--u-min", u_min), ("--u-max", u_max)):
+        if v is not None and not lo <= v <= hi:
+            raise UsageError(f"{model_path}: {option} {v:g} is outside the model's input "
+                             f"range [{lo:g}, {hi:g}]")
+    low = lo if u_min is None else u_min
+    high = hi if u_max is None else u_max
+    if not low < high:
+        raise UsageError(f"{model_path}: --u-min {low:g} must be below --u-max {high:g} "
+                         f"(the model's input range is [{lo:g}, {hi:g}])")
+
+
 def run(args):
+    check_output(args.output)
     model = load_model(args.model)
+    check_limits(args.u_min, args.u_max, model, args.model)
     with open_from_args(args, args.desired, need=("displacement",)) as reader, \
             progress_bar(f"compensate {args.desired}") as bar:
         max_step = None

@@ -3,7 +3,7 @@
 import os
 import time
 
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, seed
 from pihyst.cli.report import add_figure_format_option
 from pihyst.sim import PLANT_NAMES
 
@@ -25,7 +25,7 @@ def register(sub):
                    help=f"output folder (created if needed; default {DEFAULT_OUT})")
     p.add_argument("--plant", choices=PLANT_NAMES, default="paper-beam",
                    help="simulated beam (default: paper-beam, calibrated to the paper)")
-    p.add_argument("--seed", type=int, default=0, metavar="N",
+    p.add_argument("--seed", type=seed, default=0, metavar="N",
                    help="noise seed of the first record (default 0)")
     add_figure_format_option(p)
     p.add_argument("--no-variants", action="store_true",

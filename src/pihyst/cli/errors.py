@@ -1,11 +1,194 @@
-"""Errors a command reports as one line with exit status 2."""
+"""The command line's error framework (docs/errors.md), shared by every command.
 
-from pihyst.io import RecordError
-from pihyst.model import InputRangeError, InvalidModelError
+- An error the user can cause (a bad file, a bad option, data that cannot be fitted, an
+  output that cannot be written) is one line ``pihyst: error: ...`` on stderr naming the
+  file, line and column, or the option, with exit status 2 and no output file. A command
+  reports one by raising one of :data:`USER_ERRORS` (:class:`UsageError` for its own
+  checks) or an ``OSError`` that names the file.
+- Anything else is a bug in pihyst: one line saying so and where to report it, exit
+  status 70; the traceback only with ``--debug``.
+- Ctrl-C: exit status 130. A closed standard output (``pihyst ... | head``): quiet,
+  exit status 0 (the output files are complete before anything is printed).
+
+Option values are checked where they are parsed, by the types below
+(``type=positive_number``...): an out-of-range value is an error naming the option.
+"""
+
+import argparse
+import math
+import os
+import sys
+import traceback
+import warnings
+
+from pihyst.exceptions import (
+    FitError,
+    InputRangeError,
+    InvalidArgumentError,
+    InvalidModelError,
+    PihystWarning,
+    RecordError,
+)
+
+EXIT_OK = 0
+EXIT_USER_ERROR = 2
+EXIT_BUG = 70            # EX_SOFTWARE of sysexits.h
+EXIT_INTERRUPTED = 130   # 128 + SIGINT
+
+BUG_REPORTS = "the pihyst issue tracker (see 'Reporting bugs' in the README)"
 
 
 class UsageError(ValueError):
     """Bad input detected by a command; the message is shown as is."""
 
 
-USER_ERRORS = (RecordError, InvalidModelError, InputRangeError, UsageError)
+USER_ERRORS = (RecordError, InvalidModelError, InputRangeError, FitError, InvalidArgumentError,
+               UsageError)
+
+
+def one_line(text):
+    """``text`` with line breaks turned into spaces: every message is one line."""
+    return " ".join(str(text).splitlines()) or "(no message)"
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``pihyst: error: argument --seed: ... (see 'pihyst
+    simulate --help')``, exit status 2."""
+
+    def error(self, message):
+        self.exit(EXIT_USER_ERROR,
+                  f"pihyst: error: {one_line(message)} (see '{self.prog} --help')\n")
+
+
+# ----------------------------------------------------------------------------- option types
+def _float(text):
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def number(text):
+    """A finite number."""
+    x = _float(text)
+    if not math.isfinite(x):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return x
+
+
+def positive_number(text):
+    """A finite number > 0."""
+    x = number(text)
+    if not x > 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
+    return x
+
+
+def open_fraction(text):
+    """A number strictly between 0 and 1."""
+    x = number(text)
+    if not 0 < x < 1:
+        raise argparse.ArgumentTypeError(f"must be between 0 and 1 (exclusive), got {text!r}")
+    return x
+
+
+def _whole(text):
+    try:
+        return int(text, 10)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+
+
+def count(lowest=1, highest=None):
+    """A whole number in [lowest, highest] (highest: a resource limit, said in the error)."""
+    def parse(text):
+        n = _whole(text)
+        if n < lowest:
+            raise argparse.ArgumentTypeError(f"must be at least {lowest}, got {text}")
+        if highest is not None and n > highest:
+            raise argparse.ArgumentTypeError(f"must be at most {highest:,}, got {text}")
+        return n
+    parse.__name__ = "count"
+    return parse
+
+
+def seed(text):
+    """A random seed: a whole number >= 0 (any size)."""
+    n = _whole(text)
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 0, got {text}")
+    return n
+
+
+# ----------------------------------------------------------------------------- running
+def run_command(run, args, *, debug=False):
+    """Run a command's ``run(args)`` and turn what it raises into the exit status and
+    one stderr line of docs/errors.md."""
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            run(args)
+            sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+    except BrokenPipeError:
+        _detach_stdout()
+        return EXIT_OK
+    except KeyboardInterrupt:
+        _say("pihyst: interrupted")
+        return EXIT_INTERRUPTED
+    except USER_ERRORS as err:
+        _say(f"pihyst: error: {one_line(err)}")
+        return EXIT_USER_ERROR
+    except MemoryError:
+        _say("pihyst: error: not enough memory for this input; use a shorter record or "
+             "coarser options")
+        return EXIT_USER_ERROR
+    except OSError as err:
+        _say(f"pihyst: error: {one_line(os_error_message(err))}")
+        return EXIT_USER_ERROR
+    except Exception as err:  # noqa: BLE001 - an unexpected error is a bug, said as one
+        if debug:
+            traceback.print_exc()
+        from pihyst._version import __version__
+        how = "the traceback above" if debug else "the output of the same command with --debug"
+        _say(f"pihyst: internal error: {type(err).__name__}: {one_line(err)} -- this is a bug "
+             f"in pihyst {__version__}, not in your input; please report it with the command "
+             f"line and {how} to {BUG_REPORTS}")
+        return EXIT_BUG
+    return EXIT_OK
+
+
+def check_output(path):
+    """Fail now, before any work, if the output ``path`` cannot be written (its folder
+    does not exist, it is a folder): the error names the path."""
+    from pihyst._atomic import check_target
+    check_target(path)
+
+
+def os_error_message(err):
+    """``FILE: reason`` for an OSError (the file the user named)."""
+    reason = err.strerror or str(err)
+    if err.filename is not None:
+        return f"{os.fsdecode(err.filename)}: {reason}"
+    return reason
+
+
+def _say(line):
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):   # stderr closed too: nothing more can be said
+        pass
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    prefix = "" if issubclass(category, PihystWarning) else f"{category.__name__}: "
+    _say(f"pihyst: warning: {prefix}{one_line(message)}")
+
+
+def _detach_stdout():
+    """Point stdout at /dev/null so that the interpreter's final flush of a closed pipe
+    does not print 'Broken pipe' on the way out."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # not a real file (e.g. in tests)
+        pass

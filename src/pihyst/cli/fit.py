@@ -2,17 +2,20 @@
 [--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency US] [--json]
 -o MODEL.json"""
 
+import math
 import sys
 import warnings
 
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, check_output, count
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 from pihyst.exceptions import FitError, InvalidModelError, PihystWarning
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
+
+MAX_CANDIDATES = 128   # the subset search's cost grows fast with the grid
 
 _QUANTITIES = {"input": "voltage", "output": "displacement"}
 
@@ -38,11 +41,12 @@ def register(sub):
     p.add_argument("--thresholds", metavar="LIST",
                    help="comma-separated thresholds to use as they are (input units, from "
                         "the bottom of the input range), e.g. 0,10,30")
-    p.add_argument("--n-operators", metavar="N", type=int,
+    p.add_argument("--n-operators", metavar="N", type=count(1, MAX_CANDIDATES),
                    help="number of operators to choose from the candidates (default: "
                         "chosen from the data)")
-    p.add_argument("--candidates", metavar="N", type=int, default=16,
-                   help="size of the candidate threshold grid (default 16, as the paper)")
+    p.add_argument("--candidates", metavar="N", type=count(2, MAX_CANDIDATES), default=16,
+                   help=f"size of the candidate threshold grid (default 16, as the paper; "
+                        f"at most {MAX_CANDIDATES})")
     p.add_argument("--holdout", metavar="HOW", default="alternate",
                    help="held-back cycles: 'alternate' (default), a fraction such as 0.5 "
                         "(the last half of the record), or 'none'")
@@ -88,6 +92,13 @@ def _thresholds(text):
         except ValueError:
             raise UsageError(f"--thresholds: {item.strip()!r} is not a number "
                              f"(expected a comma-separated list such as 0,10,30)") from None
+        if not (math.isfinite(values[-1]) and values[-1] >= 0):
+            raise UsageError(f"--thresholds: {item.strip()} is not a finite number >= 0")
+        if len(values) > 1 and not values[-1] > values[-2]:
+            raise UsageError(f"--thresholds must increase strictly: {values[-2]:g} is "
+                             f"followed by {values[-1]:g}")
+    if len(values) > MAX_CANDIDATES:
+        raise UsageError(f"--thresholds: {len(values)} thresholds, at most {MAX_CANDIDATES}")
     return values
 
 
@@ -158,12 +169,12 @@ def _error(err, record):
 
 
 def run(args):
+    check_output(args.output)
     thresholds = _thresholds(args.thresholds)
     holdout = _holdout(args.holdout)
-    if args.n_operators is not None and args.n_operators < 1:
-        raise UsageError(f"--n-operators must be at least 1, got {args.n_operators}")
-    if args.candidates < 2:
-        raise UsageError(f"--candidates must be at least 2, got {args.candidates}")
+    if args.n_operators is not None and args.n_operators > args.candidates:
+        raise UsageError(f"--n-operators {args.n_operators} is more than the --candidates "
+                         f"{args.candidates} to choose from")
     if args.max_operators is not None and args.max_operators < 1:
         raise UsageError(f"--max-operators must be at least 1, got {args.max_operators}")
     if args.max_latency is not None and not args.max_latency > 0:

@@ -6,6 +6,7 @@ Streams the record block by block (an hour at 10 kHz in bounded memory), except 
 import numpy as np
 
 from pihyst._version import __version__
+from pihyst.cli.errors import check_output
 from pihyst.cli.model_inputs import InputRange, add_initial_state_option, initial_state, settle_end
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
 from pihyst.io import ColumnWriter, load_model
@@ -28,6 +29,7 @@ def register(sub):
 
 
 def run(args):
+    check_output(args.output)
     model = load_model(args.model)
     limits = InputRange(model)
     state = initial_state(model, args.initial_state)

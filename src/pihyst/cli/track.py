@@ -7,12 +7,18 @@ inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.compensate import add_limit_options, check_slew_rate, smallest_step
-from pihyst.cli.errors import UsageError
+from pihyst.cli.compensate import (
+    add_limit_options,
+    check_limits,
+    check_slew_rate,
+    smallest_step,
+)
+from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.cli.record_options import add_record_options, read_from_args
 from pihyst.inverse import Compensator
 from pihyst.io import load_model, write_columns
+from pihyst.sim.signals import MAX_SAMPLES
 
 
 def register(sub):
@@ -42,15 +48,21 @@ def _limits(args, model, plant):
     lo = max(model.input_range[0], plant.u_min) if args.u_min is None else args.u_min
     hi = min(model.input_range[1], plant.u_max) if args.u_max is None else args.u_max
     if not (plant.u_min <= lo < hi <= plant.u_max):
-        raise UsageError(f"voltage limits [{lo:g}, {hi:g}] V must lie in the beam's drive "
-                         f"range [{plant.u_min:g}, {plant.u_max:g}] V with u_min < u_max")
+        raise UsageError(f"voltage limits --u-min {lo:g} and --u-max {hi:g} must lie in the "
+                         f"beam's drive range [{plant.u_min:g}, {plant.u_max:g}] V with "
+                         f"--u-min below --u-max")
     return lo, hi
 
 
 def run(args):
+    check_output(args.output)
     model = load_model(args.model)
+    check_limits(args.u_min, args.u_max, model, args.model)
     rec = read_from_args(args, args.desired, need=("time", "displacement"))
     t, y_d = rec.time, rec.displacement
+    if y_d.size > MAX_SAMPLES:  # the beam's state per sample would not fit in memory
+        raise UsageError(f"{args.desired}: {y_d.size:,} samples, more than the "
+                         f"{MAX_SAMPLES:,} a simulated beam runs at once: split the file")
     back = np.flatnonzero(np.diff(t) < 0)
     if back.size:
         i = int(back[0]) + 1

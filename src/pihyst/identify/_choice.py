@@ -77,7 +77,8 @@ def choose(candidates, *, minor_loops_known, unknown_reason, judged_on_held_back
                      f"families within {100 * TOLERANCE:g} % of the lowest judged RMS error "
                      f"(the worst of held-back cycles and validation record)")
     else:
-        chosen = min(eligible, key=lambda c: n_fitted * math.log(max(c.judged_rms, 1e-300) ** 2)
+        # n ln(RMS^2) as 2 n ln(RMS): the square of a tiny RMS would underflow to 0
+        chosen = min(eligible, key=lambda c: 2 * n_fitted * math.log(max(c.judged_rms, 1e-300))
                      + c.fitted.n_params * math.log(n_fitted))
         criterion = "lowest BIC on the fitted data (nothing held back)"
     bounds = [f"max_operators = {max_operators}" if max_operators is not None else None,

@@ -42,6 +42,7 @@ from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedReco
 from pihyst.identify._latency import measure_latency
 from pihyst.identify._report import FitReport, FitResult
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
+from pihyst.identify._sufficiency import check_fit, check_record
 from pihyst.model import InvalidModelError
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
@@ -195,6 +196,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
 
     rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
                        holdout=holdout, offset=offset, through=through)
+    check_record(rec.u, rec.y)
     if rec.state_mode == "explicit" and thresholds is None:
         raise FitError("an explicit initial_state needs explicit thresholds (one value "
                        "per operator)")
@@ -262,6 +264,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         final_errors = fitter.errors(model)
         if validation is not None:
             final_errors["validation"] = validation.errors(model)
+    check_fit(rec, best_c.judged_rms, model)
     undetermined = _undetermined(rec, validation, known, unknown_reason, delay_info, cands)
     report = FitReport.build(rec, cands, skipped, best.name, criterion,
                              refit=bool(refit and rec.has_held_back),

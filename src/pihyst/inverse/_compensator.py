@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst import _core
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.model import InvalidModelError, PIModel
 from pihyst.model._models import _finite_vector
 
@@ -141,7 +142,7 @@ class Compensator:
     def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
                  initial_state=None):
         if not isinstance(model, PIModel):
-            raise TypeError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
+            raise InvalidArgumentError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
                             f"PiecewiseLinearPI), not {type(model).__name__}")
         negative = np.flatnonzero(model.weights < 0)
         if negative.size:
@@ -155,20 +156,22 @@ class Compensator:
         u_min = lo if u_min is None else _number(u_min, "u_min")
         u_max = hi if u_max is None else _number(u_max, "u_max")
         if not lo <= u_min < u_max <= hi:
-            raise ValueError(f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min < "
-                             f"u_max inside the model's input range [{lo:g}, {hi:g}]")
+            raise InvalidArgumentError(
+                f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min < u_max inside the "
+                f"model's input range [{lo:g}, {hi:g}]")
         self.limits = (u_min, u_max)
         if slew_rate is not None:
             slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
             if not slew_rate > 0:
-                raise ValueError(f"slew_rate must be > 0 volts per sample, got {slew_rate:g}")
+                raise InvalidArgumentError(f"slew_rate must be > 0 volts per sample, got "
+                                           f"{slew_rate:g}")
         self.slew_rate = slew_rate
         if initial_voltage is None:
             initial_voltage = min(max(0.0, u_min), u_max)
         initial_voltage = _number(initial_voltage, "initial_voltage")
         if not u_min <= initial_voltage <= u_max:
-            raise ValueError(f"initial_voltage {initial_voltage:g} is outside the voltage "
-                             f"limits [{u_min:g}, {u_max:g}]")
+            raise InvalidArgumentError(f"initial_voltage {initial_voltage:g} is outside the "
+                                       f"voltage limits [{u_min:g}, {u_max:g}]")
         state = (model.initial_state if initial_state is None else
                  _finite_vector(initial_state, "initial_state", model.n_operators))
         self._start = (np.array(state), initial_voltage)
@@ -205,13 +208,14 @@ class Compensator:
         voltage = start_voltage if voltage is None else _number(voltage, "voltage")
         lo, hi = self.limits
         if not lo <= voltage <= hi:
-            raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+            raise InvalidArgumentError(f"voltage {voltage:g} is outside the limits "
+                                       f"[{lo:g}, {hi:g}]")
         self._core.reset(state, voltage)
 
     # ---------------------------------------------------------------- compensation
     def step(self, y_desired):
         """The voltage for one desired displacement (applied to the state)."""
-        return self._core.step(float(y_desired))
+        return self._core.step(_number(y_desired, "y_desired", allow_inf=True, allow_nan=True))
 
     def run(self, y_desired):
         """Compensate a block of desired displacements, continuing from the current state.
@@ -274,21 +278,21 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
                        ).run(y_desired)
 
 
-def _number(value, name, allow_inf=False):
+def _number(value, name, allow_inf=False, allow_nan=False):
     try:
         v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if np.isnan(v) or (np.isinf(v) and not allow_inf):
-        raise ValueError(f"{name} must be a finite number, got {v}")
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidArgumentError(f"{name} must be a number, got {value!r:.40}") from None
+    if (np.isnan(v) and not allow_nan) or (np.isinf(v) and not allow_inf):
+        raise InvalidArgumentError(f"{name} must be a finite number, got {v}")
     return v
 
 
 def _desired(y_desired):
     try:
         y = np.array(y_desired, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("y_desired must be a sequence of numbers") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidArgumentError("y_desired must be a sequence of numbers") from None
     if y.ndim != 1:
-        raise ValueError(f"y_desired must be one-dimensional, got shape {y.shape}")
+        raise InvalidArgumentError(f"y_desired must be one-dimensional, got shape {y.shape}")
     return y

@@ -62,18 +62,51 @@ def _parse_json(raw, path):
         raise InvalidModelError(f"{path}:{line}:{column}: not UTF-8 text (byte "
                                 f"0x{raw[err.start]:02x})") from None
     try:
-        return json.loads(text, parse_constant=_no_constant)
+        return json.loads(text, parse_constant=_no_constant, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as err:
         raise InvalidModelError(f"{path}:{err.lineno}:{err.colno}: invalid JSON: {err.msg}") \
             from None
     except RecursionError:
         raise InvalidModelError(f"{path}: invalid JSON: nested too deeply") from None
+    except _KeyError as err:
+        raise InvalidModelError(f"{path}:{_where(text, err.token, err.last)}: {err}") \
+            from None
     except ValueError as err:  # e.g. an integer with more digits than Python converts
         raise InvalidModelError(f"{path}: invalid JSON: {err}") from None
 
 
+class _KeyError(ValueError):
+    """A JSON token that is valid syntax but not a valid model file (``token`` is
+    searched for in the text to say where)."""
+
+    def __init__(self, message, token, last=False):
+        super().__init__(message)
+        self.token, self.last = token, last
+
+
 def _no_constant(name):
-    raise ValueError(f"{name} is not a number in JSON")
+    raise _KeyError(f"invalid JSON: {name} is not a number in JSON (use a finite number)",
+                    name)
+
+
+def _unique_keys(pairs):
+    seen = set()
+    for key, _ in pairs:
+        if key in seen:
+            raise _KeyError(f"duplicate key {key!r}: which value is meant?",
+                            json.dumps(key), last=True)
+        seen.add(key)
+    return dict(pairs)
+
+
+def _where(text, token, last):
+    """LINE:COLUMN of the first (or ``last``) occurrence of ``token`` in ``text``, 1:1
+    when not found."""
+    i = text.rfind(token) if last else text.find(token)
+    if i < 0:
+        return "1:1"
+    line = text.count("\n", 0, i) + 1
+    return f"{line}:{i - (text.rfind(chr(10), 0, i) + 1) + 1}"
 
 
 def save_model(model, path):

@@ -16,6 +16,7 @@ owns the running operator state.
 """
 
 import json
+import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -24,7 +25,7 @@ import numpy as np
 
 from pihyst import _core, paper
 from pihyst._atomic import write_atomically
-from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
 
 PAPER_SHAPE = paper.SHAPE
@@ -44,12 +45,27 @@ class Response:
 
 
 def _finite_vector(values, name, length=None):
+    """``values`` as a read-only float vector; InvalidModelError unless it is a flat
+    sequence of finite real numbers (not strings, not booleans)."""
+    if isinstance(values, (str, bytes, dict)) or values is None:
+        raise InvalidModelError(f"{name} must be a list of numbers, got "
+                                f"{type(values).__name__}")
     try:
-        a = np.array(values, dtype=np.float64)
+        raw = np.asarray(values)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidModelError(f"{name} must be a flat list of numbers") from None
+    if raw.ndim != 1:
+        raise InvalidModelError(f"{name} must be a flat list of numbers")
+    mixed = isinstance(values, (list, tuple)) and any(
+        isinstance(v, (bool, np.bool_, str)) for v in values)
+    if mixed or raw.dtype.kind not in "iuf":
+        # mixed or exotic items: each must be a real number (a huge int is too large)
+        for i, v in enumerate(values if mixed else raw.tolist()):
+            _finite_number(v, f"{name}[{i}]")
+    try:
+        a = np.array(raw, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
         raise InvalidModelError(f"{name} must be a list of numbers") from None
-    if a.ndim != 1:
-        raise InvalidModelError(f"{name} must be a flat list of numbers")
     if length is not None and a.size != length:
         raise InvalidModelError(f"{name} must have {length} values (one per operator), "
                                 f"got {a.size}")
@@ -61,10 +77,14 @@ def _finite_vector(values, name, length=None):
 
 
 def _finite_number(value, name):
+    """``value`` as a float; InvalidModelError unless it is a finite real number (a
+    string or a boolean is not a number)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InvalidModelError(f"{name} must be a number, got {value!r:.40}")
     try:
         x = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidModelError(f"{name} must be a number, got {value!r:.40}") from None
+    except OverflowError:
+        raise InvalidModelError(f"{name} is too large for a floating-point number") from None
     if not np.isfinite(x):
         raise InvalidModelError(f"{name} is {x}, not a finite number")
     return x
@@ -103,6 +123,8 @@ class PIModel(ABC):
             raise InvalidModelError("a model needs at least one operator (weights is empty)")
         set_(self, "offset", _finite_number(offset, "offset"))
         try:
+            if isinstance(input_range, (str, bytes, dict)):
+                raise TypeError
             lo, hi = DEFAULT_INPUT_RANGE if input_range is None else input_range
         except (TypeError, ValueError):
             raise InvalidModelError(f"input_range must be [min, max], got "
@@ -111,6 +133,8 @@ class PIModel(ABC):
         if not lo < hi:
             raise InvalidModelError(f"input_range must be [min, max] with min < max, got "
                                     f"{[lo, hi]}")
+        if not np.isfinite(hi - lo):
+            raise InvalidModelError(f"input_range {[lo, hi]} is too wide: its span overflows")
         set_(self, "input_range", (lo, hi))
         set_(self, "initial_state",
              np.zeros(self.weights.size) if initial_state is None else
@@ -125,6 +149,21 @@ class PIModel(ABC):
             raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
         set_(self, "metadata", MappingProxyType(dict(metadata or {})))
         set_(self, "_bank", self._new_bank(self.initial_state))
+        self._check_output_bound()
+
+    def _check_output_bound(self):
+        """InvalidModelError if an output could overflow: the envelopes are monotone, so
+        every operator output lies between its envelopes' values at the ends of the input
+        range (or its initial state), and |y| <= |offset| + sum_k |w_k| max|f_k|."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            ends = [np.abs(np.asarray(e, dtype=float))
+                    for u in self.input_range for e in self._bank.envelopes(u)]
+            reach = np.max(np.vstack(ends + [np.abs(self.initial_state)]), axis=0)
+            bound = abs(self.offset) + float(np.sum(np.abs(self.weights) * reach))
+        if not np.isfinite(bound):
+            raise InvalidModelError("the model's output would overflow on its input range "
+                                    "(weights, thresholds, shape or input range too large "
+                                    "for floating point)")
 
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable: use "
@@ -151,9 +190,12 @@ class PIModel(ABC):
 
     # ---------------------------------------------------------------- batch
     def _checked_input(self, u):
-        u = np.ascontiguousarray(u, dtype=np.float64)
+        try:
+            u = np.ascontiguousarray(u, dtype=np.float64)
+        except (TypeError, ValueError, OverflowError):
+            raise InvalidArgumentError("input must be a sequence of numbers") from None
         if u.ndim != 1:
-            raise ValueError(f"input must be one-dimensional, got shape {u.shape}")
+            raise InvalidArgumentError(f"input must be one-dimensional, got shape {u.shape}")
         lo, hi = self.input_range
         # min/max first: two fast passes; NaN makes the comparison fail too
         if u.size and not (u.min() >= lo and u.max() <= hi):
@@ -312,7 +354,7 @@ class PIModel(ABC):
             raise InvalidModelError(f"{source}: unknown key {unknown[0]!r} for family "
                                     f"{family!r} (allowed: {', '.join(sorted(allowed))})")
         version = d.get("schema_version", SCHEMA_VERSION)
-        if version != SCHEMA_VERSION:
+        if isinstance(version, bool) or version != SCHEMA_VERSION:
             raise InvalidModelError(f"{source}: schema_version {version!r:.20} is not "
                                     f"{SCHEMA_VERSION} (written by another pihyst version)")
         common = {k: d[k] for k in ("weights", "offset", "input_range", "initial_state",
@@ -370,7 +412,10 @@ class Stepper:
 
     def step(self, u):
         """One sample: advance the running state by the input ``u``, return y."""
-        u = float(u)
+        try:
+            u = float(u)
+        except (TypeError, ValueError, OverflowError):
+            raise InvalidArgumentError(f"input must be a number, got {u!r:.40}") from None
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
@@ -451,6 +496,9 @@ class MultislopePI(PIModel):
                 and self.a * self.h < 1):
             raise InvalidModelError(f"multislope shape needs U > 0, 0 < a < b, 0 <= h <= 1 "
                                     f"and a h < 1; got U={U:g}, a={a:g}, b={b:g}, h={h:g}")
+        if not np.isfinite(self.b * self.U):
+            raise InvalidModelError(f"multislope shape U={self.U:g}, b={self.b:g}: b U "
+                                    f"overflows floating point")
         if input_range is None:
             input_range = (0.0, self.U)
         super().__init__(weights, input_range=input_range, **kwargs)

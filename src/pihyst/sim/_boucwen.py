@@ -22,6 +22,7 @@ remanent displacement y = -h > 0 at u = 0.
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._runs import checked_input, monotone_runs
 
 
@@ -54,13 +55,13 @@ class BoucWen:
             float(v) for v in (d, alpha, beta, gamma, c2))
         values = np.array([self.u_max, self.d, self.alpha, self.beta, self.gamma, self.c2])
         if not np.all(np.isfinite(values)):
-            raise ValueError("Bouc-Wen parameters must be finite")
+            raise InvalidArgumentError("Bouc-Wen parameters must be finite")
         if not (self.u_max > 0 and self.d > 0 and self.alpha > 0 and self.c2 >= 0):
-            raise ValueError("Bouc-Wen needs u_max > 0, d > 0, alpha > 0, c2 >= 0")
+            raise InvalidArgumentError("Bouc-Wen needs u_max > 0, d > 0, alpha > 0, c2 >= 0")
         if not self.beta > abs(self.gamma):
-            raise ValueError("Bouc-Wen needs beta > |gamma| (bounded, stable loops)")
+            raise InvalidArgumentError("Bouc-Wen needs beta > |gamma| (bounded, stable loops)")
         if 2 * self.alpha * self.beta / (self.beta + self.gamma) > 1 + 1e-12:
-            raise ValueError("Bouc-Wen needs 2 alpha beta / (beta + gamma) <= 1 "
+            raise InvalidArgumentError("Bouc-Wen needs 2 alpha beta / (beta + gamma) <= 1 "
                              "(otherwise the displacement can run against the voltage)")
         self.reset()
 

@@ -15,6 +15,8 @@ for any spacing dt_n (runs of equal spacing go through scipy.signal.lfilter).
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
+
 
 def _lfilter():
     # lazy: importing scipy.signal takes about 0.4 s, too long for `pihyst --help`
@@ -47,9 +49,9 @@ class ModalFilter:
         self.poles = np.array(poles, dtype=complex)
         self.residues = np.array(residues, dtype=complex)
         if self.poles.shape != self.residues.shape or self.poles.ndim != 1:
-            raise ValueError("one residue per pole")
+            raise InvalidArgumentError("one residue per pole")
         if np.any(self.poles.real >= 0):
-            raise ValueError("poles must have negative real parts (a stable filter)")
+            raise InvalidArgumentError("poles must have negative real parts (a stable filter)")
         self.direct = float(direct)
         self._x = np.zeros(self.poles.size, dtype=complex)
         self._t = None
@@ -124,7 +126,7 @@ def beam_filter(resonance_hz, damping):
     w = 2 * np.pi * float(resonance_hz)
     z = float(damping)
     if not (w > 0 and 0 < z < 1):
-        raise ValueError("beam dynamics need resonance_hz > 0 and 0 < damping < 1")
+        raise InvalidArgumentError("beam dynamics need resonance_hz > 0 and 0 < damping < 1")
     p = complex(-z * w, w * np.sqrt(1 - z * z))
     # G = r / (s - p) + conj(r) / (s - conj(p)), r = w^2 / (p - conj(p)); one complex mode
     # with residue 2 r gives the same real output.

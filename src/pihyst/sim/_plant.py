@@ -33,9 +33,11 @@ True
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._boucwen import BoucWen
 from pihyst.sim._lti import beam_filter, creep_filter
 from pihyst.sim._preisach import Preisach
+from pihyst.sim._runs import checked_seed
 
 U_MAX = 150.0
 SUPPLY_STEP_V = 0.01          # the paper's DC supply resolution
@@ -113,27 +115,28 @@ class Plant:
         u = np.asarray(u, dtype=float)
         t = np.asarray(t, dtype=float)
         if u.ndim != 1 or t.shape != u.shape:
-            raise ValueError(f"u and t must be one-dimensional and of equal length, got "
+            raise InvalidArgumentError(f"u and t must be one-dimensional and of equal length, got "
                              f"shapes {u.shape} and {t.shape}")
         for arr, what in ((u, "voltage"), (t, "time")):
             bad = np.flatnonzero(~np.isfinite(arr))
             if bad.size:
-                raise ValueError(f"sample {bad[0]}: {what} {arr[bad[0]]} is not a finite number")
+                raise InvalidArgumentError(f"sample {bad[0]}: {what} {arr[bad[0]]} is not a "
+                                           f"finite number")
         if u.size == 0:
             return np.empty(0)
         back = np.flatnonzero(np.diff(t) < 0)
         if back.size:
-            raise ValueError(f"sample {back[0] + 1}: time goes backwards "
+            raise InvalidArgumentError(f"sample {back[0] + 1}: time goes backwards "
                              f"({t[back[0]]:g} s -> {t[back[0] + 1]:g} s)")
         if self._t is not None and t[0] < self._t:
-            raise ValueError(f"time {t[0]:g} s is before the previous run's last sample "
+            raise InvalidArgumentError(f"time {t[0]:g} s is before the previous run's last sample "
                              f"({self._t:g} s); call reset() to start again")
         # u_q = q round(u / q): the supply's resolution
         uq = np.round(u / self.quantum_V) * self.quantum_V if self.quantum_V > 0 else u
         tol = 1e-9 * self.u_max
         bad = np.flatnonzero((uq < self.u_min - tol) | (uq > self.u_max + tol))
         if bad.size:
-            raise ValueError(f"sample {bad[0]}: voltage {u[bad[0]]:g} V is outside the "
+            raise InvalidArgumentError(f"sample {bad[0]}: voltage {u[bad[0]]:g} V is outside the "
                              f"beam's drive range [{self.u_min:g}, {self.u_max:g}] V")
         uq = np.clip(uq, self.u_min, self.u_max)
         y = self.hysteresis.run(uq)
@@ -229,8 +232,10 @@ def make_plant(name="paper-beam", *, seed=0, noise=True, creep=True, quantisatio
     >>> round(float(beam.run(np.array([0.0]), np.array([0.0]))[0]), 2) > 0
     True
     """
-    if name not in _VARIANTS:
-        raise ValueError(f"unknown plant {name!r}; choose one of {', '.join(PLANT_NAMES)}")
+    seed = checked_seed(seed)
+    if not isinstance(name, str) or name not in _VARIANTS:
+        raise InvalidArgumentError(f"unknown plant {name!r:.40}; choose one of "
+                                   f"{', '.join(PLANT_NAMES)}")
     factory, creep_per_decade, summary = _VARIANTS[name]
     return Plant(name, factory(), creep_per_decade=creep_per_decade if creep else 0.0,
                  noise_um=NOISE_UM if noise else 0.0,

@@ -25,6 +25,7 @@ Rest state: u = 0 after a full 0 -> u_max -> 0 cycle, which switches every relay
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._runs import checked_input, monotone_runs
 
 
@@ -62,18 +63,18 @@ class Preisach:
     def __init__(self, u_max, terms, reversible=(), warp=0.0):
         self.u_max = float(u_max)
         if not (np.isfinite(self.u_max) and self.u_max > 0):
-            raise ValueError(f"u_max must be a positive number, got {u_max}")
+            raise InvalidArgumentError(f"u_max must be a positive number, got {u_max}")
         terms = np.array(terms, dtype=float).reshape(-1, 3)
         if not np.all(np.isfinite(terms)) or np.any(terms[:, 0] < 0):
-            raise ValueError("density terms (A, p, q) must be finite with A >= 0")
+            raise InvalidArgumentError("density terms (A, p, q) must be finite with A >= 0")
         self.terms = terms
         self.reversible = np.array(reversible, dtype=float)
         x = np.linspace(0.0, 1.0, 1001)
         if self.reversible.size and np.any(np.diff(self._reversible(x)) < 0):
-            raise ValueError("the reversible part must be non-decreasing on [0, u_max]")
+            raise InvalidArgumentError("the reversible part must be non-decreasing on [0, u_max]")
         self.warp = float(warp)
         if not 0.0 <= self.warp < 1.0:
-            raise ValueError(f"warp must be in [0, 1), got {warp}")
+            raise InvalidArgumentError(f"warp must be in [0, 1), got {warp}")
         self.reset()
 
     # ------------------------------------------------------------- formulas

@@ -1,17 +1,29 @@
 """Shared by the hysteresis parts: input checks and splitting a signal into monotone runs."""
 
+import numbers
+
 import numpy as np
+
+from pihyst.exceptions import InvalidArgumentError
 
 
 def checked_input(u, u_max):
     """``u`` as a float array, one-dimensional and within [0, u_max] (volts)."""
     u = np.asarray(u, dtype=float)
     if u.ndim != 1:
-        raise ValueError("input must be one-dimensional")
+        raise InvalidArgumentError("input must be one-dimensional")
     if u.size and not np.all((u >= 0) & (u <= u_max)):
         bad = np.flatnonzero(~((u >= 0) & (u <= u_max)))[0]
-        raise ValueError(f"sample {bad}: input {u[bad]:g} V is outside [0, {u_max:g}] V")
+        raise InvalidArgumentError(f"sample {bad}: input {u[bad]:g} V is outside [0, {u_max:g}] V")
     return u
+
+
+def checked_seed(seed):
+    """A noise seed: a whole number >= 0 (numpy's generators take no negative seed)."""
+    if (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral)
+            or seed < 0):
+        raise InvalidArgumentError(f"seed must be a whole number >= 0, got {seed!r:.40}")
+    return int(seed)
 
 
 def monotone_runs(x, x_prev, dir_prev):

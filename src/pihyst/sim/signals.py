@@ -4,42 +4,85 @@ Every function returns ``(t, u)``: sample times (s, from 0, step ``dt``) and val
 values are generic: volts when the signal drives a beam, micrometres when it is a desired
 displacement to track. ``u_min`` and ``u_max`` are the signal's lowest and highest level;
 every signal starts at ``u_min`` (a beam at rest at 0 V).
+
+Invalid arguments raise :class:`~pihyst.exceptions.InvalidArgumentError`; a signal of
+more than :data:`MAX_SAMPLES` samples raises :class:`~pihyst.exceptions.ResourceLimitError`
+before anything is allocated.
 """
+
+import numbers
 
 import numpy as np
 
 from pihyst import paper
+from pihyst.exceptions import InvalidArgumentError, ResourceLimitError
+from pihyst.sim._runs import checked_seed
 
 PAPER_PERIOD_S = paper.DRIVE_PERIOD_S
 PAPER_U_MAX = paper.DRIVE_U_MAX_V
 DEFAULT_DT = 0.1
+#: Longest signal made (samples): about 100 MB of CSV and 1 GB of memory once simulated.
+MAX_SAMPLES = 2_000_000
+
+
+def _real(value, name):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InvalidArgumentError(f"{name} must be a number, got {value!r:.40}")
+    return float(value)
 
 
 def _check_common(u_min, u_max, dt):
     for v, name in ((u_min, "u_min"), (u_max, "u_max"), (dt, "dt")):
-        if not np.isfinite(v):
-            raise ValueError(f"{name} must be a finite number, got {v}")
+        if not np.isfinite(_real(v, name)):
+            raise InvalidArgumentError(f"{name} must be a finite number, got {v}")
     if not u_max > u_min:
-        raise ValueError(f"u_max must be above u_min, got u_min={u_min:g}, u_max={u_max:g}")
+        raise InvalidArgumentError(f"u_max must be above u_min, got u_min={u_min:g}, "
+                                   f"u_max={u_max:g}")
+    if not np.isfinite(u_max - u_min):
+        raise InvalidArgumentError(f"u_min={u_min:g} and u_max={u_max:g}: the span overflows")
     if not dt > 0:
-        raise ValueError(f"dt must be positive, got {dt:g}")
+        raise InvalidArgumentError(f"dt must be positive, got {dt:g}")
 
 
 def _positive(value, name):
-    if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a positive number, got {value}")
+    if not (np.isfinite(_real(value, name)) and value > 0):
+        raise InvalidArgumentError(f"{name} must be a positive number, got {value}")
 
 
 def _count(value, name):
-    if int(value) != value or value < 1:
-        raise ValueError(f"{name} must be a whole number >= 1, got {value}")
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real)
+            or not np.isfinite(value) or int(value) != value or value < 1):
+        raise InvalidArgumentError(f"{name} must be a whole number >= 1, got {value!r:.40}")
     return int(value)
+
+
+def _check_samples(n, what):
+    """ResourceLimitError unless ``n`` (a float: it may be huge or inf) samples are few
+    enough to make."""
+    if not n <= MAX_SAMPLES:
+        size = f"{n:.3g}" if np.isfinite(n) else "infinitely many"
+        raise ResourceLimitError(f"{what} makes {size} samples, more than the {MAX_SAMPLES:,} "
+                                 f"pihyst makes at once: use a larger dt or a shorter signal")
+
+
+def _check_period(period_s, dt):
+    if dt > period_s / 2:
+        raise InvalidArgumentError(f"dt = {dt:g} s is more than half the period "
+                                   f"{period_s:g} s: the peaks would not be sampled")
+
+
+def _times(n, dt):
+    """t_i = i dt for i < n; InvalidArgumentError if the last time overflows."""
+    if not np.isfinite(float(max(n - 1, 0)) * dt):
+        raise InvalidArgumentError(f"dt = {dt:g} s: the time of sample {n - 1} overflows")
+    return np.arange(n) * dt
 
 
 def _grid(duration, dt):
     # t_i = i dt for i = 0..n, n = round(duration / dt): the end point is included
+    _check_samples(duration / dt + 1, f"a duration of {duration:g} s at dt = {dt:g} s")
     n = int(round(duration / dt))
-    return np.arange(n + 1) * dt
+    return _times(n + 1, dt)
 
 
 def _piecewise_linear(times, levels, dt):
@@ -63,6 +106,7 @@ def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
     """
     _check_common(u_min, u_max, dt)
     _positive(period_s, "period_s")
+    _check_period(period_s, dt)
     n_cycles = _count(n_cycles, "n_cycles")
     t = _grid(n_cycles * period_s, dt)
     # u = u_min + (u_max - u_min) (1 - |2 frac(t / P) - 1|)
@@ -83,6 +127,7 @@ def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=D
     """
     _check_common(u_min, u_max, dt)
     _positive(period_s, "period_s")
+    _check_period(period_s, dt)
     n_cycles = _count(n_cycles, "n_cycles")
     t = _grid(n_cycles * period_s, dt)
     u = 0.5 * (u_min + u_max) - 0.5 * (u_max - u_min) * np.cos(2 * np.pi * t / period_s)
@@ -104,17 +149,22 @@ def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_
     """
     _check_common(u_min, u_max, dt)
     _positive(period_s, "period_s")
+    _check_period(period_s, dt)
     n_triangles = _count(n_triangles, "n_triangles")
-    if not 0 < ratio < 1:
-        raise ValueError(f"ratio must be between 0 and 1, got {ratio:g}")
+    if not 0 < _real(ratio, "ratio") < 1:
+        raise InvalidArgumentError(f"ratio must be between 0 and 1, got {ratio:g}")
+    # every triangle takes at least two samples: bound the count before the arrays
+    _check_samples(2.0 * n_triangles + 1, f"{n_triangles} triangles")
     span = u_max - u_min
-    times, levels = [0.0], [u_min]
-    for k in range(n_triangles):
-        peak = span * ratio ** k
-        half = max(dt, dt * round(peak / span * period_s / 2 / dt))
-        times += [times[-1] + half, times[-1] + 2 * half]
-        levels += [u_min + peak, u_min]
-    return _piecewise_linear(np.array(times), np.array(levels), dt)
+    peaks = span * ratio ** np.arange(n_triangles)
+    halves = np.maximum(dt, dt * np.round(peaks / span * period_s / 2 / dt))
+    _check_samples(2 * halves.sum() / dt + 1, f"{n_triangles} triangles of period "
+                   f"{period_s:g} s at dt = {dt:g} s")
+    ends = np.cumsum(np.repeat(halves, 2))
+    times = np.concatenate(([0.0], ends))
+    levels = np.concatenate(([u_min], np.ravel(np.column_stack((u_min + peaks,
+                                                                np.full(n_triangles, u_min))))))
+    return _piecewise_linear(times, levels, dt)
 
 
 def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT_DT, seed=0):
@@ -136,10 +186,15 @@ def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT
     if rate is None:
         rate = 2 * (u_max - u_min) / PAPER_PERIOD_S
     _positive(rate, "rate")
-    rng = np.random.default_rng(seed)
+    _check_samples(n_ramps + 1.0, f"{n_ramps} ramps")
+    rng = np.random.default_rng(checked_seed(seed))
     levels = np.concatenate(([u_min], rng.uniform(u_min, u_max, n_ramps)))
-    steps = np.maximum(1, np.ceil(np.abs(np.diff(levels)) / rate / dt - 1e-9))
-    times = np.concatenate(([0.0], np.cumsum(steps) * dt))
+    with np.errstate(over="ignore"):   # a huge count is refused just below
+        steps = np.maximum(1, np.ceil(np.abs(np.diff(levels)) / rate / dt - 1e-9))
+        times = np.concatenate(([0.0], np.cumsum(steps) * dt))
+    _check_samples(steps.sum() + 1, f"{n_ramps} ramps at {rate:g} per second, dt = {dt:g} s")
+    if not np.isfinite(times[-1]):
+        raise InvalidArgumentError(f"dt = {dt:g} s: the signal's duration overflows")
     return _piecewise_linear(times, levels, dt)
 
 
@@ -157,11 +212,16 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     _check_common(u_min, u_max, dt)
     n_steps = _count(n_steps, "n_steps")
     _positive(step_s, "step_s")
+    per_step = max(1.0, round(step_s / dt)) if np.isfinite(step_s / dt) else np.inf
+    levels_count = 2 * n_steps + 1 if down else n_steps + 1
+    _check_samples(float(levels_count) * per_step, f"{n_steps} steps of {step_s:g} s at "
+                   f"dt = {dt:g} s")
+    per_step = int(per_step)
     k = np.arange(n_steps + 1)
     if down:
         k = np.concatenate((k, k[-2::-1]))
-    per_step = max(1, int(round(step_s / dt)))
     # clip: u_min + span * k / n can round one ulp past u_max
     levels = np.minimum(u_min + (u_max - u_min) * k / n_steps, u_max)
     u = np.repeat(levels, per_step)
-    return np.arange(u.size) * dt, u
+    return _times(u.size, dt), u
+
