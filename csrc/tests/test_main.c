@@ -21,6 +21,7 @@ int main(void)
 {
     run_model_tests();
     run_inverse_tests();
+    run_creep_tests();
     printf("%d passed, %d failed\n", test_passed, test_failed);
     return test_failed == 0 ? 0 : 1;
 }

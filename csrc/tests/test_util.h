@@ -11,4 +11,5 @@ void test_check(int ok, const char *what, const char *file, int line);
 
 void run_model_tests(void);
 void run_inverse_tests(void);
+void run_creep_tests(void);
 #endif
