@@ -445,6 +445,28 @@ cdef class Creep:
                 pihyst_creep_run(&self.c, &h_v[0], dt_p, &y_v[0], n)
         return y
 
+    def lag_states(self, h, dt=None):
+        """The N x n matrix of lag states z_i[t] after each sample of h (identification
+        needs them; the output is not formed)."""
+        cdef const double[::1] h_v = _vector(h, name="h")
+        cdef Py_ssize_t n = h_v.shape[0], t, i
+        cdef const double[::1] dt_v
+        cdef bint fixed = dt is None
+        cdef double[::1] st = self._state
+        z = np.empty((n, self.n))
+        cdef double[:, ::1] z_v = z
+        if not fixed:
+            dt_v = _vector(dt, n, "dt")
+        with nogil:
+            for t in range(n):
+                if fixed:
+                    pihyst_creep_step(&self.c, h_v[t])
+                else:
+                    pihyst_creep_step_dt(&self.c, dt_v[t], h_v[t])
+                for i in range(<Py_ssize_t>self.n):
+                    z_v[t, i] = st[i]
+        return z
+
     def compensate(self, Compensator comp, y_desired, dt=None):
         """(voltage, output, flags) for a block of desired outputs of the model with
         creep: each sample's hysteresis target goes to ``comp``."""

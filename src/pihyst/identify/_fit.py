@@ -58,7 +58,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         n_candidates=DEFAULT_N_CANDIDATES, shape=None, identify_shape=True, offset=True,
         nonnegative=True, bounds=None, through=None, initial_state="auto",
         holdout="alternate", refit=True, input_range=None, input_segments=4, kp_grid=16,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep=False):
     """Fit PI-type hysteresis models to a measured record and keep the most accurate.
 
     Parameters
@@ -117,6 +117,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     max_exhaustive : int
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
+    t : array_like, optional
+        Sample times (s), needed with ``creep``.
+    creep : bool or array_like
+        Also fit creep (docs/theory/creep.md): first-order lags of the hysteresis output
+        with half-decade time constants (or these time constants, s), their gains fitted
+        with the weights in one QP. The model then carries ``model.creep``.
 
     Returns
     -------
@@ -152,6 +158,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     >>> [round(float(w), 6) for w in res.model.weights]
     [0.3, 0.2, 0.1]
     """
+    if creep is not False and creep is not None:
+        from pihyst.identify._creep import fit_with_creep
+        kw = {k: v for k, v in locals().items()
+              if k not in ("u", "y", "t", "creep", "fit_with_creep")}
+        return fit_with_creep(fit, u, y, t, time_constants=None if creep is True else creep,
+                              **kw)
     rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
                   holdout=holdout, offset=offset, through=through)
     if family is None:
