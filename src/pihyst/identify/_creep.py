@@ -80,11 +80,16 @@ def _lag_deficits(model, h, dt, tau, start_state):
     return out
 
 
-def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative):
-    """Weights, offset and creep gains of ``model``'s operators by repeated joint QPs."""
+def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=True):
+    """Weights, offset and creep gains of ``model``'s operators by repeated joint QPs.
+
+    ``free_weights=False`` (a regularized kernel basis): the weights keep their shape,
+    w = q w_0 with one scale q >= 0, so the joint QP cannot undo the regularization.
+    """
     hyst = model.replace(creep=None)
     h = hyst.predict(u)
-    k, n = model.n_operators, tau.size
+    basis = np.eye(model.n_operators) if free_weights else model.weights[:, None].copy()
+    k, n = basis.shape[1], tau.size
     fit_offset = offset is True
     fixed_offset = 0.0 if offset is False else (None if fit_offset else float(offset))
     tie = log_t_basis(n)
@@ -94,8 +99,8 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative):
                   np.full(int(fit_offset), -np.inf), np.zeros(p)]
     # g_i = p_0 + p_1 s_i <= p_0 + p_1: bounding both by G / (2n) keeps sum_i g_i <= G
     upper = np.r_[np.full(k + fit_offset, np.inf), np.full(p, MAX_TOTAL_GAIN / (2 * n))]
-    names = [f"w[{i}]" for i in range(k)] + ["offset"] * fit_offset + \
-        ["creep per lag", "creep rise toward slow lags"]
+    names = ([f"w[{i}]" for i in range(k)] if free_weights else ["weight scale"]) + \
+        ["offset"] * fit_offset + ["creep per lag", "creep rise toward slow lags"]
     span = max(float(np.ptp(y[start:])), 1e-300)
     gains, passes = np.zeros(n), 0
     while passes < MAX_PASSES:
@@ -107,6 +112,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative):
             b = min(a + CHUNK, u.size)
             phi = hyst.operators(u[a:b], initial_state=state)
             state = phi[-1]
+            phi = phi @ basis
             lo = max(start - a, 0)
             if lo >= b - a:
                 continue
@@ -116,7 +122,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative):
             gram += x.T @ x
             rhs += x.T @ d
         sol = solve_qp(gram, rhs, lower=lower, upper=upper, warn=False, names=names).x
-        w = sol[:k]
+        w = basis @ sol[:k]
         c = sol[k] if fit_offset else fixed_offset
         gains = np.clip(tie @ sol[k + fit_offset:], 0.0, None)
         hyst = hyst.replace(weights=w, offset=c)
@@ -126,6 +132,12 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative):
         if change <= 1e-6 * span:
             break
     return hyst, gains, passes
+
+
+def _free(model):
+    """Whether the joint QP may move every weight: not for the regularized kernel basis
+    (family kp), whose weights it would overfit without the regularization."""
+    return model.metadata.get("fit", {}).get("family") != "kp"
 
 
 def _rms(model, u, y, t, start):
@@ -154,13 +166,15 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, **kwargs):
     first = fit(u, y, **kwargs)
     start = first.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     hyst, gains, _ = _joint_qp(first.model, u, y, dt, tau, start=start, offset=offset,
-                               nonnegative=nonnegative)
+                               nonnegative=nonnegative,
+                               free_weights=_free(first.model))
     # the record without its creep: the settled displacement the structure is chosen on
     psi = _lag_deficits(hyst, hyst.predict(u), dt, tau, hyst.initial_state)
     second = fit(u, y + psi @ gains, **kwargs)
     start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     hyst, gains, passes = _joint_qp(second.model, u, y, dt, tau, start=start, offset=offset,
-                                    nonnegative=nonnegative)
+                                    nonnegative=nonnegative,
+                                    free_weights=_free(second.model))
     model = hyst.replace(creep=Creep(tau, gains, dt_fixed))
     meta = dict(second.model.metadata)
     summary = dict(meta.get("fit", {}))
@@ -169,6 +183,7 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, **kwargs):
         "creep_total": float(gains.sum()), "qp_passes": passes,
         "rms_without_creep": _rms(first.model, u, y, None, start),
         "rms_with_creep": _rms(model, u, y, t, start),
+        "weights": "free" if _free(second.model) else "one scale (regularized kp shape)",
         "note": ("family and thresholds chosen on the record with the estimated creep "
                  "removed; weights, offset and creep gains fitted together on every "
                  "sample after the settling sweep"),
