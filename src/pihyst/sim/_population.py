@@ -39,14 +39,19 @@ def _preisach(rng):
         return h, desc
 
 
-def _remanence(h):
-    """Remanent displacement at 0 V after the full cycle, in % of the 0 -> u_max rise."""
-    h.reset()
-    top = float(h.run(np.array([U_MAX]))[0])
+def _rise_and_rest(h):
+    """(rise from rest at 0 V to u_max, rest displacement at 0 V after the full cycle)."""
     h.reset()
     rest = float(h.run(np.array([0.0]))[0])
+    top = float(h.run(np.array([U_MAX]))[0])
     h.reset()
-    return 100.0 * rest / max(top - rest, 1e-12)
+    return top - rest, rest
+
+
+def _remanence(h):
+    """Remanent displacement at 0 V after the full cycle, in % of the 0 -> u_max rise."""
+    rise, rest = _rise_and_rest(h)
+    return 100.0 * rest / max(rise, 1e-12)
 
 
 def _bouc_wen(rng, strong):
@@ -64,7 +69,8 @@ def _bouc_wen(rng, strong):
         rem = _remanence(h)
         if (10.0 <= rem <= 20.0) if strong else (1.0 <= rem < 10.0):
             desc = {"kind": "bouc-wen", "n": n, "d": d, "alpha": alpha, "beta": beta,
-                    "gamma": rho * beta, "c2": c2, "remanence_pct": rem}
+                    "gamma": rho * beta, "c2": c2, "remanence_pct": rem,
+                    "strong_remanence": bool(strong)}
             return h, desc
     raise RuntimeError("no Bouc-Wen parameters with the requested remanence found")
 
@@ -90,9 +96,7 @@ def random_plant(seed):
     else:
         hyst, desc = _bouc_wen(rng, strong=kind == "bouc-wen-remanent")
     creep = 0.0 if rng.random() < 0.2 else float(rng.uniform(0.003, 0.03))
-    hyst.reset()
-    rise = float(hyst.run(np.array([U_MAX]))[0]) - float(hyst.run(np.array([0.0]))[0])
-    hyst.reset()
+    rise, _ = _rise_and_rest(hyst)
     noise = float(10 ** rng.uniform(-4.3, -3.0) * rise)   # 0.005 .. 0.1 % of the range
     rate = float(10 ** rng.uniform(*np.log10(RATE_RANGE_HZ)))
     desc.setdefault("remanence_pct", _remanence(hyst))
