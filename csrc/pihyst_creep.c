@@ -72,6 +72,7 @@ double pihyst_creep_target_dt(const pihyst_creep *c, double dt, double y_desired
 {
     size_t i;
     double carry = 0.0, beta = 0.0;
+    if (dt == c->dt) return pihyst_creep_target(c, y_desired); /* alpha_i known */
     for (i = 0; i < c->n; ++i) {
         const double keep = c->gain[i] * exp(-dt / c->tau[i]); /* g_i (1 - alpha_i) */
         carry += keep * c->state[i];
@@ -84,6 +85,7 @@ double pihyst_creep_step_dt(pihyst_creep *c, double dt, double h)
 {
     size_t i;
     double lag = 0.0;
+    if (dt == c->dt) return pihyst_creep_step(c, h); /* alpha_i known: no exp */
     for (i = 0; i < c->n; ++i) {
         c->state[i] += -expm1(-dt / c->tau[i]) * (h - c->state[i]);
         lag += c->gain[i] * (h - c->state[i]);

@@ -34,19 +34,22 @@ CHUNK = 1 << 15
 MAX_PASSES = 6
 
 
-def log_t_basis(n):
+def log_t_basis(n, n_seen=None):
     """Gains g = B p of n lags at half-decade time constants (fastest first), p >= 0:
 
-        g_i = p_0 + p_1 s_i,  s_i = i / (n - 1) in [0, 1],
+        g_i = p_0 + p_1 s_i,  s_i = min(i / (n_seen - 1), 1) in [0, 1],
 
     a creep rate per decade p_0 (equal gains over log-spaced lags: creep linear in
     log t, as measured on piezo actuators) plus a non-negative rise toward the slow
     lags. Free gains would alias: on a record driven at a constant rate a lag much
     faster than the ramps adds tau dH/dt, the sign of the direction, which is a
     hysteresis width, not creep (measured on the simulated beams: free gains put 5 %
-    on the 0.3-1 s lags and tripled the tracking error on staircases).
+    on the 0.3-1 s lags and tripled the tracking error on staircases). ``n_seen`` (default
+    n) lags have time constants within the record; the slower ones keep the last one's
+    gain: beyond the record creep goes on at the last measured rate per decade.
     """
-    s = np.linspace(0.0, 1.0, n) if n > 1 else np.zeros(1)
+    n_seen = n if n_seen is None else max(1, min(int(n_seen), n))
+    s = np.minimum(np.arange(n) / (n_seen - 1), 1.0) if n_seen > 1 else np.zeros(n)
     return np.column_stack([np.ones(n), s])
 
 
@@ -80,7 +83,8 @@ def _lag_deficits(model, h, dt, tau, start_state):
     return out
 
 
-def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=True):
+def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=True,
+              duration=np.inf):
     """Weights, offset and creep gains of ``model``'s operators by repeated joint QPs.
 
     ``free_weights=False`` (a regularized kernel basis): the weights keep their shape,
@@ -92,7 +96,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
     k, n = basis.shape[1], tau.size
     fit_offset = offset is True
     fixed_offset = 0.0 if offset is False else (None if fit_offset else float(offset))
-    tie = log_t_basis(n)
+    tie = log_t_basis(n, int(np.count_nonzero(tau <= duration)))
     p = tie.shape[1]
     cols = k + fit_offset + p
     lower = np.r_[np.zeros(k) if nonnegative else np.full(k, -np.inf),
@@ -165,15 +169,16 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, **kwargs):
 
     first = fit(u, y, **kwargs)
     start = first.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
+    # first creep estimate: every weight free (a kp basis may overfit here; only the
+    # creep estimate is kept, the structure and weights are fitted again below)
     hyst, gains, _ = _joint_qp(first.model, u, y, dt, tau, start=start, offset=offset,
-                               nonnegative=nonnegative,
-                               free_weights=_free(first.model))
+                               nonnegative=nonnegative, duration=duration)
     # the record without its creep: the settled displacement the structure is chosen on
     psi = _lag_deficits(hyst, hyst.predict(u), dt, tau, hyst.initial_state)
     second = fit(u, y + psi @ gains, **kwargs)
     start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     hyst, gains, passes = _joint_qp(second.model, u, y, dt, tau, start=start, offset=offset,
-                                    nonnegative=nonnegative,
+                                    nonnegative=nonnegative, duration=duration,
                                     free_weights=_free(second.model))
     model = hyst.replace(creep=Creep(tau, gains, dt_fixed))
     meta = dict(second.model.metadata)
