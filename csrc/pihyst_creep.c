@@ -105,7 +105,7 @@ void pihyst_creep_run(pihyst_creep *c, const double *h, const double *dt, double
 }
 
 double pihyst_creep_compensator_step(pihyst_creep *cr, pihyst_compensator *c, double dt,
-                                     double y_desired, double *y, unsigned *flags)
+                                     double y_desired, double *y, pihyst_flags *flags)
 {
     const int fixed = dt < 0.0;
     /* a NaN desired value gives a NaN target: the compensator holds and flags it */
@@ -120,16 +120,16 @@ double pihyst_creep_compensator_step(pihyst_creep *cr, pihyst_compensator *c, do
 
 size_t pihyst_creep_compensator_run(pihyst_creep *cr, pihyst_compensator *c,
                                     const double *y_desired, const double *dt, double *u,
-                                    double *y, unsigned char *flags, size_t n)
+                                    double *y, pihyst_flags *flags, size_t n)
 {
     size_t t, count = 0;
     for (t = 0; t < n; ++t) {
-        unsigned fl = 0;
+        pihyst_flags fl = 0;
         double out;
         u[t] = pihyst_creep_compensator_step(cr, c, dt ? dt[t] : -1.0, y_desired[t], &out,
                                              &fl);
         if (y) y[t] = out;
-        if (flags) flags[t] = (unsigned char)fl;
+        if (flags) flags[t] = fl;
         count += fl != 0;
     }
     return count;

@@ -78,13 +78,13 @@ void pihyst_creep_run(pihyst_creep *c, const double *h, const double *dt, double
  *  hysteresis output actually reached. *y (may be NULL) receives the model output.
  *  dt < 0 selects the fixed interval. Returns the voltage. */
 double pihyst_creep_compensator_step(pihyst_creep *cr, pihyst_compensator *c, double dt,
-                                     double y_desired, double *y, unsigned *flags);
+                                     double y_desired, double *y, pihyst_flags *flags);
 
 /** A block of n samples of pihyst_creep_compensator_step; dt NULL: the fixed interval.
  *  y and flags may be NULL. Returns the number of samples with a flag set. */
 size_t pihyst_creep_compensator_run(pihyst_creep *cr, pihyst_compensator *c,
                                     const double *y_desired, const double *dt, double *u,
-                                    double *y, unsigned char *flags, size_t n);
+                                    double *y, pihyst_flags *flags, size_t n);
 
 /** Human-readable text of a status code (static storage). */
 const char *pihyst_creep_status_text(pihyst_creep_status status);

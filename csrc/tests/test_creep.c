@@ -2,8 +2,10 @@
  * met exactly by (C2)-(C3) for fixed and per-sample intervals, step == run, and the
  * compensator with creep: exact round trip of a model with creep on a voltage walk
  * with holds, limits under any input (NaN, infinities, 1e300), validation. */
-#include "pihyst_creep.h"
 #include "test_util.h"
+
+#ifndef PIHYST_TEST_F32 /* the creep lags are double precision only */
+#include "pihyst_creep.h"
 
 #include <float.h>
 
@@ -87,7 +89,7 @@ static void test_compensator(void)
     static const double thr[4] = {0.0, 10.0, 25.0, 45.0};
     static const double w[4] = {0.2, 0.1, 0.05, 0.04};
     static double u[N_CREEP], yd[N_CREEP], uc[N_CREEP], yc[N_CREEP];
-    static unsigned char flags[N_CREEP];
+    static pihyst_flags flags[N_CREEP];
     static double scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(4, 0)];
     static const double wild[6] = {NAN, INFINITY, -INFINITY, 1e300, -1e300, 20.0};
     double coef[PIHYST_COEF_LEN(4)], fstate[4], alpha[3], zstate[3], err = 0.0;
@@ -97,8 +99,15 @@ static void test_compensator(void)
     double v = 0.0, target = 100.0;
     int t, bad = 0;
     size_t n_flagged;
-    CHECK(pihyst_model_init(&m, PIHYST_CLASSICAL, 4, thr, w, 1.0, 0.0, 150.0, NULL, NULL,
-                            coef, fstate, NULL) == PIHYST_OK);
+    pihyst_params params = {0};
+    params.family = PIHYST_CLASSICAL;
+    params.n_ops = 4;
+    params.thresholds = thr;
+    params.weights = w;
+    params.offset = 1.0;
+    params.u_min = 0.0;
+    params.u_max = 150.0;
+    CHECK(pihyst_model_init(&m, &params, coef, fstate) == PIHYST_OK);
     CHECK(pihyst_creep_init(&cr, 3, tau3, gain3, 0.05, alpha, zstate, NULL) ==
           PIHYST_CREEP_OK);
     pihyst_creep_settle(&cr, pihyst_model_step(&m, 0.0));
@@ -128,7 +137,7 @@ static void test_compensator(void)
     CHECK(err < 1e-7);
     /* any input: the voltage stays inside the limits */
     for (t = 0; t < N_CREEP; ++t) {
-        unsigned fl;
+        pihyst_flags fl;
         double y;
         const double uu = pihyst_creep_compensator_step(&cr, &c, 0.05 * (t % 3),
                                                         wild[t % 6], &y, &fl);
@@ -170,3 +179,4 @@ void run_creep_tests(void)
     test_compensator();
     test_validation();
 }
+#endif /* PIHYST_TEST_F32 */
