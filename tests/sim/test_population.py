@@ -72,9 +72,11 @@ def test_growing_sine_grows_to_the_full_range():
 
 @pytest.mark.slow
 def test_population_handful_within_a_loose_bound():
-    """Four actuators of the benchmark's population: with creep in the model, mean
-    validation and tracking errors stay within a loose 1 % of range each (the benchmark
-    prints the distribution over 30)."""
+    """Four Preisach actuators of the benchmark's population recorded with minor loops
+    (decaying triangles): with creep in the model, validation and tracking errors stay
+    within 0.5 % of range each, and creep in the model helps where the actuator creeps.
+    (The benchmark prints the distribution over 30, Bouc-Wen and triangle records
+    included.)"""
     import warnings
 
     from pihyst.exceptions import PihystWarning
@@ -82,7 +84,10 @@ def test_population_handful_within_a_loose_bound():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PihystWarning)
-        results = [evaluate_plant(seed, samples_per_cycle=3000) for seed in (0, 2, 5, 11)]
+        results = [evaluate_plant(seed, samples_per_cycle=3000) for seed in (0, 3, 5, 11)]
     for r in results:
+        assert r.description["kind"] == "preisach" and r.record == "decaying-triangles"
         for task in ("validation", "tracking"):
-            assert r.mean(True, task) < 1.0, (r.seed, task, r.errors)
+            assert r.mean(True, task) < 0.5, (r.seed, task, r.errors)
+            if r.description["creep_per_decade"] > 0.005:
+                assert r.mean(True, task) < r.mean(False, task), (r.seed, task, r.errors)
