@@ -83,7 +83,11 @@ def evaluate_plant(seed, samples_per_cycle=10_000):
     result = PlantResult(seed=int(seed), description=desc, record=kind)
     voltages = judged_signals(seed, desc["rate_hz"], period, 0.0, plant.u_max)
     for creep in (False, True):
-        fitted = fit(u, y, t=t, creep=True) if creep else fit(u, y)
+        # the drive range is known: a record whose peak sample falls just short of u_max
+        # must not shrink the model's input range below the signals it is judged on
+        span = (0.0, plant.u_max)
+        fitted = (fit(u, y, t=t, creep=True, input_range=span) if creep
+                  else fit(u, y, input_range=span))
         model = fitted.model
         result.families[creep] = model.family
         if creep:
