@@ -8,11 +8,11 @@ BIN = $(VENV)/bin
 
 .PHONY: demo test test-slow install ctest lint pytest bench clean
 $(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*.pyx)
-	@echo "== first run: creating $(VENV) and installing pihyst with its dependencies (1-3 min)"
+	@echo "make: installing pihyst and its dependencies into $(VENV) (first time only, a few minutes: pip's progress follows)"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --progress-bar off -e ".[test]" | grep -E "^(Collecting|Building|Successfully|ERROR)" || true
-	@test -x $(BIN)/pihyst || { echo "pip install failed: run $(BIN)/pip install -e '.[test]'"; exit 1; }
+	$(BIN)/pip install --progress-bar on -e ".[test]"
+	@echo "make: pihyst is installed in $(VENV)"
 	touch $@
 
 install: $(BIN)/pihyst

@@ -2,7 +2,8 @@
 
 - :class:`InvalidModelError`: parameters that do not describe a valid model;
 - :class:`InputRangeError`: an input sample outside a model's input range;
-- :class:`CSVError`: a data file that cannot be used (file, line and column named);
+- :class:`RecordError`: a record (data file) that cannot be used, and its subclass
+  :class:`CSVError` for delimited text (file, line and column named);
 - :class:`FitError`, :class:`InfeasibleConstraintsError`: data that cannot be fitted as asked;
 - :class:`PihystWarning`, :class:`IllConditionedWarning`: warnings.
 
@@ -51,10 +52,20 @@ class InputRangeError(ValueError):
                          f"[{input_range[0]:g}, {input_range[1]:g}]")
 
 
-class CSVError(ValueError):
+class RecordError(ValueError):
+    """A record could not be used: ``FILE: where: what is wrong`` (``where`` names the
+    variable and sample of an array file)."""
+
+    def __init__(self, path, message):
+        self.path, self.message = path, message
+        super().__init__(f"{path}: {message}")
+
+
+class CSVError(RecordError):
     """A CSV file could not be used; the message names file, line and column."""
 
     def __init__(self, path, line, column, message):
-        self.path, self.line, self.column = path, line, column
+        self.line, self.column = line, column
         where = f"{path}:{line}:{column}" if column else f"{path}:{line}"
-        super().__init__(f"{where}: {message}")
+        ValueError.__init__(self, f"{where}: {message}")
+        self.path, self.message = path, message

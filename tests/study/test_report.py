@@ -23,10 +23,10 @@ def test_every_promised_file_is_written(demo):
     expected = {"report.html", "metrics.json", "loop.csv", "identification.csv",
                 "validation.csv", "tracking_triangle.csv", "tracking_reversals.csv",
                 "model_classical.json", "model_multislope.json", "model_best.json",
-                "fig04_classical_operators.png", "fig05_multislope_operators.png",
-                "fig07_loop.png", "fig08_fit_errors.png", "fig11_voltages.png",
-                "fig12_tracking.png", "fig13_tracking_reversals.png",
-                "fig14_validation.png", "fig15_variants.png", "fig16_beams.png"}
+                "fig1_loop.png", "fig2_fit_errors.png", "fig3_classical_operators.png",
+                "fig4_multislope_operators.png", "fig5_validation.png", "fig6_voltages.png",
+                "fig7_tracking.png", "fig8_tracking_reversals.png", "fig9_variants.png",
+                "fig10_beams.png"}
     assert names == expected
     assert not [n for n in names if n.startswith(".pihyst-")]
     assert lines == ["drawing the figures ...", "writing data, models and metrics ..."]
@@ -67,13 +67,17 @@ def test_html_shows_every_metric_beside_the_papers(demo):
     for number in numbers:
         assert f"{number:g}" in text, number
     assert f"{paper.TRACKING_RMS_UM:.4f}" in text
-    assert " / ".join(f"{v:+.3g} um" for v in paper.FIT_EXTREMES_CLASSICAL_UM.values()) in text
+    assert " / ".join(f"{v:+.3g} µm" for v in paper.FIT_EXTREMES_CLASSICAL_UM.values()) in text
     m = study.metrics
     assert f'{m["fit"]["multislope"]["mean_abs"]:.4g}' in text
     assert f'{m["tracking"]["triangle"]["errors"]["multislope"]["mean_abs"]:.4g}' in text
     assert "never moves: left out" in text
     for fig in ("Fig. 4", "Fig. 5", "Fig. 7", "Fig. 8", "Fig. 11", "Fig. 12"):
-        assert fig in text
+        assert f"(the paper's {fig})" in text
+    # numbered in the order of the page
+    numbers = [int(n) for n in re.findall(r"<figcaption><b>Figure (\d+)\.", text)]
+    assert numbers == list(range(1, 11))
+    assert " um" not in text.split("<details>")[0]
 
 
 def test_metrics_json_is_the_studys(demo):
@@ -110,12 +114,20 @@ def test_report_command_on_a_simulated_record(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "pihyst report: [1/3]" in printed and "report.html" in printed
     names = set(os.listdir(out))
-    assert {"report.html", "metrics.json", "record.csv", "fig07_loop.png",
-            "fig08_fit_errors.png", "model_best.json"} <= names
+    assert {"report.html", "metrics.json", "record.csv", "fig1_loop.png",
+            "fig2_fit_errors.png", "model_best.json"} <= names
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["mode"] == "report" and metrics["threshold_scale"] == 1.0
-    text = (out / "report.html").read_text()
-    assert "paper's beam" in text and "Fig. 11" not in text
+    text = (out / "report.html").read_text(encoding="utf-8")
+    # the user's study: no paper columns unless asked for
+    assert "paper's beam" not in text and "Fig. 7" not in text and "Fig. 11" not in text
+    assert "Figure 1. Measured loop and fitted models" in text
+    assert main(["report", str(data), "--out", str(out), "--paper", "--figure-format", "svg",
+                 "--figure-format", "pdf"]) == 0
+    text = (out / "report.html").read_text(encoding="utf-8")
+    assert "paper's beam" in text and "(the paper's Fig. 7)" in text
+    assert (out / "fig1_loop.svg").read_text().lstrip().startswith("<?xml")
+    assert (out / "fig2_fit_errors.pdf").read_bytes().startswith(b"%PDF")
 
 
 def test_report_default_folder_is_next_to_the_data(tmp_path):
@@ -154,10 +166,12 @@ def test_demo_command_is_the_papers_study(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "[1/8]" in printed and "[8/8]" in printed and "report.html" in printed
+    assert "[1/9]" in printed and "[9/9]" in printed and "report.html" in printed
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["timing_s"]["total_computation"] < 120
     h = metrics["headline"]
     assert h["fit_improvement_pct"] > 60
     assert h["tracking_mean_abs_pct_of_range"] < 1.0
-    assert len([n for n in os.listdir(out) if n.endswith(".png")]) == 10
+    assert len([n for n in os.listdir(out) if n.endswith(".png")]) == 11   # Fig. 17: the rig
+    assert metrics["rig"]["tracking"]["feedback"]["mean_abs"] < \
+        metrics["rig"]["tracking"]["open_loop"]["mean_abs"]

@@ -18,12 +18,15 @@ from pihyst.cli import (
     fit_many,
     predict,
     report,
+    rig,
     simulate,
     track,
+    validate,
 )
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict, fit, fit_many, simulate, compensate, track, demo, report, export]
+COMMANDS = [predict, fit, validate, fit_many, simulate, compensate, track, demo, report, export,
+            rig]
 
 
 def build_parser():
@@ -32,8 +35,9 @@ def build_parser():
         description="Prandtl-Ishlinskii hysteresis models for piezoelectric actuators: "
                     "predict displacement from voltage, fit models to measured loops, "
                     "compensate hysteresis by feedforward.",
-        epilog="CSV files: one header row, columns found by name (time_s, voltage_V, "
-               "displacement_um), extra columns ignored, '#' lines are comments. "
+        epilog="Records: delimited text (any separator, header or not) or .npy/.npz/.mat/"
+               ".h5/.parquet; columns time_s, voltage_V, displacement_um by default, or "
+               "named with --voltage/--displacement/--time COL (docs/records.md). "
                "Run 'pihyst COMMAND --help' for the options of a command.")
     parser.add_argument("--version", action="version", version=f"pihyst {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)

@@ -1,30 +1,41 @@
-"""pihyst compensate MODEL.json DESIRED.csv -o OUT.csv [--u-min V] [--u-max V] [--slew-rate V/S]"""
+"""pihyst compensate MODEL.json DESIRED -o OUT.csv [--u-min V] [--u-max V] [--slew-rate V/S]
+[--strict] [--initial-state MODE] [record options]
+
+Streams the record block by block; --slew-rate first reads the times once to find the
+smallest step."""
 
 import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
+from pihyst.cli.model_inputs import add_initial_state_option, initial_state
+from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
 from pihyst.inverse import Compensator
-from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
+from pihyst.io import ColumnWriter, load_model
 
 
 def register(sub):
     p = sub.add_parser(
         "compensate", help="voltages that make a model follow a desired displacement",
-        description="Invert MODEL.json exactly, sample by sample, on the displacement_um "
-                    "column of DESIRED.csv (the desired trajectory) and write time_s, "
-                    "voltage_V and the displacement_um the model predicts for those "
-                    "voltages, with a 'saturated' column (1 where the desired value was out "
-                    "of reach within the limits; with --slew-rate also 'slew_limited'). "
-                    "The voltage starts at 0 V (or the nearer limit) with the model's "
-                    "initial state.",
+        description="Invert MODEL.json exactly, sample by sample, on the desired "
+                    "displacement of DESIRED (displacement_um, or --displacement COL) and "
+                    "write time_s, voltage_V and the displacement_um the model predicts for "
+                    "those voltages, with a 'saturated' column (1 where the desired value was "
+                    "out of reach within the limits; with --slew-rate also 'slew_limited'). "
+                    "Prints the displacement range the model can reach. The voltage starts "
+                    "at 0 V (or the nearer limit) with the model's initial state.",
         epilog="example: pihyst compensate examples/paper_table1_multislope.json "
                "desired.csv -o voltages.csv --slew-rate 10")
     p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
-    p.add_argument("desired", metavar="DESIRED.csv", help="CSV with a displacement_um column "
-                   "(time_s copied if present)")
+    p.add_argument("desired", metavar="DESIRED", help="record with the desired displacement "
+                   "(time copied if present)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     add_limit_options(p, default_range="the model's input range")
+    p.add_argument("--strict", action="store_true",
+                   help="a desired displacement out of reach is an error (exit status 2, no "
+                        "output file) instead of a saturated sample")
+    add_initial_state_option(p, modes=("model", "bottom", "top", "zero"))
+    add_record_options(p, "DESIRED")
     p.set_defaults(run=run)
 
 
@@ -39,62 +50,157 @@ def add_limit_options(p, default_range):
                         "rate x the smallest time step, per sample)")
 
 
-def max_step_per_sample(slew_rate, t, path, lines):
-    """Volts per sample from volts per second: rate x the smallest time step, so that no
-    interval of the file sees a faster change."""
-    if t is None:
-        raise UsageError(f"--slew-rate needs a time_s column in {path}")
+def check_slew_rate(slew_rate, path):
     if not (np.isfinite(slew_rate) and slew_rate > 0):
         raise UsageError(f"--slew-rate must be a positive number of volts per second, got "
                          f"{slew_rate:g}")
-    if t.size < 2:
-        return np.inf
-    dt = np.diff(t)
-    bad = np.flatnonzero(~(dt > 0))
-    if bad.size:
-        i = bad[0] + 1
-        raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
-                       f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g}): "
-                       "--slew-rate needs increasing times")
-    return slew_rate * float(dt.min())
+
+
+def smallest_step(records, path):
+    """The smallest time step over blocks of a record; an error where time does not
+    increase."""
+    smallest, previous = np.inf, None
+    for rec in records:
+        t = rec.time
+        if t is None:
+            raise UsageError(f"--slew-rate needs a time_s column in {path} (or --time COL, "
+                             "or --rate HZ)")
+        full = t if previous is None else np.r_[previous, t]
+        dt = np.diff(full)
+        bad = np.flatnonzero(~(dt > 0))
+        if bad.size:
+            i = int(bad[0]) + (0 if previous is None else -1) + 1
+            raise rec.error(i, "time", f"time_s = {t[i]:g} does not increase (previous "
+                            f"{full[bad[0]]:g}): --slew-rate needs increasing times")
+        if dt.size:
+            smallest = min(smallest, float(dt.min()))
+        previous = t[-1]
+    return smallest
+
+
+def reachable(model, state, lo, hi):
+    """(lowest, highest) displacement the model reaches with voltages in [lo, hi]: at lo
+    after coming down from hi, and at hi after going up from lo."""
+    down = model.simulate(np.array([hi, lo]), initial_state=state).output[-1]
+    up = model.simulate(np.array([lo, hi]), initial_state=state).output[-1]
+    return float(down), float(up)
+
+
+def reach_hint(model, y_lo, y_hi, d_lo=None, d_hi=None):
+    """Why a desired displacement may be out of reach, and (given the trajectory's span)
+    whether a shift would bring it in."""
+    unit = model.units.get("output", "um")
+    hint = (f"the displacement's zero is the sensor zero of the record the model was fitted "
+            f"on (model offset {model.offset:.4g} {unit})")
+    if d_lo is None:
+        return hint
+    if d_hi - d_lo <= y_hi - y_lo:
+        shift = y_lo - d_lo if d_lo < y_lo else y_hi - d_hi
+        hint += f"; shifted by {shift:+.4g} {unit} the trajectory would be in reach"
+    else:
+        hint += (f"; the trajectory spans {d_hi - d_lo:.4g} {unit}, more than the "
+                 f"{y_hi - y_lo:.4g} {unit} the model reaches")
+    return hint
 
 
 def run(args):
     model = load_model(args.model)
-    columns, lines = read_columns(args.desired, ["displacement_um"], optional=["time_s"])
-    y_desired = columns["displacement_um"]
-    t = columns.get("time_s")
-    max_step = None
-    if args.slew_rate is not None:
-        max_step = max_step_per_sample(args.slew_rate, t, args.desired, lines)
-    note = []
-    if t is None:
-        t = np.arange(y_desired.size, dtype=float)
-        note = [f"{args.desired} has no time_s column: time_s is the sample index"]
-    try:
-        compensator = Compensator(model, u_min=args.u_min, u_max=args.u_max,
-                                  slew_rate=max_step)
-    except ValueError as err:
-        raise UsageError(f"{args.model}: {err}") from None
-    result = compensator.run(y_desired)
-    lo, hi = result.limits
-    out = {"time_s": t, "voltage_V": result.voltage, "displacement_um": result.displacement,
-           "saturated": result.saturated.astype(float)}
+    with open_from_args(args, args.desired, need=("displacement",)) as reader, \
+            progress_bar(f"compensate {args.desired}") as bar:
+        max_step = None
+        if args.slew_rate is not None:
+            check_slew_rate(args.slew_rate, args.desired)
+            max_step = args.slew_rate * smallest_step(reader.chunks(), args.desired)
+            max_step = max_step if np.isfinite(max_step) else None
+        state = initial_state(model, args.initial_state)
+        try:
+            compensator = Compensator(model, u_min=args.u_min, u_max=args.u_max,
+                                      slew_rate=max_step, initial_state=state)
+        except ValueError as err:
+            raise UsageError(f"{args.model}: {err}") from None
+        lo, hi = compensator.limits
+        y_lo, y_hi = reachable(model, state, lo, hi)
+        unit = model.units.get("output", "um")
+        stats = _Stats()
+        writer = None
+        try:
+            for rec in reader.chunks(progress=bar):
+                y_d = rec.displacement
+                result = compensator.run(y_d)
+                if args.strict and result.n_saturated:
+                    i = int(np.flatnonzero(result.saturated)[0])
+                    raise rec.error(i, "displacement",
+                                    f"displacement_um = {y_d[i]:g} is out of reach: the "
+                                    f"model reaches [{y_lo:.4g}, {y_hi:.4g}] {unit} with the "
+                                    f"voltage in [{lo:g}, {hi:g}] V; "
+                                    + reach_hint(model, y_lo, y_hi))
+                if writer is None:
+                    writer = _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit)
+                t = rec.time if rec.time is not None else \
+                    np.arange(rec.start, rec.start + len(rec), dtype=float)
+                out = {"time_s": t, "voltage_V": result.voltage,
+                       "displacement_um": result.displacement,
+                       "saturated": result.saturated.astype(float)}
+                if max_step is not None:
+                    out["slew_limited"] = result.slew_limited.astype(float)
+                writer.write(out)
+                stats.add(result, y_d)
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        writer.close()
+        print(reader.describe())
+    n = stats.n
+    print(f"wrote {n} samples to {args.output} (voltage {stats.u_lo:.4g} .. {stats.u_hi:.4g} V)")
+    print(f"reachable displacement: [{y_lo:.4g}, {y_hi:.4g}] {unit} with the voltage in "
+          f"[{lo:g}, {hi:g}] V")
+    print(f"saturated: {stats.saturated} of {n} samples ({stats.low} at {lo:g} V, "
+          f"{stats.high} at {hi:g} V)"
+          + ("" if max_step is None else f"; slew-limited: {stats.slew}"))
+    if stats.saturated:
+        print(f"the desired displacement spans [{stats.d_lo:.4g}, {stats.d_hi:.4g}] {unit}: "
+              f"{stats.outside} samples lie outside the reachable range; "
+              + reach_hint(model, y_lo, y_hi, stats.d_lo, stats.d_hi)
+              + " (--strict makes this an error)")
+    if stats.err_max is not None:
+        print(f"reached samples: largest |predicted - desired| {stats.err_max:.3g} {unit}")
+
+
+def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit):
+    names = ["time_s", "voltage_V", "displacement_um", "saturated"]
     if max_step is not None:
-        out["slew_limited"] = result.slew_limited.astype(float)
-    write_columns(args.output, out,
-                  comments=[f"pihyst {__version__} compensate {args.model} {args.desired}",
-                            f"voltage limits [{lo:g}, {hi:g}] V"
-                            + ("" if max_step is None else
-                               f", slew limit {max_step:g} V per sample"), *note])
-    reached = result.reached
-    err = np.abs(result.displacement - y_desired)[reached]
-    unit = model.units.get("output", "um")
-    print(f"wrote {y_desired.size} samples to {args.output} "
-          f"(voltage {result.voltage.min():.4g} .. {result.voltage.max():.4g} V)")
-    print(f"saturated: {result.n_saturated} of {y_desired.size} samples "
-          f"({int(result.saturated_low.sum())} at {lo:g} V, "
-          f"{int(result.saturated_high.sum())} at {hi:g} V)"
-          + ("" if max_step is None else f"; slew-limited: {result.n_slew_limited}"))
-    if err.size:
-        print(f"reached samples: largest |predicted - desired| {err.max():.3g} {unit}")
+        names.append("slew_limited")
+    note = ([] if rec.time is not None else
+            [f"{args.desired} has no time: time_s is the sample index"])
+    return ColumnWriter(args.output, names, comments=[
+        f"pihyst {__version__} compensate {args.model} {args.desired}",
+        f"voltage limits [{lo:g}, {hi:g}] V"
+        + ("" if max_step is None else f", slew limit {max_step:g} V per sample"),
+        f"reachable displacement [{y_lo:.6g}, {y_hi:.6g}] {unit}", *note])
+
+
+class _Stats:
+    """What compensate prints, accumulated block by block."""
+
+    def __init__(self):
+        self.n = self.saturated = self.low = self.high = self.slew = self.outside = 0
+        self.u_lo = self.d_lo = np.inf
+        self.u_hi = self.d_hi = -np.inf
+        self.err_max = None
+
+    def add(self, result, y_d):
+        self.n += len(y_d)
+        self.saturated += result.n_saturated
+        self.low += int(result.saturated_low.sum())
+        self.high += int(result.saturated_high.sum())
+        self.slew += result.n_slew_limited
+        self.outside += result.n_saturated
+        self.u_lo = min(self.u_lo, float(result.voltage.min()))
+        self.u_hi = max(self.u_hi, float(result.voltage.max()))
+        self.d_lo = min(self.d_lo, float(y_d.min()))
+        self.d_hi = max(self.d_hi, float(y_d.max()))
+        reached = result.reached
+        if reached.any():
+            e = float(np.abs(result.displacement - y_d)[reached].max())
+            self.err_max = e if self.err_max is None else max(self.err_max, e)

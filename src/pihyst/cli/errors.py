@@ -1,6 +1,6 @@
 """Errors a command reports as one line with exit status 2."""
 
-from pihyst.io import CSVError
+from pihyst.io import RecordError
 from pihyst.model import InputRangeError, InvalidModelError
 
 
@@ -8,4 +8,4 @@ class UsageError(ValueError):
     """Bad input detected by a command; the message is shown as is."""
 
 
-USER_ERRORS = (CSVError, InvalidModelError, InputRangeError, UsageError)
+USER_ERRORS = (RecordError, InvalidModelError, InputRangeError, UsageError)

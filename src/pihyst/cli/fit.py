@@ -1,28 +1,35 @@
-"""pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N] [--json]
+"""pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N]
+[--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency US] [--json]
 -o MODEL.json"""
 
 import sys
 import warnings
 
+import numpy as np
+
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
-from pihyst.exceptions import FitError, PihystWarning
+from pihyst.cli.record_options import add_record_options, options_text, read_from_args
+from pihyst.exceptions import FitError, InvalidModelError, PihystWarning
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
-from pihyst.io import CSVError, column_number, read_columns, save_model
+from pihyst.io import save_model
 
-_COLUMNS = {"input": "voltage_V", "output": "displacement_um"}
+_QUANTITIES = {"input": "voltage", "output": "displacement"}
 
 
 def register(sub):
     p = sub.add_parser(
         "fit", help="fit hysteresis models to a measured loop",
         description="Fit PI-type models to the voltage_V and displacement_um columns of "
-                    "DATA.csv, judge them on held-back cycles, save the most accurate as "
-                    "MODEL.json and print a report (errors, family comparison, why each "
-                    "threshold was chosen).",
+                    "DATA.csv, judge them on held-back cycles (and on another record with "
+                    "--validate), save the smallest, fastest of those within 2 %% of the "
+                    "best as MODEL.json and print a report (errors per kind of held-back "
+                    "data, compensator latency, why each threshold was chosen, what the "
+                    "data could not determine).",
         epilog="example: pihyst fit loop.csv -o model.json   "
                "(then: pihyst predict model.json loop.csv -o predicted.csv)")
-    p.add_argument("data", metavar="DATA.csv", help="CSV with voltage_V and displacement_um")
+    p.add_argument("data", metavar="DATA", help="record with the voltage and the displacement "
+                   "(voltage_V and displacement_um, or name them: --voltage, --displacement)")
     p.add_argument("-o", "--output", metavar="MODEL.json", required=True,
                    help="model file to write (loads with pihyst.load_model)")
     p.add_argument("--model", metavar="FAMILY", choices=FAMILY_NAMES,
@@ -51,6 +58,23 @@ def register(sub):
                         "is arbitrary)")
     p.add_argument("--json", action="store_true",
                    help="print the report as JSON instead of a table")
+    p.add_argument("--validate", metavar="OTHER.csv",
+                   help="a second record (read with the same record options), judged but "
+                        "not fitted: every family's error on it is reported and counts in "
+                        "the choice")
+    p.add_argument("--delay", metavar="N", default="0",
+                   help="samples by which the displacement lags the voltage (the model "
+                        "maps u[k] to y[k+N]), or 'auto' to choose it on held-back cycles "
+                        "(default 0; the report says which delay the record favours)")
+    p.add_argument("--max-operators", metavar="N", type=int,
+                   help="choose only among models with at most N operators")
+    p.add_argument("--max-latency", metavar="US", type=float,
+                   help="choose only among models whose compensator takes at most US "
+                        "microseconds per sample in the worst case (measured)")
+    p.add_argument("--input-range", metavar="LO,HI",
+                   help="the model's input range: the drive's real limits, e.g. 0,150 "
+                        "(default: the span of the record); must contain that span")
+    add_record_options(p, "DATA")
     p.set_defaults(run=run)
 
 
@@ -82,14 +106,55 @@ def _holdout(text):
     return f
 
 
-def _error(err, path, lines):
+def _delay(text):
+    if text == "auto":
+        return text
+    try:
+        d = int(text)
+    except ValueError:
+        d = -1
+    if d < 0:
+        raise UsageError(f"--delay: expected a number of samples >= 0 or 'auto', got {text!r}")
+    return d
+
+
+def _input_range(text):
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        raise UsageError(f"--input-range: expected LO,HI such as 0,150, got {text!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+        raise UsageError(f"--input-range: expected finite LO < HI, got {text!r}")
+    return lo, hi
+
+
+def _with_input_range(model, wanted, record):
+    """The model with the user's input range, which must contain the record's span."""
+    u = record.voltage
+    lo, hi = wanted
+    outside = np.flatnonzero((u < lo) | (u > hi))
+    if outside.size:
+        i = int(outside[0])
+        raise record.error(i, "voltage", f"voltage_V = {u[i]:g} is outside --input-range "
+                           f"{lo:g},{hi:g}: the range must contain the record's span "
+                           f"[{u.min():g}, {u.max():g}]")
+    try:
+        return model.replace(input_range=(lo, hi))
+    except InvalidModelError as err:
+        raise UsageError(f"--input-range {lo:g},{hi:g}: the {model.family} model cannot be "
+                         f"extended to it ({err})") from None
+
+
+def _error(err, record):
     """A FitError as a one-line file:line:column error."""
-    col = column_number(path, _COLUMNS[err.column]) if err.column in _COLUMNS else 0
-    if err.index is not None and 0 <= err.index < len(lines):
-        return CSVError(path, int(lines[err.index]), col, str(err))
-    if col:
-        return CSVError(path, int(lines[0]), col, str(err))
-    return UsageError(f"{path}: {err}")
+    quantity = _QUANTITIES.get(err.column)
+    if err.index is not None and 0 <= err.index < len(record):
+        return record.error(err.index, quantity or "voltage", str(err))
+    if quantity:
+        return record.error(0, quantity, str(err))
+    return UsageError(f"{record.source}: {err}")
 
 
 def run(args):
@@ -99,8 +164,21 @@ def run(args):
         raise UsageError(f"--n-operators must be at least 1, got {args.n_operators}")
     if args.candidates < 2:
         raise UsageError(f"--candidates must be at least 2, got {args.candidates}")
-    columns, lines = read_columns(args.data, list(_COLUMNS.values()))
-    u, y = columns["voltage_V"], columns["displacement_um"]
+    if args.max_operators is not None and args.max_operators < 1:
+        raise UsageError(f"--max-operators must be at least 1, got {args.max_operators}")
+    if args.max_latency is not None and not args.max_latency > 0:
+        raise UsageError(f"--max-latency must be a positive number of microseconds, got "
+                         f"{args.max_latency:g}")
+    delay = _delay(args.delay)
+    input_range = _input_range(args.input_range)
+    record = read_from_args(args, args.data, need=("voltage", "displacement"),
+                            say=not args.json, optional=())
+    u, y = record.voltage, record.displacement
+    other = validate = None
+    if args.validate is not None:
+        other = read_from_args(args, args.validate, need=("voltage", "displacement"),
+                               say=not args.json, optional=())
+        validate = (other.voltage, other.displacement)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PihystWarning)
         try:
@@ -108,12 +186,22 @@ def run(args):
                          n_operators=args.n_operators, n_candidates=args.candidates,
                          holdout=holdout, initial_state=args.initial_state,
                          through="top" if args.through_top else None,
-                         offset=not args.no_offset)
+                         offset=not args.no_offset, validate=validate, delay=delay,
+                         max_operators=args.max_operators,
+                         max_latency=(None if args.max_latency is None
+                                      else 1e-6 * args.max_latency))
         except FitError as err:
-            raise _error(err, args.data, lines) from None
-    model = result.model.replace(metadata={
-        **result.model.metadata,
-        "source": {"data": args.data, "command": f"pihyst {__version__} fit"}})
+            if other is not None and str(err).startswith("validate:"):
+                raise _error(err, other) from None
+            raise _error(err, record) from None
+    model = result.model
+    if input_range is not None:
+        model = _with_input_range(model, input_range, record)
+    model = model.replace(metadata={
+        **model.metadata,
+        "source": {"data": args.data, "command": f"pihyst {__version__} fit "
+                                                 + options_text(args),
+                   "record": _plain(record.metadata)}})
     save_model(model, args.output)
     for w in caught:
         print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)
@@ -121,3 +209,10 @@ def run(args):
     if not args.json:
         print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
               f"operators (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+
+
+def _plain(meta):
+    """The record's metadata as JSON-ready values."""
+    return {k: (v if isinstance(v, (str, int, float, bool, type(None))) else
+                {str(a): str(b) for a, b in v.items()} if isinstance(v, dict) else str(v))
+            for k, v in meta.items()}

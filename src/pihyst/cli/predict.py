@@ -1,48 +1,74 @@
-"""pihyst predict MODEL.json INPUT.csv -o OUT.csv"""
+"""pihyst predict MODEL.json INPUT -o OUT.csv [record options] [--initial-state MODE]
+
+Streams the record block by block (an hour at 10 kHz in bounded memory), except with
+--initial-state settle, which needs the record's range first."""
 
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
+from pihyst.cli.model_inputs import InputRange, add_initial_state_option, initial_state, settle_end
+from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
+from pihyst.io import ColumnWriter, load_model
 
 
 def register(sub):
     p = sub.add_parser("predict", help="displacement a model predicts for a voltage signal",
-                       description="Run MODEL.json on the voltage_V column of INPUT.csv and "
-                                   "write time_s, voltage_V and the predicted displacement_um.",
+                       description="Run MODEL.json on the voltage of INPUT (voltage_V, or "
+                                   "--voltage COL) and write time_s, voltage_V and the "
+                                   "predicted displacement_um.",
                        epilog="example: pihyst predict examples/paper_table1_multislope.json "
                               "examples/triangle_0_150V.csv -o out.csv")
     p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
-    p.add_argument("input", metavar="INPUT.csv", help="CSV with a voltage_V column "
-                   "(time_s copied if present)")
+    p.add_argument("input", metavar="INPUT", help="record with the voltage (time copied if "
+                   "present)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
+    add_initial_state_option(p)
+    add_record_options(p, "INPUT")
     p.set_defaults(run=run)
-
-
-def _in_range_or_error(model, u, lines, path, column):
-    lo, hi = model.input_range
-    bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
-    if bad.size:
-        i = bad[0]
-        raise CSVError(path, int(lines[i]), column,
-                       f"voltage_V = {u[i]:g} is outside the model's input range "
-                       f"[{lo:g}, {hi:g}]")
 
 
 def run(args):
     model = load_model(args.model)
-    columns, lines = read_columns(args.input, ["voltage_V"], optional=["time_s"])
-    u = columns["voltage_V"]
-    _in_range_or_error(model, u, lines, args.input, column_number(args.input, "voltage_V"))
-    note = []
-    t = columns.get("time_s")
-    if t is None:
-        t = np.arange(u.size, dtype=float)
-        note = [f"{args.input} has no time_s column: time_s is the sample index"]
-    y = model.predict(u)
-    write_columns(args.output, {"time_s": t, "voltage_V": u, "displacement_um": y},
-                  comments=[f"pihyst {__version__} predict {args.model} {args.input}", *note])
-    print(f"wrote {u.size} samples to {args.output} "
-          f"(displacement {y.min():.4g} .. {y.max():.4g} {model.units.get('output', 'um')})")
-
-
+    limits = InputRange(model)
+    state = initial_state(model, args.initial_state)
+    names = ["time_s", "voltage_V", "displacement_um"]
+    if args.initial_state == "settle":
+        names.append("settling")
+    lo = hi = None
+    writer = None
+    with open_from_args(args, args.input, need=("voltage",)) as reader, \
+            progress_bar(f"predict {args.input}") as bar:
+        chunks = reader.chunks(progress=bar)
+        if args.initial_state == "settle":
+            chunks = [reader.read(progress=bar)]
+            end = settle_end(chunks[0].voltage)
+        try:
+            for rec in chunks:
+                u = limits.check(rec.voltage, rec)
+                response = limits.run_model.simulate(u, initial_state=state)
+                state = response.final_state
+                t = rec.time if rec.time is not None else \
+                    np.arange(rec.start, rec.start + len(rec), dtype=float)
+                if writer is None:
+                    note = ([] if rec.time is not None else
+                            [f"{args.input} has no time: time_s is the sample index"])
+                    writer = ColumnWriter(args.output, names, comments=[
+                        f"pihyst {__version__} predict {args.model} {args.input}", *note])
+                out = {"time_s": t, "voltage_V": rec.voltage,
+                       "displacement_um": response.output}
+                if args.initial_state == "settle":
+                    out["settling"] = (np.arange(len(rec)) < end).astype(float)
+                writer.write(out)
+                y = response.output
+                lo = y.min() if lo is None else min(lo, y.min())
+                hi = y.max() if hi is None else max(hi, y.max())
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        writer.close()
+        print(reader.describe())
+    if limits.note():
+        print(f"note: {limits.note()}")
+    print(f"wrote {writer.rows} samples to {args.output} "
+          f"(displacement {lo:.4g} .. {hi:.4g} {model.units.get('output', 'um')})")

@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from pihyst.cli.errors import UsageError
-from pihyst.io import CSVError, read_columns
+from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 
 
 def register(sub):
@@ -19,11 +19,22 @@ def register(sub):
                     "figures as PNG, metrics.json, the data with the predictions as CSV and "
                     "the models as JSON.",
         epilog="example: pihyst simulate -o loop.csv && pihyst report loop.csv --out rep")
-    p.add_argument("data", metavar="DATA.csv",
-                   help="CSV with voltage_V and displacement_um (time_s optional)")
+    p.add_argument("data", metavar="DATA",
+                   help="record with the voltage and the displacement (time optional)")
     p.add_argument("--out", metavar="DIR", default=None,
-                   help="output folder (default: DATA-report next to DATA.csv)")
+                   help="output folder (default: DATA-report next to DATA)")
+    add_figure_format_option(p)
+    p.add_argument("--paper", action="store_true",
+                   help="show the paper's numbers (its own beam's) beside this record's")
+    add_record_options(p, "DATA")
     p.set_defaults(run=run)
+
+
+def add_figure_format_option(p):
+    """--figure-format svg|pdf (shared with pihyst demo)."""
+    p.add_argument("--figure-format", metavar="FORMAT", action="append", default=[],
+                   choices=("svg", "pdf"),
+                   help="also write the figures as svg or pdf (repeatable); PNG always")
 
 
 def run(args):
@@ -35,11 +46,11 @@ def run(args):
     from pihyst.exceptions import FitError
     from pihyst.study import loop_study
 
-    cols, _ = read_columns(args.data, ["voltage_V", "displacement_um"], optional=["time_s"])
-    u, y = cols["voltage_V"], cols["displacement_um"]
+    rec = read_from_args(args, args.data, need=("voltage", "displacement"))
+    u, y = rec.voltage, rec.displacement
     if np.ptp(u) <= 0:
-        raise CSVError(args.data, 0, 0, "voltage_V is constant: there is no loop to fit")
-    t = cols.get("time_s", np.arange(u.size, dtype=float))
+        raise rec.error(0, "voltage", "voltage_V is constant: there is no loop to fit")
+    t = rec.time if rec.time is not None else np.arange(u.size, dtype=float)
     out = args.out or os.path.splitext(args.data)[0] + "-report"
     if os.path.exists(out) and not os.path.isdir(out):
         raise UsageError(f"--out {out}: exists and is not a folder")
@@ -49,12 +60,15 @@ def run(args):
         print(f"pihyst report: {line}", flush=True)
 
     try:
-        study = loop_study(t, u, y, source=f"Measured record {args.data}: {u.size} samples",
-                           progress=say)
+        source = rec.reader.describe().replace("read ", "Measured record ", 1)
+        study = loop_study(t, u, y, source=source, progress=say)
     except FitError as err:
         raise UsageError(f"{args.data}: {err}") from None
     try:
-        files = write_report(study, out, command=f"pihyst report {args.data} --out {out}",
+        given = options_text(args)
+        files = write_report(study, out, command=f"pihyst report {args.data} --out {out}"
+                                                 + (f" {given}" if given else ""),
+                             figure_formats=args.figure_format, paper=args.paper,
                              progress=say)
     except OSError as err:
         raise UsageError(f"--out {out}: cannot write the report: {err.strerror}") from None

@@ -7,11 +7,12 @@ inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.compensate import add_limit_options, max_step_per_sample
+from pihyst.cli.compensate import add_limit_options, check_slew_rate, smallest_step
 from pihyst.cli.errors import UsageError
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
+from pihyst.cli.record_options import add_record_options, read_from_args
 from pihyst.inverse import Compensator
-from pihyst.io import CSVError, column_number, load_model, read_columns, write_columns
+from pihyst.io import load_model, write_columns
 
 
 def register(sub):
@@ -27,11 +28,12 @@ def register(sub):
                "pihyst fit rec.csv -o model.json && pihyst track model.json desired.csv "
                "--plant paper-beam -o tracked.csv")
     p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
-    p.add_argument("desired", metavar="DESIRED.csv",
-                   help="CSV with time_s and displacement_um (the desired trajectory)")
+    p.add_argument("desired", metavar="DESIRED",
+                   help="record with the time and the desired displacement")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     add_limit_options(p, default_range="the model's and the beam's range")
     add_plant_options(p, seed_help="seed of the beam's sensor noise (default 0)")
+    add_record_options(p, "DESIRED")
     p.set_defaults(run=run)
 
 
@@ -47,18 +49,20 @@ def _limits(args, model, plant):
 
 def run(args):
     model = load_model(args.model)
-    columns, lines = read_columns(args.desired, ["time_s", "displacement_um"])
-    t, y_d = columns["time_s"], columns["displacement_um"]
+    rec = read_from_args(args, args.desired, need=("time", "displacement"))
+    t, y_d = rec.time, rec.displacement
     back = np.flatnonzero(np.diff(t) < 0)
     if back.size:
-        i = back[0] + 1
-        raise CSVError(args.desired, int(lines[i]), column_number(args.desired, "time_s"),
-                       f"time_s = {t[i]:g} goes back in time (previous {t[i - 1]:g})")
+        i = int(back[0]) + 1
+        raise rec.error(i, "time", f"time_s = {t[i]:g} goes back in time (previous "
+                        f"{t[i - 1]:g})")
     plant = plant_from_options(args)
     u_min, u_max = _limits(args, model, plant)
     max_step = None
     if args.slew_rate is not None:
-        max_step = max_step_per_sample(args.slew_rate, t, args.desired, lines)
+        check_slew_rate(args.slew_rate, args.desired)
+        max_step = args.slew_rate * smallest_step([rec], args.desired)
+        max_step = max_step if np.isfinite(max_step) else None
     try:
         compensator = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
     except ValueError as err:

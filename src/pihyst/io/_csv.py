@@ -1,95 +1,142 @@
-"""CSV files of docs/interfaces.md: one header row, columns found by name, extra
-columns ignored, lines starting with ``#`` are comments.
+"""CSV files of docs/interfaces.md, written fast and atomically, and the former reader
+interface :func:`read_columns` (now a thin layer over :mod:`pihyst.io._records`).
 
 Errors are :class:`CSVError` with a one-line message ``FILE:LINE:COLUMN: what is wrong``
 (line and column 1-based; column counts fields).
 """
 
-import csv
 import io as _io
 import os
+import tempfile
 
 import numpy as np
 
-from pihyst._atomic import write_atomically
 from pihyst.exceptions import CSVError
+from pihyst.io._text_check import data_line_of
+from pihyst.io._text_source import TextSource
+
+WRITE_ROWS = 1 << 16
 
 
 def read_columns(path, names, optional=()):
-    """Read named columns of a CSV file as float arrays.
+    """Read named columns of a delimited text file as float arrays.
 
     Returns ``(columns, lines)``: a dict name -> array holding every column of ``names``
     (an error if absent) and those of ``optional`` that the header has, and the 1-based
     file line of each data row. Every value must be a finite number; the file must
     have at least one data row.
     """
-    path = os.fspath(path)
-    try:
-        # utf-8-sig: a byte-order mark (Excel writes one) is not part of the first name
-        with open(path, encoding="utf-8-sig", newline="") as f:
-            text = f.read()
-    except OSError as err:
-        raise CSVError(path, 0, 0, f"cannot read file: {err.strerror}") from None
-    except UnicodeDecodeError:
-        raise CSVError(path, 1, 0, "not a text file (UTF-8 expected)") from None
-    rows = [(n, row) for n, row in enumerate(csv.reader(_io.StringIO(text)), start=1)
-            if row and not row[0].lstrip().startswith("#") and any(c.strip() for c in row)]
-    if not rows:
-        raise CSVError(path, 1, 0, "empty file: expected a header row naming the columns "
-                       f"{', '.join(names)}")
-    header_line, header = rows[0]
-    header = [h.strip() for h in header]
+    src = TextSource(path)
+    if not src.columns:
+        raise CSVError(src.path, src.dialect.first_line, 0, "no header line naming the "
+                       f"columns {', '.join(names)}")
     index = {}
-    for name in names:
-        if name not in header:
-            hint = ("; columns must be separated by commas"
-                    if len(header) == 1 and any(c in header[0] for c in ";\t") else "")
-            raise CSVError(path, header_line, 0, f"missing column {name!r} in header "
-                           f"({', '.join(header)}){hint}")
-        index[name] = header.index(name)
-    for name in optional:
-        if name in header:
-            index[name] = header.index(name)
-    names = list(index)
-    if len(rows) == 1:
-        raise CSVError(path, header_line, 0, "no data rows after the header")
-    values = np.empty((len(rows) - 1, len(names)))
-    for i, (line, row) in enumerate(rows[1:]):
-        for j, name in enumerate(names):
-            col = index[name]
-            if col >= len(row) or not row[col].strip():
-                raise CSVError(path, line, col + 1, f"missing value for column {name!r}")
-            try:
-                v = float(row[col])
-            except ValueError:
-                raise CSVError(path, line, col + 1, f"column {name!r}: {row[col].strip()!r} "
-                               "is not a number") from None
-            if not np.isfinite(v):
-                raise CSVError(path, line, col + 1, f"column {name!r}: {row[col].strip()} "
-                               "is not a finite number")
-            values[i, j] = v
-    lines = np.array([line for line, _ in rows[1:]])
-    return {name: values[:, j].copy() for j, name in enumerate(names)}, lines
+    for name in [*names, *optional]:
+        hits = [i for i, c in enumerate(src.columns) if c == name]
+        if len(hits) > 1:
+            raise CSVError(src.path, src.dialect.header_line, hits[1] + 1,
+                           f"column {name!r} appears {len(hits)} times in the header")
+        if hits:
+            index[name] = hits[0]
+        elif name in names:
+            raise CSVError(src.path, src.dialect.header_line, 0, f"missing column {name!r} "
+                           f"in header ({', '.join(src.columns)})")
+    values = np.concatenate(list(src.blocks(list(index.values()))))
+    blocks = [(first, block) for first, block, _ in src._blocks()]
+    lines = np.array([data_line_of(blocks, src.dialect, i) for i in range(len(values))]) \
+        if len(values) < 10_000 else _all_lines(blocks)
+    return {n: values[:, j].copy() for j, n in enumerate(index)}, lines
+
+
+def _all_lines(blocks):
+    from pihyst.io._text_format import is_skipped
+    out = []
+    for first, block in blocks:
+        for number, raw in enumerate(block.split(b"\n"), start=first):
+            if not is_skipped(raw.decode("utf-8", errors="replace")):
+                out.append(number)
+    return np.array(out)
+
+
+class ColumnWriter:
+    """A CSV file written block by block that appears only once complete: rows go to a
+    temporary file in the target's folder, renamed over the target by :meth:`close`;
+    an exception inside ``with ColumnWriter(...)`` removes it.
+
+    Values are written as the shortest decimal that reads back exactly (pyarrow's
+    writer when installed, else Python's ``repr``)."""
+
+    def __init__(self, path, names, comments=(), engine=None):
+        self.path = os.fspath(path)
+        self.engine = engine
+        self.names = list(names)
+        folder = os.path.dirname(os.path.abspath(self.path))
+        fd, self._tmp = tempfile.mkstemp(dir=folder, prefix=".pihyst-", suffix=".tmp")
+        self._file = os.fdopen(fd, "wb")
+        head = "".join(f"# {c}\n" for c in comments) + ",".join(self.names) + "\n"
+        self._file.write(head.encode("utf-8"))
+        self.rows = 0
+
+    def write(self, columns):
+        """Append rows: a dict name -> array with every name of the header."""
+        data = [np.ascontiguousarray(columns[n], dtype=np.float64) for n in self.names]
+        n = len(data[0])
+        for start in range(0, n, WRITE_ROWS):
+            self._file.write(format_rows([a[start:start + WRITE_ROWS] for a in data],
+                                         self.engine))
+        self.rows += n
+
+    def close(self):
+        self._file.close()
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(self._tmp, 0o666 & ~umask)
+        os.replace(self._tmp, self.path)
+
+    def abort(self):
+        self._file.close()
+        if os.path.exists(self._tmp):
+            os.unlink(self._tmp)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, tb):
+        if kind is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def format_rows(columns, engine=None):
+    """CSV bytes of equal-length float columns, no header: with pyarrow's writer when
+    installed (or ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
+    try:
+        if engine == "numpy":
+            raise ImportError
+        import pyarrow as pa
+        import pyarrow.csv as pcsv
+    except ImportError:
+        line = ",".join(["%r"] * len(columns)) + "\n"
+        flat = np.column_stack(columns).ravel().tolist()
+        return ((line * len(columns[0])) % tuple(flat)).encode("ascii")
+    out = _io.BytesIO()
+    table = pa.table({f"c{j}": c for j, c in enumerate(columns)})
+    pcsv.write_csv(table, out, pcsv.WriteOptions(include_header=False))
+    return out.getvalue()
 
 
 def write_columns(path, columns, comments=()):
     """Write named columns (dict name -> array) to ``path``, complete or not at all."""
-    names = list(columns)
-    data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
-    out = _io.StringIO()
-    for c in comments:
-        out.write(f"# {c}\n")
-    out.write(",".join(names) + "\n")
-    np.savetxt(out, data, delimiter=",", fmt="%.17g")
-    write_atomically(path, out.getvalue())
+    with ColumnWriter(path, list(columns), comments) as w:
+        w.write(columns)
 
 
 def column_number(path, name):
     """1-based position of column ``name`` in the header of ``path``, 0 if absent
     (for error messages that name a column)."""
-    with open(path, encoding="utf-8-sig", newline="") as f:
-        for row in csv.reader(f):
-            if row and not row[0].lstrip().startswith("#") and any(c.strip() for c in row):
-                fields = [h.strip() for h in row]
-                return fields.index(name) + 1 if name in fields else 0
-    return 0
+    try:
+        columns = TextSource(path).columns
+    except CSVError:
+        return 0
+    return columns.index(name) + 1 if name in columns else 0

@@ -62,7 +62,7 @@ def figure_png(fig):
 
 
 def loop_plot(u, y, fits, *, labels=None, title="Measured loop and fitted models",
-              xlabel="voltage (V)", ylabel="displacement (um)"):
+              xlabel="voltage (V)", ylabel="displacement (µm)"):
     """Measured y against u with each model's prediction (paper Fig. 7)."""
     fig = _figure(6.4, 4.8)
     ax = fig.subplots()
@@ -76,7 +76,7 @@ def loop_plot(u, y, fits, *, labels=None, title="Measured loop and fitted models
 
 
 def fit_error_plot(t, u, errors, *, labels=None, title="Fitting error (measured - model)",
-                   xlabel_t="time (s)", xlabel_u="voltage (V)", ylabel="error (um)",
+                   xlabel_t="time (s)", xlabel_u="voltage (V)", ylabel="error (µm)",
                    marks=None):
     """Errors against time (left) and input (right) (paper Fig. 8). ``marks`` are
     (x_input, error, text) points to annotate on the right (e.g. the paper's extremes)."""
@@ -138,7 +138,7 @@ def voltage_plot(t, voltages, *, labels=None, title="Driving voltages",
 
 def tracking_plot(t, desired, measured, errors, *, labels=None,
                   title="Tracking a desired displacement", xlabel="time (s)",
-                  ylabel="displacement (um)", error_label="tracking error (um)"):
+                  ylabel="displacement (µm)", error_label="tracking error (µm)"):
     """Desired and measured displacement (top) and the tracking errors (bottom)
     (paper Fig. 12)."""
     fig = _figure(7.6, 6.2)
@@ -158,7 +158,7 @@ def tracking_plot(t, desired, measured, errors, *, labels=None,
     return fig
 
 
-def error_bars_plot(groups, values, *, labels=None, title, ylabel="mean |error| (um)"):
+def error_bars_plot(groups, values, *, labels=None, title, ylabel="mean |error| (µm)"):
     """Grouped bars: ``values[key]`` is one bar per group (e.g. per simulated beam)."""
     fig = _figure(7.6, 3.8)
     ax = fig.subplots()
@@ -176,7 +176,7 @@ def error_bars_plot(groups, values, *, labels=None, title, ylabel="mean |error| 
 
 
 def loops_grid_plot(loops, *, title="The simulated beams", xlabel="voltage (V)",
-                    ylabel="displacement (um)"):
+                    ylabel="displacement (µm)"):
     """Small multiples: ``loops[name] = (u, y)``."""
     n = len(loops)
     fig = _figure(2.6 * n, 2.9)

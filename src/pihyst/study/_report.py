@@ -16,8 +16,10 @@ Every file is written complete or not at all.
 import base64
 import datetime
 import html
+import io
 import json
 import os
+import re
 
 import numpy as np
 
@@ -75,84 +77,108 @@ def _list(values, digits=4):
 
 # ----------------------------------------------------------------------------- figures
 class _Figures:
-    """Figures in report order: (file name, title, caption, PNG bytes)."""
+    """Figures in page order, numbered as added: (key, file name, title, caption, PNG
+    bytes, paper's figure or None); ``extra`` holds each figure in the other formats
+    asked for (SVG, PDF) by file name."""
 
-    def __init__(self):
+    def __init__(self, formats=(), paper=True):
         self.items = []
+        self.formats = tuple(formats)
+        self.paper = paper
+        self.extra = {}
 
-    def add(self, name, title, caption, fig):
-        self.items.append((name, title, caption, plot.figure_png(fig)))
+    def add(self, key, title, caption, fig, paper_figure=None):
+        n = len(self.items) + 1
+        name = f"fig{n}_{key}.png"
+        self.items.append((key, name, f"Figure {n}. {title}", caption, plot.figure_png(fig),
+                           paper_figure))
+        for fmt in self.formats:
+            buf = io.BytesIO()
+            fig.savefig(buf, format=fmt, dpi=plot.DPI)
+            self.extra[f"fig{n}_{key}.{fmt}"] = buf.getvalue()
 
-    def html(self, name):
-        for fname, title, caption, png in self.items:
-            if fname == name:
+    def has(self, key):
+        return any(item[0] == key for item in self.items)
+
+    def html(self, key):
+        for k, fname, title, caption, png, paper_figure in self.items:
+            if k == key:
                 data = base64.b64encode(png).decode("ascii")
+                if paper_figure and self.paper:
+                    title += f" (the paper's {paper_figure})"
                 return (f'<figure id="{html.escape(fname)}"><img src="data:image/png;base64,'
                         f'{data}" alt="{html.escape(title)}"><figcaption><b>'
-                        f'{html.escape(title)}.</b> {caption}</figcaption></figure>')
-        raise KeyError(name)
+                        f'{html.escape(title, quote=False)}.</b> {caption}</figcaption>'
+                        '</figure>')
+        raise KeyError(key)
 
 
 def _labels(study):
     return {k: fm.label for k, fm in study.models.items()}
 
 
-def _make_figures(study):
-    figs = _Figures()
+def _make_figures(study, formats=(), paper=True):
+    figs = _Figures(formats, paper)
     loop = study.loop
     labels = _labels(study)
     short = {"classical": "conventional PI", "multislope": "multislope PI",
              "best": "pihyst's best"}
     pred = study.predictions["loop"]
-    figs.add("fig07_loop.png", "Fig. 7: measured loop and fitted models",
+    figs.add("loop", "Measured loop and fitted models",
              "The record (black) and each model's prediction for the same voltages.",
              plot.loop_plot(loop.u, loop.y, {k: pred[k] for k in MODEL_ORDER},
-                            labels=labels))
+                            labels=labels), "Fig. 7")
     errors = {k: loop.y - pred[k] for k in MODEL_ORDER}
-    figs.add("fig08_fit_errors.png", "Fig. 8: fitting errors",
+    figs.add("fit_errors", "Fitting errors",
              "Measured minus model, against time and against voltage.",
-             plot.fit_error_plot(loop.t, loop.u, errors, labels=short))
+             plot.fit_error_plot(loop.t, loop.u, errors, labels=short), "Fig. 8")
     ops = study.operators
     if "classical" in ops:
         c = ops["classical"]
-        figs.add("fig04_classical_operators.png", "Fig. 4: play operators of the conventional PI",
+        figs.add("classical_operators", "Play operators of the conventional PI",
                  "Output of each classical play operator of the fitted model over one "
                  "cycle of the input range, from the model's initial state.",
                  plot.operators_plot(c["u"], c["outputs"], c["thresholds"],
-                                     title="Classical play operators"))
+                                     title="Classical play operators"), "Fig. 4")
     if "multislope" in ops:
         m = ops["multislope"]
-        figs.add("fig05_multislope_operators.png",
-                 "Fig. 5: multislope play operators",
+        figs.add("multislope_operators", "Multislope play operators",
                  "Output of each multislope operator (paper eq. 6) over one cycle; the "
                  "landmarks of the largest threshold are marked.",
                  plot.operators_plot(m["u"], m["outputs"], m["thresholds"],
                                      title="Multislope play operators",
-                                     annotations=m["annotations"]))
+                                     annotations=m["annotations"]), "Fig. 5")
     if study.mode == "demo":
         _demo_figures(study, figs, short)
     return figs
 
 
 def _demo_figures(study, figs, short):
+    """The demo's figures, added in the order the page shows them."""
+    val = study.records["validation"]
+    pv = study.predictions["validation"]
+    figs.add("validation", "Errors on data no model was fitted on (pihyst)",
+             "Random ramps with reversals inside the range (minor loops): measured minus "
+             "model.",
+             plot.fit_error_plot(val.t, val.u, {k: val.y - pv[k] for k in MODEL_ORDER},
+                                 labels=short, title="Validation error (measured - model)"))
     tri = study.tracking["triangle"]
-    figs.add("fig11_voltages.png", "Fig. 11: driving voltages",
+    figs.add("voltages", "Driving voltages",
              "Voltage commanded for the triangular trajectory: proportional to the desired "
              "displacement (without compensation) and from each inverse model.",
              plot.voltage_plot(tri["t"], {k: tri["voltage"][k] for k in
                                           ("none", "multislope", "classical", "best")},
-                               labels=short | {"none": "without compensation"}))
-    figs.add("fig12_tracking.png", "Fig. 12: tracking and tracking error",
+                               labels=short | {"none": "without compensation"}), "Fig. 11")
+    figs.add("tracking", "Tracking and tracking error",
              "Desired and measured displacement of the beam, and the tracking error "
              "(measured minus desired).",
              plot.tracking_plot(tri["t"], tri["desired"],
                                 {k: tri["measured"][k] for k in ("none", "multislope")},
                                 {k: tri["measured"][k] - tri["desired"] for k in
                                  ("none", "multislope", "best")},
-                                labels=short))
+                                labels=short), "Fig. 12")
     rev = study.tracking["reversals"]
-    figs.add("fig13_tracking_reversals.png", "Fig. 13 (pihyst): tracking with reversals "
-             "inside the range",
+    figs.add("tracking_reversals", "Tracking with reversals inside the range (pihyst)",
              "The paper tracks only a full-range triangle. Here the desired trajectory "
              "turns inside the range, where the models' minor loops matter.",
              plot.tracking_plot(rev["t"], rev["desired"],
@@ -160,30 +186,26 @@ def _demo_figures(study, figs, short):
                                 {k: rev["measured"][k] - rev["desired"] for k in
                                  ("classical", "multislope", "best")},
                                 labels=short, title="Tracking with reversals inside the range"))
-    val = study.records["validation"]
-    pv = study.predictions["validation"]
-    figs.add("fig14_validation.png", "Fig. 14 (pihyst): errors on data no model was "
-             "fitted on",
-             "Random ramps with reversals inside the range (minor loops): measured minus "
-             "model.",
-             plot.fit_error_plot(val.t, val.u, {k: val.y - pv[k] for k in MODEL_ORDER},
-                                 labels=short, title="Validation error (measured - model)"))
     if study.variants:
         names = [r["plant"] for r in study.variants]
-        figs.add("fig15_variants.png", "Fig. 15 (pihyst): the comparison on every "
-                 "simulated beam",
+        figs.add("variants", "The comparison on every simulated beam (pihyst)",
                  "Mean absolute error on each beam's validation record (random ramps, "
                  "fitted by no model).",
                  plot.error_bars_plot(names, {k: [r["validation"][k] for r in study.variants]
                                               for k in MODEL_ORDER}, labels=short,
                                       title="Validation error per simulated beam"))
-        figs.add("fig16_beams.png", "Fig. 16 (pihyst): the simulated beams",
+        figs.add("beams", "The simulated beams (pihyst)",
                  "Each beam's loop for the 0-150-0 V, 300 s triangle.",
                  plot.loops_grid_plot(study.variant_loops))
+    if study.rig is not None:
+        from pihyst.study._rig_study import rig_figure
+        figs.add("rig_tracking", "Tracking through the rig (pihyst)",
+                 "The triangle tracked through the emulated instruments, open loop and "
+                 "with feedback; error = measured - desired.", rig_figure(study.rig))
 
 
 # ----------------------------------------------------------------------------- tables
-def _table1(study):
+def _table1(study, paper_columns=True):
     paper = study.metrics["paper"]["table1"]
     models = study.metrics["models"]
     rows = []
@@ -200,11 +222,13 @@ def _table1(study):
                          _f(p["weights"][i]) if i < len(p["weights"]) else ""])
     paper_head = "threshold, paper (V)" if study.mode == "demo" else \
         "threshold, paper (V, its 0-150 V beam)"
+    if not paper_columns:
+        return _table(["model", "threshold r (V)", "weight"], [r[:3] for r in rows])
     return _table(["model", "threshold r (V)", "weight, pihyst", paper_head, "weight, paper"],
                   rows)
 
 
-def _fit_table(study):
+def _fit_table(study, paper_columns=True):
     m = study.metrics
     paper = m["paper"]["fit"]
     rows = []
@@ -219,8 +243,12 @@ def _fit_table(study):
                      " / ".join(_signed(e["extremes"][k]) for k in ("low", "middle", "high")),
                      " / ".join(_signed(pe.get(k)) for k in ("low", "middle", "high"))
                      if pe else "&ndash;"])
-    return _table(["model", "mean |e| (um)", "paper", "max |e| (um)", "RMS (um)",
-                   "mean |e| / range", "extremes low / mid / high (um)", "paper"], rows)
+    head = ["model", "mean |e| (µm)", "paper", "max |e| (µm)", "RMS (µm)",
+            "mean |e| / range", "extremes low / mid / high (µm)", "paper"]
+    if not paper_columns:
+        keep = [0, 1, 3, 4, 5, 6]
+        return _table([head[i] for i in keep], [[r[i] for i in keep] for r in rows])
+    return _table(head, rows)
 
 
 def _tracking_table(study, name, paper_row):
@@ -234,8 +262,8 @@ def _tracking_table(study, name, paper_row):
         rows.append([label, _f(e["mean_abs"]), _f(p.get("mean_abs")), _f(e["rms"]),
                      _f(p.get("rms")), _f(e["max_abs"]), f'{e["mean_abs_pct"]:.3g} %',
                      "&ndash;" if sat is None else str(sat)])
-    return _table(["compensation", "mean |e| (um)", "paper", "RMS (um)", "paper",
-                   "max |e| (um)", "mean |e| / range", "saturated samples"], rows)
+    return _table(["compensation", "mean |e| (µm)", "paper", "RMS (µm)", "paper",
+                   "max |e| (µm)", "mean |e| / range", "saturated samples"], rows)
 
 
 def _validation_table(study):
@@ -244,7 +272,7 @@ def _validation_table(study):
         e = study.metrics["validation"][key]
         rows.append([html.escape(study.models[key].label), _f(e["mean_abs"]), _f(e["max_abs"]),
                      _f(e["rms"]), f'{e["mean_abs_pct"]:.3g} %'])
-    return _table(["model", "mean |e| (um)", "max |e| (um)", "RMS (um)", "mean |e| / range"],
+    return _table(["model", "mean |e| (µm)", "max |e| (µm)", "RMS (µm)", "mean |e| / range"],
                   rows)
 
 
@@ -256,55 +284,57 @@ def _variants_table(study):
                      _f(r["improvement_pct"], 3) + " %", _f(r["validation"]["classical"]),
                      _f(r["validation"]["multislope"]), _f(r["validation"]["best"]),
                      html.escape(r["best_family"])])
-    return _table(["beam", "range (um)", "conventional, loop", "multislope, loop",
+    return _table(["beam", "range (µm)", "conventional, loop", "multislope, loop",
                    "multislope vs conventional", "conventional, validation",
                    "multislope, validation", "pihyst's best, validation",
                    "pihyst's best family"], rows)
 
 
-def _summary(study):
+def _summary(study, paper_columns=True):
     m = study.metrics
     fit = m["fit"]
     imp = m["improvement_pct"]
     p = m["paper"]
     rows = [
-        ["conventional PI, mean |fitting error|", f'{_f(fit["classical"]["mean_abs"])} um',
-         f'{p["fit"]["classical"]["mean_abs"]} um'],
-        ["multislope PI, mean |fitting error|", f'{_f(fit["multislope"]["mean_abs"])} um',
-         f'{p["fit"]["multislope"]["mean_abs"]} um'],
+        ["conventional PI, mean |fitting error|", f'{_f(fit["classical"]["mean_abs"])} µm',
+         f'{p["fit"]["classical"]["mean_abs"]} µm'],
+        ["multislope PI, mean |fitting error|", f'{_f(fit["multislope"]["mean_abs"])} µm',
+         f'{p["fit"]["multislope"]["mean_abs"]} µm'],
         ["multislope vs conventional", f"{_f(imp, 3)} % less",
          f'{p["fit"]["improvement_pct"]} % less'],
         ["conventional PI, extreme errors low / middle / high",
-         " / ".join(f"{_signed(fit['classical']['extremes'][k])} um"
+         " / ".join(f"{_signed(fit['classical']['extremes'][k])} µm"
                     for k in ("low", "middle", "high")),
-         " / ".join(f"{_signed(p['fit']['classical']['extremes'][k])} um"
+         " / ".join(f"{_signed(p['fit']['classical']['extremes'][k])} µm"
                     for k in ("low", "middle", "high"))],
     ]
     if study.mode == "demo":
         tr = m["tracking"]["triangle"]["errors"]["multislope"]
         rows += [
-            ["feedforward tracking (multislope), mean |error|", f'{_f(tr["mean_abs"])} um',
-             f'{p["tracking"]["mean_abs"]} um'],
-            ["feedforward tracking (multislope), RMS error", f'{_f(tr["rms"])} um',
-             f'{p["tracking"]["rms"]:.4f} um (the paper\'s "MSE")'],
+            ["feedforward tracking (multislope), mean |error|", f'{_f(tr["mean_abs"])} µm',
+             f'{p["tracking"]["mean_abs"]} µm'],
+            ["feedforward tracking (multislope), RMS error", f'{_f(tr["rms"])} µm',
+             f'{p["tracking"]["rms"]:.4f} µm (the paper\'s "MSE")'],
             ["tracking mean |error| / range", f'{tr["mean_abs_pct"]:.3g} %',
              f'{p["tracking"]["mean_abs_pct_of_range"]:.3g} % of '
-             f'{p["beam"]["max_displacement_um"]:g} um'],
+             f'{p["beam"]["max_displacement_um"]:g} µm'],
         ]
     verdict = ("The multislope PI beats the conventional PI" if imp is not None and imp > 0
                else "The multislope PI does not beat the conventional PI")
     text = (f"<p class=\"verdict\">{verdict} here: {_f(imp, 3)} % less mean absolute fitting "
-            f"error (paper: {p['fit']['improvement_pct']} %).")
+            f"error" + (f" (paper: {p['fit']['improvement_pct']} %)." if paper_columns else "."))
     if study.mode == "demo":
         best = m["validation"]["best"]["mean_abs"]
         text += (f" On data with reversals inside the range, which no model was fitted on, "
                  f"pihyst's automatic choice ({html.escape(m['models']['best']['title'])}) "
-                 f"errs by {_f(best, 3)} um on average, against "
-                 f"{_f(m['validation']['multislope']['mean_abs'], 3)} um for the multislope "
-                 f"PI and {_f(m['validation']['classical']['mean_abs'], 3)} um for the "
+                 f"errs by {_f(best, 3)} µm on average, against "
+                 f"{_f(m['validation']['multislope']['mean_abs'], 3)} µm for the multislope "
+                 f"PI and {_f(m['validation']['classical']['mean_abs'], 3)} µm for the "
                  f"conventional PI.")
     text += "</p>"
     paper_head = "paper" if study.mode == "demo" else "paper (its own beam, for reference)"
+    if not paper_columns:
+        return text + _table(["quantity", "this record"], [r[:2] for r in rows])
     return text + _table(["quantity", "pihyst", paper_head], rows)
 
 
@@ -330,7 +360,7 @@ def _notes(study):
     for key in MODEL_ORDER:
         fm = study.models[key]
         for n in fm.notes:
-            items.append(f"<li><b>{html.escape(fm.label)}</b>: {html.escape(n)}</li>")
+            items.append(f"<li><b>{html.escape(fm.label)}</b>: {_prose(n)}</li>")
     return f'<ul class="notes">{"".join(items)}</ul>' if items else "<p>None.</p>"
 
 
@@ -345,17 +375,26 @@ def _best_section(study):
     text = (f"<p>{html.escape(fm.label)}: {entry['n_operators']} operators, chosen by "
             f"{html.escape(entry.get('criterion', ''))}. Every family pihyst fits, with its "
             f"errors on the cycles held back from its fit:</p>")
-    report_text = html.escape(str(fm.fit_report)) if fm.fit_report is not None else ""
-    return (text + _table(["family", "RMS (um)", "mean |e| (um)", "max |e| (um)"], rows)
+    report_text = _prose(str(fm.fit_report)) if fm.fit_report is not None else ""
+    return (text + _table(["family", "RMS (µm)", "mean |e| (µm)", "max |e| (µm)"], rows)
             + f"<details><summary>full identification report</summary><pre>{report_text}"
               "</pre></details>")
+
+
+_UM = re.compile(r"(?<![\w.])um\b")
+
+
+def _prose(text):
+    """Text from elsewhere (descriptions, notes, the fit report) for the page: escaped,
+    micrometres written µm."""
+    return _UM.sub("µm", html.escape(text, quote=False))
 
 
 def _files_list(names):
     return "<ul>" + "".join(f"<li><code>{html.escape(n)}</code></li>" for n in names) + "</ul>"
 
 
-def render_html(study, figs, files, command):
+def render_html(study, figs, files, command, paper=True):
     m = study.metrics
     stamp = datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
     parts = [
@@ -367,14 +406,14 @@ def render_html(study, figs, files, command):
         f"<code>{html.escape(command)}</code>; computed in "
         f"{m['timing_s']['total_computation']:.1f} s. Paper: {html.escape(m['paper']['source'])}."
         f"</p>",
-        "<h2>Summary</h2>", _summary(study),
-        "<h2>The data</h2>", f"<p>{html.escape(study.source)}</p>",
+        "<h2>Summary</h2>", _summary(study, paper),
+        "<h2>The data</h2>", f"<p>{_prose(study.source)}</p>",
     ]
     if study.mode == "demo":
         lp = m["loop"]
-        parts.append(f"<p>Recorded loop: {lp['samples']} samples, {lp['peak_um']:.4g} um at "
-                     f"150 V (paper's beam: {m['paper']['beam']['max_displacement_um']:g} um), "
-                     f"{lp['end_um']:+.3g} um back at 0 V. "
+        parts.append(f"<p>Recorded loop: {lp['samples']} samples, {lp['peak_um']:.4g} µm at "
+                     f"150 V (paper's beam: {m['paper']['beam']['max_displacement_um']:g} µm), "
+                     f"{lp['end_um']:+.3g} µm back at 0 V. "
                      f"Errors are measured minus model, the paper's sign.</p>")
     else:
         lp = m["loop"]
@@ -385,39 +424,44 @@ def render_html(study, figs, files, command):
                          f"<code>record.csv</code> but neither fitted nor judged, nor "
                          f"plotted.</p>")
         parts.append(f"<p>{lp['samples']} samples, input {lp['input_range'][0]:.4g} .. "
-                     f"{lp['input_range'][1]:.4g}, output range {lp['range_um']:.4g} um. The "
+                     f"{lp['input_range'][1]:.4g}, output range {lp['range_um']:.4g} µm. The "
                      f"paper's thresholds are scaled by {m['threshold_scale']:.4g} (input "
                      f"span / 150 V) and measured from the bottom of the input range; initial "
-                     f"states are found from the data and an offset is fitted. The paper's "
-                     f"numbers are for its own beam, shown for reference.</p>")
-    parts += ["<h2>Table 1: thresholds and weights</h2>", _table1(study),
-              "<h2>Fitting the loop</h2>", _fit_table(study),
-              figs.html("fig07_loop.png"), figs.html("fig08_fit_errors.png"),
+                     f"states are found from the data and an offset is fitted."
+                     + (" The paper's numbers are for its own beam, shown for reference."
+                        if paper else "") + "</p>")
+    parts += ["<h2>Thresholds and weights" + (" (the paper's Table 1)" if paper else "")
+              + "</h2>", _table1(study, paper),
+              "<h2>Fitting the loop</h2>", _fit_table(study, paper),
+              figs.html("loop"), figs.html("fit_errors"),
               "<h2>Operators</h2>"]
-    for name in ("fig04_classical_operators.png", "fig05_multislope_operators.png"):
-        if any(f[0] == name for f in figs.items):
-            parts.append(figs.html(name))
+    for key in ("classical_operators", "multislope_operators"):
+        if figs.has(key):
+            parts.append(figs.html(key))
     if study.mode == "demo":
         parts += ["<h2>Models judged on data they were not fitted on</h2>",
-                  f"<p>{html.escape(study.records['validation'].description)}.</p>",
-                  _validation_table(study), figs.html("fig14_validation.png"),
+                  f"<p>{_prose(study.records['validation'].description)}.</p>",
+                  _validation_table(study), figs.html("validation"),
                   "<h2>Feedforward compensation</h2>",
                   "<p>Desired trajectory: "
-                  f"{html.escape(study.tracking['triangle']['description'])}. "
+                  f"{_prose(study.tracking['triangle']['description'])}. "
                   "Each model's exact inverse gives the voltage (within 0-150 V); without "
                   "compensation the voltage is proportional to the desired displacement.</p>",
                   _tracking_table(study, "triangle", True),
-                  figs.html("fig11_voltages.png"), figs.html("fig12_tracking.png"),
+                  figs.html("voltages"), figs.html("tracking"),
                   "<h3>Reversals inside the range</h3>",
-                  f"<p>{html.escape(study.tracking['reversals']['description'])}.</p>",
+                  f"<p>{_prose(study.tracking['reversals']['description'])}.</p>",
                   _tracking_table(study, "reversals", False),
-                  figs.html("fig13_tracking_reversals.png")]
+                  figs.html("tracking_reversals")]
         if study.variants:
             parts += ["<h2>Other simulated beams</h2>",
                       "<p>The same method on every simulated beam (loop: the paper's "
-                      "triangle; validation: random ramps), mean absolute errors in um.</p>",
-                      _variants_table(study), figs.html("fig15_variants.png"),
-                      figs.html("fig16_beams.png")]
+                      "triangle; validation: random ramps), mean absolute errors in µm.</p>",
+                      _variants_table(study), figs.html("variants"),
+                      figs.html("beams")]
+    if study.rig is not None:
+        from pihyst.study._rig_study import rig_html
+        parts.append(rig_html(study.rig, figs.html("rig_tracking")))
     parts += ["<h2>pihyst's automatic choice</h2>", _best_section(study),
               "<h2>Notes</h2>", _notes(study),
               "<h2>Files</h2>", _files_list(files), "</body></html>"]
@@ -425,9 +469,14 @@ def render_html(study, figs, files, command):
 
 
 # ----------------------------------------------------------------------------- entry
-def write_report(study, out_dir, *, command="", progress=None):
+def write_report(study, out_dir, *, command="", progress=None, figure_formats=(),
+                 paper=None):
     """Write the report folder ``out_dir`` (created if needed) for a
     :class:`pihyst.study.Study`; returns the names of the files written.
+
+    Figures are numbered in page order and written as PNG, and also in each of
+    ``figure_formats`` ("svg", "pdf"). ``paper``: show the paper's numbers beside the
+    study's (default: for the demo, not for a user's record).
 
     Examples
     --------
@@ -442,10 +491,14 @@ def write_report(study, out_dir, *, command="", progress=None):
     os.makedirs(out_dir, exist_ok=True)
     say = progress or (lambda line: None)
     say("drawing the figures ...")
-    figs = _make_figures(study)
+    paper = study.mode == "demo" if paper is None else paper
+    figs = _make_figures(study, figure_formats, paper)
     files = []
-    for name, _, _, png in figs.items:
+    for _, name, _, _, png, _ in figs.items:
         write_atomically(os.path.join(out_dir, name), png)
+        files.append(name)
+    for name, data in figs.extra.items():
+        write_atomically(os.path.join(out_dir, name), data)
         files.append(name)
     say("writing data, models and metrics ...")
     files += _write_data(study, out_dir)
@@ -458,7 +511,7 @@ def write_report(study, out_dir, *, command="", progress=None):
     files.append("metrics.json")
     files.append("report.html")
     write_atomically(os.path.join(out_dir, "report.html"),
-                     render_html(study, figs, files, command))
+                     render_html(study, figs, files, command, paper))
     return files
 
 
@@ -483,4 +536,6 @@ def _write_data(study, out_dir):
                                 "measured displacements per compensation (none = voltage "
                                 "proportional to the desired displacement)"])
         names.append(name)
+    if study.rig is not None:
+        names += study.rig.write_logs(out_dir)
     return names

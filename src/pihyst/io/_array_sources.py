@@ -1,0 +1,259 @@
+"""Records stored as arrays: NumPy ``.npy``/``.npz``, MATLAB ``.mat`` (v5 through SciPy,
+v7.3 through h5py), HDF5 (h5py), Parquet (pyarrow), and the arrays a Python function
+returns.
+
+A quantity is one variable (a vector), ``NAME:K`` (column K, 1-based, of a matrix) or
+``K`` alone (column K of the file's only matrix). Samples are named in messages by their
+0-based index in the variable.
+"""
+
+import os
+
+import numpy as np
+
+from pihyst.exceptions import RecordError
+
+MAT_V73_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+class ArraySource:
+    """Named arrays (1-D or 2-D with samples along the first axis), read lazily where the
+    format allows (memory-mapped .npy, HDF5 datasets)."""
+
+    def __init__(self, path, kind, variables, extra=None):
+        self.path, self.kind = path, kind
+        self.variables = variables      # name -> array-like (sliceable, .shape)
+        self.extra = dict(extra or {})
+        self.columns = tuple(name for name, a in variables.items() if len(a.shape) == 1)
+
+    def metadata(self):
+        return {"format": self.kind, **self.extra}
+
+    def _matrix(self):
+        matrices = [n for n, a in self.variables.items() if len(a.shape) == 2]
+        if len(matrices) != 1:
+            return None
+        return matrices[0]
+
+    def resolve(self, spec, quantity):
+        """(variable, column or None) for a spec: a name, NAME:K, or K."""
+        text = str(spec).strip()
+        name, _, col = text.rpartition(":") if ":" in text else ("", "", "")
+        if not name and text.isdigit():
+            matrix = self._matrix()
+            if matrix is None:
+                raise RecordError(self.path, f"--{quantity} {text}: a column number needs a "
+                                  f"file with exactly one matrix; name a variable "
+                                  f"({self.inventory()})")
+            name, col = matrix, text
+        elif not name:
+            name, col = text, ""
+        if name not in self.variables:
+            raise RecordError(self.path, f"no variable {name!r} for the {quantity} "
+                              f"({self.inventory()})")
+        shape = self.variables[name].shape
+        if col:
+            if not col.isdigit() or len(shape) != 2 or not 1 <= int(col) <= shape[1]:
+                columns = shape[1] if len(shape) == 2 else 0
+                raise RecordError(self.path, f"--{quantity} {text}: {name!r} has shape "
+                                  f"{shape}; column K must be 1..{columns} of a matrix")
+            return name, int(col) - 1
+        if len(shape) == 2 and 1 in shape:
+            return name, 0
+        if len(shape) != 1:
+            raise RecordError(self.path, f"{name!r} has shape {shape}: name one column "
+                              f"as {name}:K for the {quantity}")
+        return name, None
+
+    def default(self, names):
+        """The first of ``names`` the file has as a vector, else None."""
+        for n in names:
+            if n in self.variables and len(self.variables[n].shape) == 1:
+                return n, None
+        return None
+
+    def inventory(self):
+        parts = [f"{n} {tuple(a.shape)}" for n, a in self.variables.items()]
+        return "variables: " + (", ".join(parts) if parts else "none")
+
+    def length(self, ref):
+        name, col = ref
+        a = self.variables[name]
+        if len(a.shape) == 2 and col is not None and a.shape[0] == 1:
+            return a.shape[1]
+        return a.shape[0]
+
+    def label(self, ref):
+        name, col = ref
+        return repr(name) if col is None else f"'{name}' column {col + 1}"
+
+    def read(self, ref, start, stop):
+        name, col = ref
+        a = self.variables[name]
+        if len(a.shape) == 1:
+            out = a[start:stop]
+        elif a.shape[0] == 1 and a.shape[1] != 1:
+            out = a[0, start:stop]
+        else:
+            out = a[start:stop, col]
+        out = np.asarray(out)
+        if not (np.issubdtype(out.dtype, np.floating) or np.issubdtype(out.dtype, np.integer)
+                or out.dtype == bool):
+            raise RecordError(self.path, f"{self.label(ref)} holds {out.dtype} values, not "
+                              "numbers")
+        return out.astype(np.float64)
+
+    def blocks(self, refs, block_rows, progress=None):
+        n = {self.length(r) for r in refs}
+        if len(n) != 1:
+            lengths = ", ".join(f"{self.label(r)} {self.length(r)}" for r in refs)
+            raise RecordError(self.path, f"the quantities have different lengths ({lengths})")
+        n = n.pop()
+        if n == 0:
+            raise RecordError(self.path, "no samples")
+        for start in range(0, n, block_rows):
+            stop = min(n, start + block_rows)
+            values = np.column_stack([self.read(r, start, stop) for r in refs])
+            bad = ~np.isfinite(values)
+            if bad.any():
+                i, j = np.argwhere(bad)[0]
+                raise RecordError(self.path, f"{self.label(refs[j])} sample {start + i}: "
+                                  f"{values[i, j]} is not a finite number")
+            if progress is not None:
+                progress(stop, n)
+            yield values
+
+    def error(self, row, ref, message):
+        return RecordError(self.path, f"{self.label(ref)} sample {row}: {message}")
+
+    def close(self):
+        closer = self.extra.pop("_close", None)
+        if closer is not None:
+            closer()
+
+
+def open_array_source(path, kind):
+    path = os.fspath(path)
+    try:
+        if kind == "npy":
+            a = np.load(path, mmap_mode="r", allow_pickle=False)
+            return ArraySource(path, kind, {"array": a})
+        if kind == "npz":
+            with np.load(path, allow_pickle=False) as z:
+                return ArraySource(path, kind, {k: z[k] for k in z.files})
+        if kind == "mat":
+            return _open_mat(path)
+        if kind == "hdf5":
+            return _open_hdf5(path, transpose=False)
+        if kind == "parquet":
+            return _open_parquet(path)
+    except OSError as err:
+        raise RecordError(path, f"cannot read file: {err.strerror or err}") from None
+    except ValueError as err:
+        raise RecordError(path, f"cannot read {kind} file: {err}") from None
+    raise ValueError(f"unknown record kind {kind!r}")
+
+
+def _open_mat(path):
+    with open(path, "rb") as f:
+        head = f.read(520)
+    if head[512:520] == MAT_V73_SIGNATURE:
+        return _open_hdf5(path, transpose=True, kind="mat (v7.3)")
+    from scipy.io import loadmat
+    try:
+        data = loadmat(path)
+    except (ValueError, TypeError, NotImplementedError) as err:
+        raise RecordError(path, f"cannot read MATLAB file: {err}") from None
+    variables = {k: v for k, v in data.items() if not k.startswith("__")
+                 and isinstance(v, np.ndarray) and v.ndim in (1, 2)
+                 and v.dtype.kind in "fiub"}
+    return ArraySource(path, "mat (v5)", {k: _vector(v) for k, v in variables.items()})
+
+
+def _vector(a):
+    if a.ndim == 2 and 1 in a.shape:
+        return a.reshape(-1)
+    return a
+
+
+def _need(module, extra, path):
+    try:
+        return __import__(module)
+    except ImportError:
+        raise RecordError(path, f"reading this file needs {module}: "
+                          f"pip install 'pihyst[{extra}]'") from None
+
+
+def _open_hdf5(path, transpose, kind="hdf5"):
+    h5py = _need("h5py", "hdf5", path)
+    f = h5py.File(path, "r")
+    variables = {}
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset) and obj.ndim in (1, 2) and obj.dtype.kind in "fiub":
+            if obj.ndim == 2 and 1 in obj.shape:
+                variables[name] = _Flat(obj)
+            else:
+                variables[name] = _Transposed(obj) if transpose and obj.ndim == 2 else obj
+    f.visititems(visit)
+    return ArraySource(path, kind, variables, {"_close": f.close})
+
+
+class _Flat:
+    """A 2-D HDF5 dataset of one row or one column, read as a vector."""
+
+    def __init__(self, dataset):
+        self.dataset = dataset
+        self.shape = (max(dataset.shape),)
+
+    def __getitem__(self, key):
+        row = self.dataset.shape[0] == 1
+        return np.asarray(self.dataset[0, key] if row else self.dataset[key, 0])
+
+
+class _Transposed:
+    """A 2-D HDF5 dataset read transposed (MATLAB v7.3 stores matrices column-major)."""
+
+    def __init__(self, dataset):
+        self.dataset = dataset
+        self.shape = dataset.shape[::-1]
+
+    def __getitem__(self, key):
+        if isinstance(key, tuple):
+            return np.asarray(self.dataset[key[::-1]]).T
+        return np.asarray(self.dataset[:, key]).T
+
+
+def _open_parquet(path):
+    _need("pyarrow", "fast", path)
+    import pyarrow.parquet as pq
+    table = pq.read_table(path)
+    variables = {name: table.column(name).to_numpy() for name in table.column_names
+                 if table.schema.field(name).type.num_fields == 0}
+    return ArraySource(path, "parquet", variables)
+
+
+def function_source(name, result):
+    """The record a Python function returned: a mapping with ``voltage``,
+    ``displacement``, ``time`` (arrays, each optional) and ``metadata``."""
+    if hasattr(result, "voltage") and hasattr(result, "displacement"):
+        result = {"voltage": result.voltage, "displacement": result.displacement,
+                  "time": getattr(result, "time", None),
+                  "metadata": dict(getattr(result, "metadata", {}) or {})}
+    if not isinstance(result, dict):
+        raise RecordError(name, f"the reader returned {type(result).__name__}; expected a "
+                          "dict with 'voltage', 'displacement', 'time' and 'metadata' "
+                          "or a pihyst.io.Record")
+    unknown = set(result) - {"voltage", "displacement", "time", "metadata"}
+    if unknown:
+        raise RecordError(name, f"the reader returned unknown keys {sorted(unknown)}")
+    variables = {}
+    for key in ("voltage", "displacement", "time"):
+        if result.get(key) is not None:
+            a = np.asarray(result[key])
+            if a.ndim != 1:
+                raise RecordError(name, f"the reader's {key!r} has shape {a.shape}, "
+                                  "expected one dimension")
+            variables[key] = a
+    return ArraySource(name, "python function", variables,
+                       {"found": dict(result.get("metadata") or {})})

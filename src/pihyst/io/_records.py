@@ -1,0 +1,468 @@
+"""Records as they come: one reader for delimited text and array files, with the columns,
+units, sensor lag and start a user names; block by block for records larger than memory.
+
+:func:`read_record` returns one :class:`Record`; :func:`open_record` returns a
+:class:`RecordReader` whose :meth:`~RecordReader.chunks` yields the same samples as
+consecutive :class:`Record` blocks (bit for bit the same values). docs/records.md.
+"""
+
+import importlib
+import importlib.util
+import os
+import re
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pihyst.exceptions import CSVError, RecordError
+from pihyst.io._array_sources import ArraySource, function_source, open_array_source
+from pihyst.io._text_source import TextSource
+
+QUANTITIES = ("voltage", "displacement", "time")
+DEFAULT_NAMES = {"voltage": "voltage_V", "displacement": "displacement_um", "time": "time_s"}
+UNIT_FACTORS = {"m": 1e6, "mm": 1e3, "um": 1.0, "µm": 1.0, "nm": 1e-3}
+_UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(m|mm|um|µm|nm)[\])]?\s*$")
+EXTENSIONS = {".npy": "npy", ".npz": "npz", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
+              ".he5": "hdf5", ".parquet": "parquet", ".pq": "parquet"}
+BLOCK_ROWS = 1 << 20
+
+
+@dataclass(frozen=True, eq=False)
+class Record:
+    """Samples of a record: ``voltage`` (V, the actuator's), ``displacement`` (µm) and
+    ``time`` (s), each a float array or None; ``start`` is the index of the first sample
+    in the whole record (0 unless this is a block of a longer one); ``metadata`` says
+    what was found and applied (format, columns, units, lag, skipped samples)."""
+
+    voltage: np.ndarray = None
+    displacement: np.ndarray = None
+    time: np.ndarray = None
+    source: str = ""
+    metadata: dict = field(default_factory=dict)
+    start: int = 0
+    reader: object = field(default=None, repr=False)
+
+    def __len__(self):
+        for a in (self.voltage, self.displacement, self.time):
+            if a is not None:
+                return len(a)
+        return 0
+
+    def error(self, index, quantity, message):
+        """A :class:`RecordError` naming the file, line and column (or variable and
+        sample) of sample ``index`` of this record: for messages about the values."""
+        if self.reader is None:
+            return RecordError(self.source or "record", f"{quantity} sample "
+                               f"{self.start + index}: {message}")
+        return self.reader.error(self.start + index, quantity, message)
+
+
+class RecordReader:
+    """An opened record with its reading options. Use :meth:`read` for all samples, or
+    :meth:`chunks` for blocks; :meth:`error` locates a sample for a message."""
+
+    def __init__(self, path, *, voltage=None, displacement=None, time=None, rate=None,
+                 displacement_unit=None, voltage_gain=None, lag=0, skip_until=None,
+                 separator=None, decimal_comma=None, reader=None,
+                 need=("voltage", "displacement"), optional=("time",)):
+        self.path = os.fspath(path)
+        self.need = tuple(need)
+        self.optional = tuple(optional) + (("time",) if skip_until is not None else ())
+        unknown = set(self.need) - set(QUANTITIES)
+        if unknown:
+            raise ValueError(f"unknown quantities {sorted(unknown)}")
+        self.source = _open_source(self.path, reader, separator, decimal_comma)
+        found = self.source.extra.get("found", {}) if isinstance(self.source, ArraySource) \
+            else {}
+        specs = {"voltage": voltage, "displacement": displacement, "time": time}
+        self.refs = self._resolve(specs)
+        self.labels = {q: self._label(r) for q, r in self.refs.items()}
+        self.rate = _positive(rate if rate is not None else found.get("rate"), "--rate")
+        self.voltage_gain = _finite(voltage_gain if voltage_gain is not None
+                                    else found.get("voltage_gain", 1.0), "--voltage-gain")
+        if self.voltage_gain == 0:
+            raise ValueError("--voltage-gain must not be 0")
+        self.unit, self.unit_from = self._unit(displacement_unit, found)
+        if not (isinstance(lag, (int, np.integer)) and lag >= 0):
+            raise ValueError(f"--lag must be a whole number of samples >= 0, got {lag!r}")
+        both = "voltage" in self.refs and "displacement" in self.refs
+        self.lag = int(lag) if both else 0
+        self.skip_until = None if skip_until is None else _finite(skip_until, "--skip-until")
+        if self.skip_until is not None and "time" not in self.refs and self.rate is None:
+            raise ValueError(f"--skip-until needs a time column in {self.path} or --rate")
+        if "time" in self.refs and self.rate is not None:
+            raise ValueError("--rate is for records without a time column; this one has "
+                             f"time in {self.labels['time']} (use --time none to ignore it)")
+        self.skipped = 0
+        self.n_samples = None
+
+    # ---------------------------------------------------------------- columns
+    def _resolve(self, specs):
+        refs = {}
+        for q in QUANTITIES:
+            spec = specs[q]
+            if spec is not None and str(spec).strip().lower() == "none":
+                if q in self.need:
+                    raise ValueError(f"--{q} none: this command needs the {q}")
+                continue
+            if q not in self.need and spec is None and q not in self.optional:
+                continue
+            ref = self._ref(q, spec)
+            if ref is not None:
+                refs[q] = ref
+        seen = {}
+        for q, ref in refs.items():
+            if ref in seen:
+                raise ValueError(f"the {seen[ref]} and the {q} are both read from "
+                                 f"{self._label(ref)} of {self.path}")
+            seen[ref] = q
+        return refs
+
+    def _ref(self, quantity, spec):
+        src = self.source
+        if isinstance(src, ArraySource):
+            if spec is not None:
+                return src.resolve(spec, quantity)
+            ref = src.default([DEFAULT_NAMES[quantity], quantity])
+            if ref is None and quantity in self.need:
+                raise RecordError(self.path, f"no {DEFAULT_NAMES[quantity]!r} for the "
+                                  f"{quantity}: name it with --{quantity} NAME, NAME:K or K "
+                                  f"({src.inventory()})")
+            return ref
+        return _text_column(src, quantity, spec, quantity in self.need)
+
+    def _label(self, ref):
+        if isinstance(self.source, ArraySource):
+            return self.source.label(ref)
+        name = self.source.columns[ref] if self.source.columns else None
+        return f"column {ref + 1}" + (f" {name!r}" if name else "")
+
+    def _unit(self, given, found):
+        if given is not None:
+            unit, where = given, "option"
+        elif found.get("displacement_unit"):
+            unit, where = found["displacement_unit"], "reader"
+        else:
+            unit, where = "um", "default"
+            ref = self.refs.get("displacement")
+            names = self.source.columns if isinstance(self.source, TextSource) else ()
+            name = names[ref] if isinstance(ref, int) and names else (
+                ref[0] if isinstance(ref, tuple) else None)
+            m = _UNIT_IN_NAME.search(name or "")
+            if m:
+                unit, where = m.group(1), f"column name {name!r}"
+        unit = "um" if unit == "µm" else unit
+        if unit not in UNIT_FACTORS:
+            raise ValueError(f"--displacement-unit must be one of m, mm, um, nm; got {unit!r}")
+        return unit, where
+
+    # ---------------------------------------------------------------- reading
+    def _raw_blocks(self, block_rows, progress):
+        order = list(self.refs)
+        if isinstance(self.source, TextSource):
+            blocks = self.source.blocks([self.refs[q] for q in order], progress)
+        else:
+            blocks = self.source.blocks([self.refs[q] for q in order], block_rows, progress)
+        for values in blocks:
+            yield {q: values[:, j] for j, q in enumerate(order)}
+
+    def chunks(self, block_rows=None, progress=None):
+        """The record as consecutive :class:`Record` blocks (about ``block_rows`` samples
+        each for array files; text files are read in blocks of bytes).
+        ``progress(done, total)`` is called after each block."""
+        transform = _Transform(self)
+        start = 0
+        for raw in self._raw_blocks(block_rows or BLOCK_ROWS, progress):
+            out = transform.feed(raw)
+            n = max((len(a) for a in out.values() if a is not None), default=0)
+            if n:
+                yield Record(**out, source=self.path, metadata=self.metadata(), start=start,
+                             reader=self)
+                start += n
+        self.skipped = transform.skipped
+        self.n_samples = start
+        if start == 0:
+            raise RecordError(self.path, "no samples left"
+                              + (f" after --skip-until {self.skip_until:g} s"
+                                 if self.skip_until is not None else "")
+                              + (f" after --lag {self.lag}" if self.lag else ""))
+
+    def read(self, progress=None):
+        """All samples as one :class:`Record`, gathered into arrays sized from the part
+        of the file read so far (so that the record is held about once, not twice)."""
+        seen = [0, 0]
+
+        def track(done, total):
+            seen[:] = done, total
+            if progress is not None:
+                progress(done, total)
+        gathered = {}
+        n = 0
+        for rec in self.chunks(progress=track):
+            k = len(rec)
+            for q in QUANTITIES:
+                a = getattr(rec, q)
+                if a is None:
+                    continue
+                buf = gathered.get(q)
+                if buf is None or n + k > buf.size:
+                    done, total = seen
+                    expected = int((n + k) * total / done * 1.02) + 1 if done else 0
+                    grown = np.empty(max(expected, int((n + k) * 1.25) + 1))
+                    if buf is not None:
+                        grown[:n] = buf[:n]
+                    buf = gathered[q] = grown
+                buf[n:n + k] = a
+            n += k
+        joined = {q: None for q in QUANTITIES}
+        for q, buf in gathered.items():
+            buf.resize(n, refcheck=False)   # in place: nothing else refers to it
+            joined[q] = buf
+        return Record(**joined, source=self.path, metadata=self.metadata(), start=0,
+                      reader=self)
+
+    # ---------------------------------------------------------------- describing
+    def metadata(self):
+        meta = {"file": self.path, **{k: v for k, v in self.source.metadata().items()
+                                      if not k.startswith("_")}}
+        meta["columns"] = dict(self.labels)
+        meta["displacement_unit"] = self.unit
+        if self.voltage_gain != 1.0:
+            meta["voltage_gain"] = self.voltage_gain
+        if self.rate is not None:
+            meta["rate_hz"] = self.rate
+        if self.lag:
+            meta["lag_samples"] = self.lag
+        if self.skip_until is not None:
+            meta["skip_until_s"] = self.skip_until
+            meta["skipped_samples"] = self.skipped
+        if self.n_samples is not None:
+            meta["samples"] = self.n_samples
+        return meta
+
+    def describe(self):
+        """One line for the user: what was read from where."""
+        parts = [f"{q} {self.labels[q]}" for q in QUANTITIES if q in self.labels]
+        notes = []
+        if "displacement" in self.refs and self.unit != "um":
+            notes.append(f"displacement in {self.unit} ({self.unit_from}) -> um")
+        if self.voltage_gain != 1.0 and "voltage" in self.refs:
+            notes.append(f"voltage x {self.voltage_gain:g}")
+        if self.rate is not None:
+            notes.append(f"{self.rate:g} Hz")
+        if self.lag:
+            notes.append(f"displacement {self.lag} sample(s) later")
+        if self.skip_until is not None:
+            notes.append(f"{self.skipped} samples before {self.skip_until:g} s skipped")
+        layout = self.source.metadata().get("layout", self.source.metadata()["format"])
+        n = "" if self.n_samples is None else f"{self.n_samples} samples, "
+        return (f"read {self.path}: {n}{layout}; " + ", ".join(parts)
+                + ("; " + ", ".join(notes) if notes else ""))
+
+    def error(self, index, quantity, message):
+        """A :class:`RecordError` at sample ``index`` (0-based, after lag and skip) of
+        ``quantity``: file:line:column for text, variable and sample for arrays."""
+        row = self.skipped + index + (self.lag if quantity == "displacement" else 0)
+        if quantity not in self.refs:
+            return RecordError(self.path, f"sample {index}: {message}")
+        return self.source.error(row, self.refs[quantity], message)
+
+    def close(self):
+        if isinstance(self.source, ArraySource):
+            self.source.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class _Transform:
+    """Units, gain, time from the rate, the sensor lag and the skipped start, applied to
+    raw blocks as they come (state carried across blocks)."""
+
+    def __init__(self, reader):
+        self.r = reader
+        self.raw_rows = 0
+        self.to_drop = reader.lag           # leading displacement samples without voltage
+        self.queue = {}
+        self.skipping = reader.skip_until is not None
+        self.skipped = 0
+
+    def feed(self, raw):
+        r = self.r
+        n = len(next(iter(raw.values())))
+        block = dict(raw)
+        if "voltage" in block and r.voltage_gain != 1.0:
+            block["voltage"] = block["voltage"] * r.voltage_gain
+        if "displacement" in block and r.unit != "um":
+            block["displacement"] = block["displacement"] * UNIT_FACTORS[r.unit]
+        if "time" not in block and r.rate is not None:
+            block["time"] = (self.raw_rows + np.arange(n)) / r.rate
+        self.raw_rows += n
+        if r.lag:
+            block = self._pair(block)
+        if self.skipping and block:
+            t = block["time"]
+            keep = np.flatnonzero(t >= r.skip_until)
+            first = keep[0] if keep.size else len(t)
+            self.skipped += int(first)
+            if keep.size:
+                self.skipping = False
+            block = {q: a[first:] for q, a in block.items()}
+        return {q: block.get(q) for q in QUANTITIES} if block else {}
+
+    def _pair(self, block):
+        d = block.pop("displacement")
+        if self.to_drop:
+            k = min(self.to_drop, len(d))
+            d, self.to_drop = d[k:], self.to_drop - k
+        for q, a in [("displacement", d), *block.items()]:
+            self.queue[q] = np.concatenate([self.queue[q], a]) if q in self.queue else a
+        n = min(len(a) for a in self.queue.values())
+        out = {q: a[:n] for q, a in self.queue.items()}
+        self.queue = {q: a[n:] for q, a in self.queue.items()}
+        return out
+
+
+def _text_column(src, quantity, spec, needed):
+    """0-based field of a text record for a quantity (None if optional and absent)."""
+    d = src.dialect
+    if spec is None:
+        name = DEFAULT_NAMES[quantity]
+        if not src.columns:
+            if not needed:
+                return None
+            raise CSVError(src.path, d.first_line, 0,
+                           f"no header line: name the columns by position, e.g. --voltage 1 "
+                           f"--displacement 2 ({d.n_fields} columns, {d.describe()})")
+        if name not in src.columns:
+            if not needed:
+                return None
+            raise CSVError(src.path, d.header_line, 0, f"missing column {name!r} in header "
+                           f"({', '.join(src.columns)}); name the {quantity} column with "
+                           f"--{quantity} NAME or --{quantity} NUMBER")
+        spec = name
+    text = str(spec).strip()
+    if text.isdigit():
+        k = int(text)
+        if not 1 <= k <= d.n_fields:
+            raise CSVError(src.path, d.header_line or d.first_line, 0,
+                           f"--{quantity} {k}: the file has columns 1 to {d.n_fields}")
+        return k - 1
+    if not src.columns:
+        raise CSVError(src.path, d.first_line, 0, f"--{quantity} {text!r}: the file has no "
+                       f"header line, so name the column by its number (1 to {d.n_fields})")
+    hits = [i for i, c in enumerate(src.columns) if c == text]
+    if not hits:
+        raise CSVError(src.path, d.header_line, 0, f"missing column {text!r} in header "
+                       f"({', '.join(src.columns)})")
+    if len(hits) > 1:
+        raise CSVError(src.path, d.header_line, hits[1] + 1,
+                       f"column {text!r} appears {len(hits)} times in the header (columns "
+                       f"{', '.join(str(i + 1) for i in hits)}): name the {quantity} by its "
+                       f"number, e.g. --{quantity} {hits[0] + 1}")
+    return hits[0]
+
+
+def _open_source(path, reader, separator, decimal_comma):
+    if reader is not None:
+        return function_source(path, _call_reader(reader, path))
+    kind = EXTENSIONS.get(os.path.splitext(path)[1].lower())
+    if kind is None:
+        return TextSource(path, separator=separator, decimal_comma=decimal_comma)
+    if separator is not None or decimal_comma is not None:
+        raise ValueError(f"--separator and --decimal-comma are for text files, not {kind}")
+    return open_array_source(path, kind)
+
+
+def _call_reader(reader, path):
+    """Call a reader given as a function, 'module:function' or 'file.py:function'."""
+    if callable(reader):
+        func, name = reader, getattr(reader, "__name__", "reader")
+    else:
+        module, sep, name = str(reader).rpartition(":")
+        if not sep or not module or not name:
+            raise ValueError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
+                             "FILE.py:FUNCTION")
+        try:
+            if module.endswith(".py"):
+                spec = importlib.util.spec_from_file_location("_pihyst_reader", module)
+                if spec is None or not os.path.isfile(module):
+                    raise ImportError(f"no file {module}")
+                mod = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(mod)
+            else:
+                sys.path.insert(0, os.getcwd())
+                try:
+                    mod = importlib.import_module(module)
+                finally:
+                    sys.path.remove(os.getcwd())
+            func = getattr(mod, name)
+        except (ImportError, AttributeError, SyntaxError) as err:
+            raise ValueError(f"--reader {reader}: cannot load it ({err})") from None
+    try:
+        return func(path)
+    except (OSError, ValueError, KeyError, TypeError, IndexError) as err:
+        raise RecordError(path, f"the reader {name} failed: {type(err).__name__}: "
+                          f"{err}") from None
+
+
+def _positive(value, option):
+    if value is None:
+        return None
+    value = _finite(value, option)
+    if value <= 0:
+        raise ValueError(f"{option} must be positive, got {value:g}")
+    return value
+
+
+def _finite(value, option):
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{option} must be a number, got {value!r}") from None
+    if not np.isfinite(value):
+        raise ValueError(f"{option} must be a finite number, got {value!r}")
+    return value
+
+
+def open_record(path, **options):
+    """A :class:`RecordReader` for ``path`` (see :func:`read_record` for the options)."""
+    return RecordReader(path, **options)
+
+
+def read_record(path, **options):
+    """Read a record as it comes.
+
+    ``path``: delimited text (any separator, header or not), ``.npy``, ``.npz``, ``.mat``
+    (v5 and v7.3), ``.h5``/``.hdf5``, ``.parquet``; or anything, with ``reader=``.
+
+    Options (all optional): ``voltage``, ``displacement``, ``time`` (column name or
+    1-based number; a variable, ``NAME:K`` or ``K`` in array files; ``"none"`` to ignore
+    a time column); ``rate`` (Hz, when there is no time column); ``displacement_unit``
+    (m, mm, um, nm; else from the column name, else um); ``voltage_gain`` (the voltage
+    column times this is the actuator's voltage); ``lag`` (the sensor answers this many
+    samples late: displacement[k + lag] goes with voltage[k]); ``skip_until`` (seconds:
+    drop the samples before); ``separator``, ``decimal_comma`` (text, when not found
+    right); ``reader`` (a function, ``module:function`` or ``file.py:function`` called
+    with ``path``, returning a dict of arrays ``voltage``, ``displacement``, ``time`` and
+    ``metadata``); ``need`` (the quantities that must be there).
+
+    Returns a :class:`Record`. Bad data raise :class:`RecordError` (:class:`CSVError` for
+    text, with file, line and column); bad options ``ValueError``.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "loop.txt")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("0\\t0,0\\t12\\n1\\t0,5\\t13\\n2\\t1,0\\t15\\n")
+    >>> rec = read_record(path, voltage=2, displacement=3, time=1, displacement_unit="nm")
+    >>> rec.voltage.tolist(), rec.displacement.round(9).tolist()
+    ([0.0, 0.5, 1.0], [0.012, 0.013, 0.015])
+    """
+    with open_record(path, **options) as reader:
+        return reader.read()

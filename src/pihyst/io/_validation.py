@@ -1,0 +1,98 @@
+"""A model judged on a record: its prediction of the record's voltage against the
+measured displacement, overall and cycle by cycle (docs/records.md)."""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+SCHMITT_BAND = 0.1
+
+
+@dataclass(frozen=True)
+class Errors:
+    """Errors (measured - predicted) of a set of samples, in µm and % of ``span``."""
+
+    samples: int
+    mean_abs: float
+    rms: float
+    max_abs: float
+    at: int          # index of the largest error
+    span: float      # the measured range the percentages refer to
+
+    @classmethod
+    def of(cls, e, span, offset=0):
+        a = np.abs(e)
+        i = int(np.argmax(a))
+        return cls(int(e.size), float(a.mean()), float(np.sqrt(np.mean(e * e))),
+                   float(a[i]), int(offset + i), float(span))
+
+    def pct(self, value):
+        return 100.0 * value / self.span if self.span > 0 else float("nan")
+
+    def to_dict(self):
+        return {"samples": self.samples, "mean_abs_um": self.mean_abs, "rms_um": self.rms,
+                "max_abs_um": self.max_abs, "max_at_sample": self.at,
+                "mean_abs_pct": self.pct(self.mean_abs), "rms_pct": self.pct(self.rms),
+                "max_abs_pct": self.pct(self.max_abs)}
+
+
+@dataclass(frozen=True)
+class Validation:
+    """The result of :func:`validate_model`: ``errors`` over the judged samples,
+    ``shifted`` (the same with the output offset re-fitted to this record's sensor zero,
+    and ``shift`` that offset), ``cycles`` (``(start, stop, Errors)`` per input cycle),
+    ``predicted`` (every sample) and ``first`` (the first judged sample)."""
+
+    errors: Errors
+    shifted: Errors
+    shift: float
+    cycles: list
+    predicted: np.ndarray = field(repr=False)
+    first: int = 0
+
+    def to_dict(self):
+        return {"errors": self.errors.to_dict(), "offset_refitted": {
+            "shift_um": self.shift, **self.shifted.to_dict()},
+            "first_judged_sample": self.first,
+            "cycles": [{"start": a, "stop": b, **e.to_dict()} for a, b, e in self.cycles]}
+
+
+def cycle_starts(u, band=SCHMITT_BAND):
+    """Indices where a cycle of the input starts: the valley before each upward crossing
+    of the middle of its range (crossings with a band of ``band`` x the range against
+    noise, a Schmitt trigger); 0 first."""
+    lo, hi = float(u.min()), float(u.max())
+    mid, half = (lo + hi) / 2, band * (hi - lo) / 2
+    level = np.where(u > mid + half, 1, np.where(u < mid - half, -1, 0))
+    idx = np.flatnonzero(level)
+    if idx.size == 0:
+        return np.array([0])
+    held = level[idx]
+    ups = idx[1:][(held[1:] == 1) & (held[:-1] == -1)]
+    if held[0] == 1:   # the record starts high: its first rise is cut too
+        ups = np.r_[idx[0], ups]
+    starts, previous = [0], 0
+    for up in ups:
+        valley = previous + int(np.argmin(u[previous:up]))
+        if valley > starts[-1]:
+            starts.append(valley)
+        previous = up
+    return np.array(starts)
+
+
+def validate_model(model, voltage, displacement, *, initial_state=None, first=0):
+    """Predict ``voltage`` with ``model`` (from ``initial_state``, default the model's)
+    and compare with ``displacement`` from sample ``first`` on."""
+    u = np.asarray(voltage, dtype=float)
+    y = np.asarray(displacement, dtype=float)
+    predicted = model.predict(u, initial_state=initial_state)
+    e = y - predicted
+    judged = slice(first, None)
+    span = float(np.ptp(y[judged])) if y[judged].size else 0.0
+    errors = Errors.of(e[judged], span, first)
+    shift = float(np.mean(e[judged]))
+    shifted = Errors.of(e[judged] - shift, span, first)
+    starts = [int(s) for s in cycle_starts(u[judged]) + first]
+    bounds = list(zip(starts, starts[1:] + [u.size]))
+    cycles = [(int(a), int(b), Errors.of(e[a:b], span, a)) for a, b in bounds if b > a]
+    return Validation(errors, shifted, shift, cycles, predicted, first)

@@ -1,0 +1,246 @@
+"""The record options on the command line: the two measured records with one command
+each, validate, compensate's reachable range and --strict, the input-range rule,
+--initial-state, and streamed commands equal to the in-memory computation bit for bit."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+import pihyst
+from pihyst.cli import main
+from pihyst.io import _records, _text_source, datasets, read_columns, read_record
+
+CLASSICAL = "examples/paper_table1_classical.json"
+MULTISLOPE = "examples/paper_table1_multislope.json"
+DATA = datasets.data_root()
+needs_data = pytest.mark.skipif(DATA is None, reason="the measured data sets (../shared/data "
+                                "or $PIHYST_DATA) are not here")
+
+
+def run(*argv):
+    return main([str(a) for a in argv])
+
+
+def triangle(path, peak=150.0, n=401, extra=""):
+    u = np.r_[np.linspace(0, peak, n // 2 + 1), np.linspace(peak, 0, n // 2 + 1)[1:]]
+    t = np.arange(u.size) * 0.01
+    path.write_text("time_s,voltage_V" + extra + "\n"
+                    + "".join(f"{a!r},{b!r}\n" for a, b in zip(t.tolist(), u.tolist())))
+    return t, u
+
+
+# ------------------------------------------------------------------ measured records
+@needs_data
+def test_p885_raw_file_fits_with_one_command(tmp_path, capsys):
+    model = tmp_path / "p885.json"
+    assert run("fit", DATA / datasets.P885_DIR / "Model_Vi_Do.dat", "--voltage", 1,
+               "--displacement", 5, "--lag", 1, "--rate", 200, "--model", "classical",
+               "-o", model) == 0
+    out = capsys.readouterr().out
+    assert "8026 samples, tab-separated, no header, 7 columns" in out
+    u, y = datasets.p885(DATA)
+    assert pihyst.load_model(model).input_range == (u.min(), u.max())
+    assert run("validate", model, DATA / datasets.P885_DIR / "Test_Vi_Do_Di.dat", "--voltage",
+               1, "--displacement", 5, "--lag", 1, "--rate", 200, "--json") == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["errors"]["samples"] == 14154
+    assert result["offset_refitted"]["rms_um"] < 2.0
+
+
+@needs_data
+def test_smarthysteresis_raw_file_fits_with_one_command(tmp_path, capsys):
+    model = tmp_path / "smart.json"
+    assert run("fit", DATA / datasets.SMART_DIR / "hysteresis_v_150_1hz.csv", "--time", 2,
+               "--displacement", 3, "--voltage", 4, "--skip-until", 4.26, "--model",
+               "classical", "-o", model) == 0
+    out = capsys.readouterr().out
+    assert "28701 samples" in out and "21300 samples before 4.26 s skipped" in out
+    assert pihyst.load_model(model).input_range == (-150.0, 150.0)
+
+
+# ------------------------------------------------------------------ validate
+def test_validate_a_model_on_its_own_prediction_and_a_shifted_record(tmp_path, capsys):
+    src = tmp_path / "in.csv"
+    triangle(src)
+    pred = tmp_path / "pred.csv"
+    assert run("predict", CLASSICAL, src, "-o", pred) == 0
+    capsys.readouterr()
+    assert run("validate", CLASSICAL, pred, "--json") == 0
+    exact = json.loads(capsys.readouterr().out)
+    assert exact["errors"]["max_abs_um"] == 0.0 and len(exact["cycles"]) == 1
+    cols, _ = read_columns(pred, ["time_s", "voltage_V", "displacement_um"])
+    shifted = tmp_path / "shifted.csv"
+    pihyst.io.write_columns(shifted, {"t": cols["time_s"], "v": cols["voltage_V"],
+                                      "d_nm": (cols["displacement_um"] + 2.0) * 1000})
+    figure = tmp_path / "check.svg"
+    assert run("validate", CLASSICAL, shifted, "--voltage", "v", "--displacement", "d_nm",
+               "--time", "t", "--figure", figure) == 0
+    out = capsys.readouterr().out
+    assert "displacement in nm (column name 'd_nm') -> um" in out
+    assert "as the model is                    2         2         2     5.16 %" in out
+    assert "mostly an offset of +2 um" in out
+    assert figure.read_text().lstrip().startswith("<?xml")
+
+
+# ------------------------------------------------------------------ compensate
+def test_compensate_prints_reach_and_strict_refuses(tmp_path, capsys):
+    src = tmp_path / "d.csv"
+    src.write_text("time_s,displacement_um\n0,1\n1,10\n2,60\n3,5\n")
+    out = tmp_path / "out.csv"
+    assert run("compensate", MULTISLOPE, src, "-o", out) == 0
+    text = capsys.readouterr().out
+    assert "reachable displacement: [0, 41.38] um with the voltage in [0, 150] V" in text
+    assert "1 samples lie outside the reachable range" in text
+    assert "sensor zero of the record the model was fitted on" in text
+    out.unlink()
+    assert run("compensate", MULTISLOPE, src, "-o", out, "--strict") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: {src}:4:2: displacement_um = 60 is out of reach")
+    assert "[0, 41.38] um" in err and err.count("\n") == 1 and not out.exists()
+    assert not [p for p in os.listdir(tmp_path) if p.startswith(".pihyst-")]
+
+
+# ------------------------------------------------------------------ input range rule
+def test_a_hair_outside_the_range_is_predicted_far_outside_is_an_error(tmp_path, capsys):
+    src = tmp_path / "in.csv"
+    src.write_text("voltage_V\n0\n150.5\n0\n")
+    out = tmp_path / "out.csv"
+    assert run("predict", CLASSICAL, src, "-o", out) == 0
+    assert "1 samples outside the model's input range [0, 150] V" in capsys.readouterr().out
+    model = pihyst.load_model(CLASSICAL)
+    wide = model.replace(input_range=(0, 151))
+    cols, _ = read_columns(out, ["displacement_um"])
+    np.testing.assert_array_equal(cols["displacement_um"], wide.predict([0, 150.5, 0]))
+    assert run("predict", MULTISLOPE, src, "-o", out) == 0
+    assert "taken at the nearest end" in capsys.readouterr().out
+    src.write_text("voltage_V\n0\n152\n")
+    assert run("predict", CLASSICAL, src, "-o", out) == 2
+    assert f"{src}:3:1: voltage_V = 152 is outside" in capsys.readouterr().err
+
+
+def test_fit_input_range(tmp_path, capsys):
+    src = tmp_path / "rec.csv"
+    t, u = triangle(src, peak=149.99)
+    y = pihyst.load_model(CLASSICAL).replace(input_range=(0, 149.99)).predict(u)
+    pihyst.io.write_columns(src, {"time_s": t, "voltage_V": u, "displacement_um": y})
+    model = tmp_path / "m.json"
+    assert run("fit", src, "--model", "classical", "--input-range", "0,150", "-o", model,
+               "--voltage", "voltage_V") == 0
+    fitted = pihyst.load_model(model)
+    assert fitted.input_range == (0.0, 150.0)
+    assert fitted.metadata["source"]["command"].endswith("fit --voltage voltage_V")
+    assert fitted.metadata["source"]["record"]["samples"] == u.size
+    assert run("fit", src, "--model", "classical", "--input-range", "0,100", "-o", model) == 2
+    assert "is outside --input-range 0,100" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ initial state
+def test_initial_state_modes(tmp_path):
+    src = tmp_path / "in.csv"
+    src.write_text("voltage_V\n75\n75\n")
+    results = {}
+    for mode in ("bottom", "top", "zero", "model"):
+        out = tmp_path / f"{mode}.csv"
+        assert run("predict", CLASSICAL, src, "-o", out, "--initial-state", mode) == 0
+        results[mode] = read_columns(out, ["displacement_um"])[0]["displacement_um"][0]
+    model = pihyst.load_model(CLASSICAL)
+    top = model.simulate([0, 150, 0, 150, 75], initial_state=np.zeros(4)).output[-1]
+    assert results["top"] == top and results["bottom"] < results["top"]
+    assert results["zero"] == results["model"]
+
+
+# ------------------------------------------------------------------ streaming
+def test_streamed_predict_and_compensate_equal_in_memory_bit_for_bit(tmp_path, monkeypatch):
+    rng = np.random.default_rng(3)
+    u = np.clip(75 + np.cumsum(rng.normal(0, 5, 3000)), 0, 150)
+    src = tmp_path / "in.csv"
+    pihyst.io.write_columns(src, {"time_s": np.arange(u.size) * 1e-3, "voltage_V": u})
+    monkeypatch.setattr(_text_source, "BLOCK_BYTES", 997)   # about 25 rows a block
+    monkeypatch.setattr(_records, "BLOCK_ROWS", 37)
+    out = tmp_path / "pred.csv"
+    for name in (CLASSICAL, MULTISLOPE):
+        model = pihyst.load_model(name)
+        assert run("predict", name, src, "-o", out) == 0
+        predicted = read_record(out, need=("voltage", "displacement"))
+        np.testing.assert_array_equal(predicted.displacement, model.predict(u))
+        comp = tmp_path / "comp.csv"
+        assert run("compensate", name, out, "-o", comp, "--slew-rate", 20000) == 0
+        cols, _ = read_columns(comp, ["voltage_V", "displacement_um", "saturated"])
+        step = 20000 * np.diff(predicted.time).min()   # V/s x the smallest time step
+        whole = pihyst.compensate(model, model.predict(u), slew_rate=step)
+        np.testing.assert_array_equal(cols["voltage_V"], whole.voltage)
+        np.testing.assert_array_equal(cols["displacement_um"], whole.displacement)
+
+
+def test_records_of_other_formats_on_the_command_line(tmp_path, capsys):
+    np.savez(tmp_path / "r.npz", v=np.array([0.0, 150.0, 0.0]))
+    out = tmp_path / "out.csv"
+    assert run("predict", CLASSICAL, tmp_path / "r.npz", "--voltage", "v", "--rate", 10,
+               "-o", out) == 0
+    cols, _ = read_columns(out, ["time_s", "displacement_um"])
+    np.testing.assert_allclose(cols["displacement_um"], [0, 38.76, 3.09], atol=1e-12)
+    np.testing.assert_array_equal(cols["time_s"], [0, 0.1, 0.2])
+    assert run("predict", CLASSICAL, tmp_path / "r.npz", "-o", out) == 2
+    err = capsys.readouterr().err
+    assert "r.npz: no 'voltage_V' for the voltage" in err and err.count("\n") == 1
+
+
+def test_no_progress_bar_in_a_pipe(tmp_path, capsys):
+    src = tmp_path / "in.csv"
+    triangle(src)
+    assert run("predict", CLASSICAL, src, "-o", tmp_path / "o.csv") == 0
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["validate", CLASSICAL, "{src}", "--figure", "{tmp}/f.txt"], "use a .png, .svg or .pdf"),
+    (["fit", "{src}", "-o", "{tmp}/m.json", "--input-range", "0-150"], "expected LO,HI"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--lag", "-2"], "--lag must be"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--rate", "10"],
+     "--rate is for records without a time column"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--reader", "nothing"],
+     "expected MODULE:FUNCTION"),
+])
+def test_bad_options_are_one_line_errors(tmp_path, capsys, argv, message):
+    src = tmp_path / "in.csv"
+    triangle(src, extra="")
+    argv = [a.format(src=src, tmp=tmp_path) for a in argv]
+    assert run(*argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pihyst: error: ") and message in err and err.count("\n") == 1
+    assert not [p for p in os.listdir(tmp_path) if p not in ("in.csv",)]
+
+
+def test_reader_function_on_the_command_line(tmp_path, capsys):
+    (tmp_path / "rig.py").write_text(
+        "import numpy as np\n"
+        "def load(path):\n"
+        "    v = np.loadtxt(path)\n"
+        "    return {'voltage': v, 'metadata': {'rate': 2.0}}\n")
+    data = tmp_path / "volts.raw"
+    data.write_text("0\n150\n0\n")
+    out = tmp_path / "o.csv"
+    assert run("predict", CLASSICAL, data, "--reader", f"{tmp_path / 'rig.py'}:load",
+               "-o", out) == 0
+    cols, _ = read_columns(out, ["time_s", "displacement_um"])
+    np.testing.assert_array_equal(cols["time_s"], [0, 0.5, 1.0])
+    assert "python function" in capsys.readouterr().out
+
+
+def test_progress_bar_on_a_terminal(monkeypatch):
+    pytest.importorskip("tqdm")
+    import io
+
+    from pihyst.cli.record_options import progress_bar
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+    term = Terminal()
+    monkeypatch.setattr("sys.stderr", term)
+    with progress_bar("reading big.csv") as bar:
+        bar(50, 100)
+        bar(100, 100)
+    assert "reading big.csv" in term.getvalue() and "100" in term.getvalue()

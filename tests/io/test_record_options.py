@@ -1,0 +1,103 @@
+"""The reading options (units, gain, rate, lag, skip) and reading block by block."""
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from pihyst.io import CSVError, RecordError, open_record, read_record
+
+pytestmark = pytest.mark.usefixtures("engine")
+
+
+def write(tmp_path, rows, header="t,u,y"):
+    path = tmp_path / "r.csv"
+    path.write_text(header + "\n" + "".join(",".join(repr(v) for v in r) + "\n" for r in rows))
+    return path
+
+
+def test_lag_pairs_later_displacement_and_locates_it(tmp_path, small_blocks):
+    rows = [(0.1 * k, float(k), 100.0 + k) for k in range(20)]
+    path = write(tmp_path, rows)
+    rec = read_record(path, time="t", voltage="u", displacement="y", lag=2)
+    assert len(rec) == 18
+    np.testing.assert_array_equal(rec.voltage, np.arange(18))
+    np.testing.assert_array_equal(rec.displacement, 102 + np.arange(18))
+    np.testing.assert_array_equal(rec.time, [r[0] for r in rows[:18]])
+    assert rec.error(0, "displacement", "x").line == 4   # header, then raw rows 0, 1, 2
+    assert rec.error(0, "voltage", "x").line == 2
+
+
+def test_skip_until_with_time_or_rate(tmp_path, small_blocks):
+    rows = [(0.5 * k, float(k), float(-k)) for k in range(10)]
+    path = write(tmp_path, rows)
+    rec = read_record(path, time="t", voltage="u", displacement="y", skip_until=2.0)
+    np.testing.assert_array_equal(rec.voltage, np.arange(4, 10))
+    assert rec.metadata["skipped_samples"] == 4
+    assert rec.error(0, "voltage", "here").line == 6
+    rec = read_record(path, time="none", voltage="u", displacement="y", rate=4, lag=1,
+                      skip_until=1.0)
+    np.testing.assert_array_equal(rec.voltage, np.arange(4, 9))
+    np.testing.assert_array_equal(rec.displacement, -np.arange(5, 10))
+    np.testing.assert_array_equal(rec.time, np.arange(4, 9) / 4)
+
+
+def test_units_gain_from_options_and_names(tmp_path):
+    path = write(tmp_path, [(0.0, 1.0, 2e-6)], header="time_s,amp_in,pos_m")
+    rec = read_record(path, voltage="amp_in", displacement="pos_m", voltage_gain=15)
+    assert rec.voltage.tolist() == [15.0] and rec.displacement == pytest.approx([2.0])
+    assert rec.metadata["displacement_unit"] == "m"
+    rec = read_record(path, voltage=2, displacement=3, displacement_unit="mm")
+    assert rec.displacement == pytest.approx([2e-3])
+
+
+@pytest.mark.parametrize("options,message", [
+    ({"lag": -1}, "--lag must be"),
+    ({"rate": 0}, "--rate must be positive"),
+    ({"rate": 10}, "--rate is for records without a time column"),
+    ({"time": "none", "skip_until": 1}, "--skip-until needs a time column"),
+    ({"displacement_unit": "inch"}, "--displacement-unit must be"),
+    ({"voltage_gain": 0}, "--voltage-gain must not be 0"),
+    ({"displacement": "u"}, "both read from column 2"),
+    ({"separator": "|"}, "unknown separator"),
+])
+def test_bad_options_are_value_errors(tmp_path, options, message):
+    path = write(tmp_path, [(0.0, 1.0, 2.0)])
+    kwargs = {"time": "t", "voltage": "u", "displacement": "y", **options}
+    with pytest.raises(ValueError, match=message):
+        read_record(path, **kwargs)
+
+
+def test_nothing_left_after_skip_or_lag(tmp_path):
+    path = write(tmp_path, [(0.0, 1.0, 2.0)])
+    with pytest.raises(ValueError, match="no samples left after --lag 1"):
+        read_record(path, time="t", voltage="u", displacement="y", lag=1)
+    with pytest.raises(CSVError, match=r"r.csv:1:4: column 'y' appears 2 times"):
+        path.write_text("t,u,y,y\n0,1,2,3\n")
+        read_record(path, voltage="u", displacement="y")
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(n=st.integers(1, 60), lag=st.integers(0, 4), skip=st.none() | st.floats(0, 3),
+       block=st.integers(16, 200))
+def test_blocks_join_to_the_whole_record(tmp_path_factory, monkeypatch, n, lag, skip, block):
+    from pihyst.io import _records, _text_source
+    path = tmp_path_factory.mktemp("b") / "r.csv"
+    rng = np.random.default_rng(n)
+    rows = np.column_stack([np.arange(n) * 0.1, rng.normal(size=n), rng.normal(size=n)])
+    path.write_text("t,u,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows.tolist()))
+    options = dict(time="t", voltage="u", displacement="y", lag=lag, skip_until=skip)
+    try:
+        whole = read_record(path, **options)
+    except RecordError as err:
+        assert "no samples left" in str(err)
+        return
+    monkeypatch.setattr(_text_source, "BLOCK_BYTES", block)
+    monkeypatch.setattr(_records, "BLOCK_ROWS", 3)
+    with open_record(path, **options) as reader:
+        parts = list(reader.chunks())
+    assert [p.start for p in parts] == list(np.cumsum([0] + [len(p) for p in parts])[:-1])
+    for q in ("voltage", "displacement", "time"):
+        np.testing.assert_array_equal(np.concatenate([getattr(p, q) for p in parts]),
+                                      getattr(whole, q))
