@@ -44,6 +44,9 @@ int main(void)
     run_inverse_tests();
     run_bank_tests();
     run_kernel_tests();
+#ifndef PIHYST_TEST_F32
+    run_creep_tests(); /* the creep lags are double precision only */
+#endif
 #ifdef PIHYST_TEST_F32
     run_twin_tests();
     printf("single precision: %d passed, %d failed\n", test_passed, test_failed);

@@ -42,4 +42,5 @@ void run_inverse_tests(void);
 void run_bank_tests(void);
 void run_kernel_tests(void);
 void run_twin_tests(void);
+void run_creep_tests(void);
 #endif

@@ -496,3 +496,146 @@ cdef class CompensatorArray:
         for i, obj in enumerate(self.compensators):
             c = <Compensator>obj
             c.last_flags = flags[i]
+
+
+# ---------------------------------------------------------------- creep (pihyst_creep.h)
+
+cdef extern from "pihyst_creep.h" nogil:
+    ctypedef enum pihyst_creep_status:
+        PIHYST_CREEP_OK
+    ctypedef struct pihyst_creep:
+        size_t n
+        double dt
+        double beta
+    pihyst_creep_status pihyst_creep_init(pihyst_creep *c, size_t n, const double *tau,
+                                          const double *gain, double dt, double *alpha,
+                                          double *state, const double *initial_state)
+    double pihyst_creep_target(const pihyst_creep *c, double y_desired)
+    double pihyst_creep_step(pihyst_creep *c, double h)
+    double pihyst_creep_target_dt(const pihyst_creep *c, double dt, double y_desired)
+    double pihyst_creep_step_dt(pihyst_creep *c, double dt, double h)
+    void pihyst_creep_run(pihyst_creep *c, const double *h, const double *dt, double *y,
+                          size_t n)
+    size_t pihyst_creep_compensator_run(pihyst_creep *cr, pihyst_compensator *c,
+                                        const double *y_desired, const double *dt,
+                                        double *u, double *y, pihyst_flags *flags,
+                                        size_t n)
+    const char *pihyst_creep_status_text(pihyst_creep_status status)
+
+
+cdef class Creep:
+    """Creep lags z_i driven by a hysteresis output h, with their state (pihyst_creep.h).
+
+    ``dt`` is the fixed interval; the methods take per-sample intervals ``dt`` (an
+    array, or a number for one sample) or use the fixed one when it is None.
+    """
+    cdef pihyst_creep c
+    cdef readonly size_t n
+    cdef object _tau, _gain, _alpha, _state
+
+    def __init__(self, tau, gain, double dt, initial_state=None):
+        cdef const double[::1] tau_v, gain_v, init_v
+        cdef double[::1] alpha_v, state_v
+        cdef const double *init_p = NULL
+        self._tau = _vector(tau, name="tau").copy()
+        self.n = self._tau.shape[0]
+        self._gain = _vector(gain, self.n, "gain").copy()
+        self._alpha = np.zeros(max(self.n, 1))
+        self._state = np.zeros(max(self.n, 1))
+        if initial_state is not None:
+            init_v = _vector(initial_state, self.n, "creep state")
+            init_p = &init_v[0] if self.n else NULL
+        tau_v, gain_v = self._tau, self._gain
+        alpha_v, state_v = self._alpha, self._state
+        status = pihyst_creep_init(&self.c, self.n, &tau_v[0] if self.n else NULL,
+                                   &gain_v[0] if self.n else NULL, dt, &alpha_v[0],
+                                   &state_v[0], init_p)
+        if status != PIHYST_CREEP_OK:
+            raise CoreError(pihyst_creep_status_text(status).decode())
+
+    @property
+    def state(self):
+        """A copy of the lag states z_i[t-1]."""
+        return self._state[:self.n].copy()
+
+    @state.setter
+    def state(self, value):
+        self._state[:self.n] = _checked_state(value, self.n)
+
+    @property
+    def beta(self):
+        """sum_i g_i (1 - alpha_i) for the fixed interval."""
+        return self.c.beta
+
+    def target(self, double y_desired, dt=None):
+        """The hysteresis output that gives y_desired at the next sample."""
+        if dt is None:
+            return pihyst_creep_target(&self.c, y_desired)
+        return pihyst_creep_target_dt(&self.c, float(dt), y_desired)
+
+    def step(self, double h, dt=None):
+        """Advance the lags by the hysteresis output h; return the output."""
+        if dt is None:
+            return pihyst_creep_step(&self.c, h)
+        return pihyst_creep_step_dt(&self.c, float(dt), h)
+
+    def run(self, h, dt=None):
+        """Outputs for a block of hysteresis outputs (intervals dt, None: fixed)."""
+        cdef const double[::1] h_v = _vector(h, name="h")
+        cdef Py_ssize_t n = h_v.shape[0]
+        cdef const double[::1] dt_v
+        cdef const double *dt_p = NULL
+        y = np.empty(n)
+        cdef double[::1] y_v = y
+        if dt is not None:
+            dt_v = _vector(dt, n, "dt")
+            dt_p = &dt_v[0] if n else NULL
+        if n:
+            with nogil:
+                pihyst_creep_run(&self.c, &h_v[0], dt_p, &y_v[0], n)
+        return y
+
+    def lag_states(self, h, dt=None):
+        """The N x n matrix of lag states z_i[t] after each sample of h (identification
+        needs them; the output is not formed)."""
+        cdef const double[::1] h_v = _vector(h, name="h")
+        cdef Py_ssize_t n = h_v.shape[0], t, i
+        cdef const double[::1] dt_v
+        cdef bint fixed = dt is None
+        cdef double[::1] st = self._state
+        z = np.empty((n, self.n))
+        cdef double[:, ::1] z_v = z
+        if not fixed:
+            dt_v = _vector(dt, n, "dt")
+        with nogil:
+            for t in range(n):
+                if fixed:
+                    pihyst_creep_step(&self.c, h_v[t])
+                else:
+                    pihyst_creep_step_dt(&self.c, dt_v[t], h_v[t])
+                for i in range(<Py_ssize_t>self.n):
+                    z_v[t, i] = st[i]
+        return z
+
+    def compensate(self, Compensator comp, y_desired, dt=None):
+        """(voltage, output, flags) for a block of desired outputs of the model with
+        creep: each sample's hysteresis target goes to ``comp``."""
+        cdef const double[::1] d_v = _vector(y_desired, name="y_desired")
+        cdef Py_ssize_t n = d_v.shape[0]
+        cdef const double[::1] dt_v
+        cdef const double *dt_p = NULL
+        u = np.empty(n)
+        y = np.empty(n)
+        flags = np.zeros(n, dtype=np.uint8)
+        cdef double[::1] u_v = u
+        cdef double[::1] y_v = y
+        cdef pihyst_flags[::1] f_v = flags
+        if dt is not None:
+            dt_v = _vector(dt, n, "dt")
+            dt_p = &dt_v[0] if n else NULL
+        if n:
+            with nogil:
+                pihyst_creep_compensator_run(&self.c, &comp.c, &d_v[0], dt_p, &u_v[0],
+                                             &y_v[0], &f_v[0], n)
+            comp.last_flags = f_v[n - 1]
+        return u, y, flags

@@ -269,3 +269,69 @@ class Compensator:
             y[t] = self.output
             flags[t] = self.last_flags
         return u, y, flags
+
+
+class Creep:
+    """NumPy twin of :class:`pihyst._core.Creep` (docs/theory/creep.md), same methods.
+
+    Written from the definitions, not from (C4)-(C5): the target is found from the
+    output's value at two hysteresis levels, which is exact because the output is affine
+    in h at each sample.
+    """
+
+    def __init__(self, tau, gain, dt, initial_state=None):
+        self.tau = np.array(tau, dtype=float)
+        self.gain = np.array(gain, dtype=float)
+        self.n = self.tau.size
+        if self.n == 0:
+            raise CoreError("creep needs at least one lag")
+        if not (np.all(np.isfinite(self.tau)) and np.all(np.isfinite(self.gain))):
+            raise CoreError("creep parameter is NaN or infinite")
+        if np.any(self.tau <= 0):
+            raise CoreError("creep time constants must be > 0")
+        if np.any(self.gain < 0) or not self.gain.sum() < 1:
+            raise CoreError("creep gains must be >= 0 and sum to less than 1")
+        if not (np.isfinite(dt) and dt >= 0):
+            raise CoreError("creep sample interval must be finite and >= 0")
+        self.dt = float(dt)
+        self.state = np.zeros(self.n) if initial_state is None else \
+            np.array(initial_state, dtype=float)
+
+    @property
+    def beta(self):
+        return float(self.gain @ np.exp(-self.dt / self.tau))
+
+    def _next(self, h, dt):
+        # alpha_i = 1 - exp(-dt/tau_i);  z_i[t] = z_i[t-1] + alpha_i (h - z_i[t-1])
+        alpha = 1.0 - np.exp(-dt / self.tau)
+        z = self.state + alpha * (h - self.state)
+        # y[t] = h - sum_i g_i (h - z_i[t])
+        return h - self.gain @ (h - z), z
+
+    def step(self, h, dt=None):
+        y, self.state = self._next(float(h), self.dt if dt is None else float(dt))
+        return float(y)
+
+    def target(self, y_desired, dt=None):
+        dt = self.dt if dt is None else float(dt)
+        y0, _ = self._next(0.0, dt)
+        y1, _ = self._next(1.0, dt)
+        return float((y_desired - y0) / (y1 - y0))
+
+    def run(self, h, dt=None):
+        h = np.asarray(h, dtype=float)
+        dts = [None] * h.size if dt is None else np.asarray(dt, dtype=float)
+        return np.array([self.step(x, d) for x, d in zip(h, dts)])
+
+    def compensate(self, comp, y_desired, dt=None):
+        y_desired = np.asarray(y_desired, dtype=float)
+        dts = [None] * y_desired.size if dt is None else np.asarray(dt, dtype=float)
+        u = np.empty(y_desired.size)
+        y = np.empty(y_desired.size)
+        flags = np.zeros(y_desired.size, dtype=np.uint8)
+        for t, (y_d, d) in enumerate(zip(y_desired, dts)):
+            with np.errstate(invalid="ignore"):
+                u[t] = comp.step(self.target(y_d, d))
+            y[t] = self.step(comp.output, d)
+            flags[t] = comp.last_flags
+        return u, y, flags

@@ -55,7 +55,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
         through=None, initial_state="auto", holdout="alternate", refit=True,
         input_range=None, validate=None, delay=0, max_operators=None, max_latency=None,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep=False):
     """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
     one of those that generalize best.
 
@@ -129,6 +129,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     max_exhaustive : int
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
+    t : array_like, optional
+        Sample times (s), needed with ``creep``.
+    creep : bool or array_like
+        Also fit creep (docs/theory/creep.md): first-order lags of the hysteresis output
+        with half-decade time constants (or these time constants, s), their gains fitted
+        with the weights in one QP. The model then carries ``model.creep``.
 
     Returns
     -------
@@ -173,6 +179,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     >>> res.report.chosen, res.model.family
     ('modified-pi', 'pwl')
     """
+    if creep is not False and creep is not None:
+        from pihyst.identify._creep import fit_with_creep
+        kw = {k: v for k, v in locals().items()
+              if k not in ("u", "y", "t", "creep", "fit_with_creep")}
+        return fit_with_creep(fit, u, y, t, time_constants=None if creep is True else creep,
+                              **kw)
     explicit_family = family is not None
     specs = FAMILY_NAMES if family is None else (
         [family] if isinstance(family, str) or not _is_sequence(family) else list(family))

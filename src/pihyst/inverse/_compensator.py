@@ -9,6 +9,10 @@ continuous, piecewise linear and non-decreasing in u. Each sample is solved exac
 the C core (no iteration, no tolerance) by walking the breakpoints of y(u) away from the
 last voltage and solving the linear equation of the segment that holds the desired
 value; where y(u) is flat the voltage nearest the last one is kept (docs/theory/inverse.md).
+For a model with creep (docs/theory/creep.md) the output is affine in the hysteresis
+output H at each sample, y = (1 - beta) H + (lag terms), 1 - beta > 0: each sample first
+solves for the hysteresis target H* (the lag state is known), then the voltage for H*
+exactly as above, then advances the lags by the H reached.
 Voltage limits and a slew limit hold for every output, whatever the input:
 a desired value out of reach saturates at the limit and is flagged, NaN holds the last
 voltage and is flagged.
@@ -24,6 +28,7 @@ import numpy as np
 from pihyst import _core
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.model import InvalidModelError, PIModel
+from pihyst.model._creep import sample_intervals
 from pihyst.model._models import _finite_vector
 
 __all__ = ["CompensationResult", "Compensator", "compensate", "FLAG_SATURATED_LOW",
@@ -79,6 +84,8 @@ class CompensationResult:
     final_voltage: float
     limits: tuple
     slew_rate: float = None
+    initial_creep_state: np.ndarray = None
+    final_creep_state: np.ndarray = None
 
     @property
     def n_saturated(self):
@@ -120,6 +127,9 @@ class Compensator:
         Operator state before the first sample (default: the model's initial state).
         The initial voltage is applied to it (a no-op for a state the model reached
         with that voltage).
+    creep_state : array_like, optional
+        For a model with creep: the lag states before the first sample (default:
+        settled at the model's output at the initial voltage).
 
     Examples
     --------
@@ -140,7 +150,7 @@ class Compensator:
     FLAG_SLEW = FLAG_SLEW
 
     def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None):
+                 initial_state=None, creep_state=None):
         if not isinstance(model, PIModel):
             raise InvalidArgumentError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
                             f"PiecewiseLinearPI), not {type(model).__name__}")
@@ -174,10 +184,22 @@ class Compensator:
                                        f"voltage limits [{u_min:g}, {u_max:g}]")
         state = (model.initial_state if initial_state is None else
                  _finite_vector(initial_state, "initial_state", model.n_operators))
-        self._start = (np.array(state), initial_voltage)
+        self._start = (np.array(state), initial_voltage, creep_state)
         self._core = _core.Compensator(model._new_bank(state), u_min, u_max,
                                        np.inf if slew_rate is None else slew_rate,
                                        initial_voltage)
+        self._lags = None
+        self._start_lags(creep_state)
+
+    def _start_lags(self, creep_state):
+        """With creep: the lags from ``creep_state``, or settled at the output now."""
+        if self.model.creep is None:
+            return
+        n = self.model.creep.n_lags
+        z = (np.full(n, self._core.output) if creep_state is None else
+             _finite_vector(creep_state, "creep_state", n))
+        self._lags = self.model.creep.lags(z)
+        self._output = self._core.output
 
     # ---------------------------------------------------------------- state
     @property
@@ -192,17 +214,26 @@ class Compensator:
 
     @property
     def displacement(self):
-        """The model's displacement at the last voltage."""
-        return self._core.output
+        """The model's displacement at the last voltage (with creep: at the last
+        sample)."""
+        return self._core.output if self._lags is None else self._output
+
+    @property
+    def creep_state(self):
+        """The creep lag states (a copy; None for a model without creep)."""
+        return None if self._lags is None else self._lags.state
 
     @property
     def last_flags(self):
         """Flags of the last :meth:`step` (0: desired value reached)."""
         return self._core.last_flags
 
-    def reset(self, state=None, voltage=None):
-        """Go back to the initial state and voltage, or to ``state`` and ``voltage``."""
-        start_state, start_voltage = self._start
+    def reset(self, state=None, voltage=None, creep_state=None):
+        """Go back to the initial state and voltage, or to ``state`` and ``voltage``
+        (with creep: the lags to ``creep_state``, default settled at the output)."""
+        start_state, start_voltage, start_creep = self._start
+        if state is None and voltage is None and creep_state is None:
+            creep_state = start_creep
         state = start_state if state is None else _finite_vector(state, "state",
                                                                  self.model.n_operators)
         voltage = start_voltage if voltage is None else _number(voltage, "voltage")
@@ -211,19 +242,41 @@ class Compensator:
             raise InvalidArgumentError(f"voltage {voltage:g} is outside the limits "
                                        f"[{lo:g}, {hi:g}]")
         self._core.reset(state, voltage)
+        self._start_lags(creep_state)
 
     # ---------------------------------------------------------------- compensation
-    def step(self, y_desired):
-        """The voltage for one desired displacement (applied to the state)."""
-        return self._core.step(_number(y_desired, "y_desired", allow_inf=True, allow_nan=True))
+    def step(self, y_desired, dt=None):
+        """The voltage for one desired displacement (applied to the state). With creep,
+        ``dt`` is the time since the previous sample (default ``model.creep.dt``)."""
+        y_desired = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
+        if self._lags is None:
+            return self._core.step(y_desired)
+        if dt is not None:
+            dt = _number(dt, "dt")
+            if dt < 0:
+                raise InvalidArgumentError(f"dt must be >= 0 s, got {dt:g}")
+        u, y, _ = self._lags.compensate(self._core, np.array([y_desired]),
+                                        None if dt is None else np.array([dt]))
+        self._output = float(y[0])
+        return float(u[0])
 
-    def run(self, y_desired):
+    def run(self, y_desired, t=None):
         """Compensate a block of desired displacements, continuing from the current state.
+        With creep, ``t`` are the sample times (s; default: every ``model.creep.dt``,
+        the first one ``creep.dt`` after the previous sample).
 
         Returns a :class:`CompensationResult`."""
         y_desired = _desired(y_desired)
         initial_state, initial_voltage = self.state, self.voltage
-        u, y, flags = self._core.run(y_desired)
+        initial_creep = self.creep_state
+        if self._lags is None:
+            u, y, flags = self._core.run(y_desired)
+        else:
+            dt = (None if t is None else
+                  sample_intervals(t, y_desired.size, self.model.creep.dt))
+            u, y, flags = self._lags.compensate(self._core, y_desired, dt)
+            if y.size:
+                self._output = float(y[-1])
         low = (flags & FLAG_SATURATED_LOW) != 0
         high = (flags & FLAG_SATURATED_HIGH) != 0
         return CompensationResult(
@@ -231,7 +284,8 @@ class Compensator:
             saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
             nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
             initial_voltage=initial_voltage, final_state=self.state,
-            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
+            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate,
+            initial_creep_state=initial_creep, final_creep_state=self.creep_state)
 
     def __repr__(self):
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
@@ -240,7 +294,7 @@ class Compensator:
 
 
 def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
-               initial_voltage=None, initial_state=None):
+               initial_voltage=None, initial_state=None, t=None, creep_state=None):
     """Voltages that make ``model`` follow the desired displacements ``y_desired``.
 
     Exact inverse sample by sample (see the module notes), within the voltage limits
@@ -253,8 +307,11 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
         A model with non-negative weights.
     y_desired : array_like
         Desired displacements, one per sample.
-    u_min, u_max, slew_rate, initial_voltage, initial_state
+    u_min, u_max, slew_rate, initial_voltage, initial_state, creep_state
         As for :class:`Compensator`.
+    t : array_like, optional
+        Sample times (s) for a model with creep (default: every ``model.creep.dt``);
+        ignored without creep.
 
     Returns
     -------
@@ -274,8 +331,8 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     (1, 150.0)
     """
     return Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                       initial_voltage=initial_voltage, initial_state=initial_state
-                       ).run(y_desired)
+                       initial_voltage=initial_voltage, initial_state=initial_state,
+                       creep_state=creep_state).run(y_desired, t=t)
 
 
 def _number(value, name, allow_inf=False, allow_nan=False):

@@ -8,6 +8,7 @@ imports nothing else of the package. Theory: docs/theory/operators.md.
 from pihyst.exceptions import InputRangeError, InvalidModelError
 from pihyst.model._bank import ModelBank
 from pihyst.model._classical_inverse import classical_inverse, reachable_output_range
+from pihyst.model._creep import Creep
 from pihyst.model._models import (
     DEFAULT_INPUT_RANGE,
     SCHEMA_VERSION,
@@ -23,6 +24,7 @@ __all__ = [
     "DEFAULT_INPUT_RANGE",
     "SCHEMA_VERSION",
     "ClassicalPI",
+    "Creep",
     "InputRangeError",
     "InvalidModelError",
     "ModelBank",

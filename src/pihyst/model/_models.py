@@ -27,6 +27,7 @@ from pihyst import _core, paper
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
+from pihyst.model._creep import Creep, sample_intervals
 
 PAPER_SHAPE = paper.SHAPE
 DEFAULT_INPUT_RANGE = (0.0, 150.0)
@@ -42,6 +43,8 @@ class Response:
     input: np.ndarray
     output: np.ndarray
     final_state: np.ndarray
+    #: with creep: the lag states z_i after the last sample (None without creep)
+    final_creep_state: np.ndarray = None
 
 
 def _finite_vector(values, name, length=None):
@@ -116,7 +119,7 @@ class PIModel(ABC):
             PIModel._registry[cls.family] = cls
 
     def __init__(self, weights, *, offset=0.0, input_range=None, initial_state=None,
-                 units=None, metadata=None):
+                 units=None, metadata=None, creep=None):
         set_ = object.__setattr__
         set_(self, "weights", _finite_vector(weights, "weights"))
         if self.weights.size == 0:
@@ -149,6 +152,8 @@ class PIModel(ABC):
             raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
         set_(self, "metadata", MappingProxyType(dict(metadata or {})))
         set_(self, "_bank", self._new_bank(self.initial_state))
+        # creep lags (docs/theory/creep.md): None for a rate-independent model
+        set_(self, "creep", None if creep is None else Creep.from_dict(creep))
         self._check_output_bound()
 
     def _check_output_bound(self):
@@ -208,18 +213,45 @@ class PIModel(ABC):
             return self.initial_state
         return _finite_vector(initial_state, "initial_state", self.n_operators)
 
-    def simulate(self, u, *, initial_state=None):
+    def simulate(self, u, *, initial_state=None, t=None, creep_state=None):
         """Run the model over the input ``u`` from ``initial_state`` (default: the
         model's own). Returns a :class:`Response` with the final operator state,
-        from which a following chunk continues exactly."""
-        u = self._checked_input(u)
-        bank = self._new_bank(self._state_or_initial(initial_state))
-        y = bank.run(u)
-        return Response(input=u, output=y, final_state=bank.state)
+        from which a following chunk continues exactly.
 
-    def predict(self, u, *, initial_state=None):
-        """Displacements for the voltages ``u`` (a NumPy array of the same length)."""
-        return self.simulate(u, initial_state=initial_state).output
+        A model with :attr:`creep` also uses the sample times ``t`` (s; default: every
+        ``creep.dt``; the first sample comes ``creep.dt`` after the initial state) and
+        the lag state ``creep_state`` (default: settled at the initial output); the
+        response then carries ``final_creep_state``. Without creep ``t`` is ignored.
+        """
+        u = self._checked_input(u)
+        state = self._state_or_initial(initial_state)
+        bank = self._new_bank(state)
+        h = bank.run(u)
+        if self.creep is None:
+            return Response(input=u, output=h, final_state=bank.state)
+        lags = self._lags(state, creep_state)
+        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        return Response(input=u, output=lags.run(h, dt), final_state=bank.state,
+                        final_creep_state=lags.state)
+
+    def predict(self, u, *, initial_state=None, t=None, creep_state=None):
+        """Displacements for the voltages ``u`` (a NumPy array of the same length);
+        ``t``, ``creep_state``: see :meth:`simulate`."""
+        return self.simulate(u, initial_state=initial_state, t=t,
+                             creep_state=creep_state).output
+
+    def hysteresis_output(self, state):
+        """offset + sum_k w_k f_k for an operator state: the settled displacement."""
+        return self.offset + float(self.weights @ np.asarray(state, dtype=np.float64))
+
+    def _lags(self, state, creep_state):
+        """The C creep lags from ``creep_state`` (None: settled at the output of the
+        operator state ``state``)."""
+        if creep_state is None:
+            creep_state = np.full(self.creep.n_lags, self.hysteresis_output(state))
+        else:
+            creep_state = _finite_vector(creep_state, "creep_state", self.creep.n_lags)
+        return self.creep.lags(creep_state)
 
     def operators(self, u, *, initial_state=None):
         """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8)."""
@@ -240,7 +272,8 @@ class PIModel(ABC):
         """Every constructor argument, by name."""
         return {**self._own_params(), "weights": self.weights, "offset": self.offset,
                 "input_range": self.input_range, "initial_state": self.initial_state,
-                "units": dict(self.units), "metadata": dict(self.metadata)}
+                "units": dict(self.units), "metadata": dict(self.metadata),
+                "creep": self.creep}
 
     def _own_params(self):
         return {}
@@ -273,6 +306,8 @@ class PIModel(ABC):
                 value = tuple(value.tolist())
             elif isinstance(value, dict):
                 value = tuple(sorted(value.items()))
+            elif isinstance(value, Creep):
+                value = value._key()
             out.append((name, value))
         return tuple(out)
 
@@ -306,7 +341,8 @@ class PIModel(ABC):
     @staticmethod
     def _defaults(model):
         return {"offset": 0.0, "input_range": DEFAULT_INPUT_RANGE,
-                "initial_state": np.zeros(model.n_operators), "units": dict(DEFAULT_UNITS)}
+                "initial_state": np.zeros(model.n_operators), "units": dict(DEFAULT_UNITS),
+                "creep": None}
 
     # ---------------------------------------------------------------- persistence
     def to_dict(self):
@@ -315,6 +351,8 @@ class PIModel(ABC):
              "weights": self.weights.tolist(), "offset": self.offset,
              "input_range": list(self.input_range),
              "initial_state": self.initial_state.tolist(), "units": dict(self.units)}
+        if self.creep is not None:
+            d["creep"] = self.creep.to_dict()
         if self.metadata:
             d["metadata"] = dict(self.metadata)
         return d
@@ -323,7 +361,7 @@ class PIModel(ABC):
         return {}
 
     _COMMON_KEYS = frozenset({"family", "weights", "offset", "input_range", "initial_state",
-                              "units", "metadata", "schema_version"})
+                              "units", "metadata", "schema_version", "creep"})
     _OWN_KEYS = frozenset()
     _REQUIRED_KEYS = ("weights",)
 
@@ -358,7 +396,7 @@ class PIModel(ABC):
             raise InvalidModelError(f"{source}: schema_version {version!r:.20} is not "
                                     f"{SCHEMA_VERSION} (written by another pihyst version)")
         common = {k: d[k] for k in ("weights", "offset", "input_range", "initial_state",
-                                    "units", "metadata") if k in d}
+                                    "units", "metadata", "creep") if k in d}
         try:
             return target(**target._own_from_dict(d), **common)
         except InvalidModelError as err:
@@ -395,23 +433,34 @@ class Stepper:
     [0.0, 25.0, 20.0]
     """
 
-    def __init__(self, model, initial_state=None):
+    def __init__(self, model, initial_state=None, creep_state=None):
         self.model = model
         self._initial = model._state_or_initial(initial_state)
         self._bank = model._new_bank(self._initial)
+        # with creep: the lags, settled at the initial output unless given
+        self._lags = None if model.creep is None else model._lags(self._initial, creep_state)
 
     @property
     def state(self):
         """The running operator state (a copy)."""
         return self._bank.state
 
-    def reset(self, state=None):
-        """Set the running state to ``state`` (default: the initial state)."""
+    @property
+    def creep_state(self):
+        """The creep lag states z_i (a copy; None for a model without creep)."""
+        return None if self._lags is None else self._lags.state
+
+    def reset(self, state=None, creep_state=None):
+        """Set the running state to ``state`` (default: the initial state); with
+        creep, the lags to ``creep_state`` (default: settled at that state's output)."""
         self._bank.state = self._initial if state is None else \
             self.model._state_or_initial(state)
+        if self._lags is not None:
+            self._lags = self.model._lags(self._bank.state, creep_state)
 
-    def step(self, u):
-        """One sample: advance the running state by the input ``u``, return y."""
+    def step(self, u, dt=None):
+        """One sample: advance the running state by the input ``u``, return y. With
+        creep, ``dt`` is the time since the previous sample (default ``creep.dt``)."""
         try:
             u = float(u)
         except (TypeError, ValueError, OverflowError):
@@ -419,7 +468,14 @@ class Stepper:
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
-        return self._bank.step(u)
+        h = self._bank.step(u)
+        if self._lags is None:
+            return h
+        if dt is not None:
+            dt = float(dt)
+            if not (np.isfinite(dt) and dt >= 0):
+                raise ValueError(f"dt must be a finite interval >= 0 s, got {dt}")
+        return self._lags.step(h, dt)
 
 
 class ClassicalPI(PIModel):

@@ -4,11 +4,13 @@
   hysteresis, creep, supply quantisation, sensor noise, optional dynamics); none is a PI
   model, so fitting PI models to their data proves something
   (docs/theory/simulated-beams.md);
+- :func:`random_plant`: a random actuator from a seed, for population benchmarks;
 - :mod:`pihyst.sim.signals`: the paper's triangle, sines, decaying triangles, random
   ramps, staircases.
 """
 
 from pihyst.sim import signals
 from pihyst.sim._plant import PLANT_NAMES, Plant, make_plant
+from pihyst.sim._population import random_plant
 
-__all__ = ["PLANT_NAMES", "Plant", "make_plant", "signals"]
+__all__ = ["PLANT_NAMES", "Plant", "make_plant", "random_plant", "signals"]

@@ -1,4 +1,5 @@
-"""Test signals: the paper's triangle, sines, decaying triangles, random ramps, staircases.
+"""Test signals: the paper's triangle, sines, decaying triangles, random ramps, staircases,
+growing sines.
 
 Every function returns ``(t, u)``: sample times (s, from 0, step ``dt``) and values. The
 values are generic: volts when the signal drives a beam, micrometres when it is a desired
@@ -225,3 +226,26 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     u = np.repeat(levels, per_step)
     return _times(u.size, dt), u
 
+
+def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=5,
+                 dt=DEFAULT_DT):
+    """A sine from ``u_min`` whose amplitude grows linearly until the last cycle's peak
+    reaches ``u_max``, then falls back to ``u_min``: nested loops growing outward.
+
+        u(t) = u_min + (u_max - u_min) min(t / T_p, 1) (1 - cos(2 pi t / period_s)) / 2,
+        T_p = (n_cycles - 1/2) period_s   (the last peak)
+
+    Examples
+    --------
+    >>> t, u = growing_sine(n_cycles=2, period_s=4.0, dt=1.0)
+    >>> [round(float(x), 1) for x in u]
+    [0.0, 12.5, 50.0, 37.5, 0.0, 62.5, 150.0, 75.0, 0.0]
+    """
+    _check_common(u_min, u_max, dt)
+    _positive(period_s, "period_s")
+    n_cycles = _count(n_cycles, "n_cycles")
+    total = n_cycles * period_s
+    t = _grid(total, dt)
+    envelope = np.minimum(t / (total - period_s / 2), 1.0)
+    u = u_min + (u_max - u_min) * envelope * (1 - np.cos(2 * np.pi * t / period_s)) / 2
+    return t, np.clip(u, u_min, u_max)

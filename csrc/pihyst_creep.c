@@ -1,0 +1,150 @@
+/* pihyst_creep.c - creep lags of a PI model and their compensator (pihyst_creep.h,
+ * docs/theory/creep.md). */
+#include "pihyst_creep.h"
+
+#include <math.h>
+
+pihyst_creep_status pihyst_creep_init(pihyst_creep *c, size_t n, const double *tau,
+                                      const double *gain, double dt, double *alpha,
+                                      double *state, const double *initial_state)
+{
+    size_t i;
+    double sum = 0.0;
+    if (!c || !tau || !gain || !alpha || !state) return PIHYST_CREEP_ENULL;
+    if (n == 0) return PIHYST_CREEP_ESIZE;
+    for (i = 0; i < n; ++i) {
+        if (!isfinite(tau[i]) || !isfinite(gain[i])) return PIHYST_CREEP_ENONFINITE;
+        if (!(tau[i] > 0.0)) return PIHYST_CREEP_ETAU;
+        if (gain[i] < 0.0) return PIHYST_CREEP_EGAIN;
+        sum += gain[i];
+    }
+    if (!(sum < 1.0)) return PIHYST_CREEP_EGAIN;
+    if (!isfinite(dt) || dt < 0.0) return PIHYST_CREEP_EDT;
+    if (initial_state) {
+        for (i = 0; i < n; ++i)
+            if (!isfinite(initial_state[i])) return PIHYST_CREEP_ENONFINITE;
+    }
+    c->n = n;
+    c->tau = tau;
+    c->gain = gain;
+    c->dt = dt;
+    c->alpha = alpha;
+    c->state = state;
+    c->beta = 0.0;
+    for (i = 0; i < n; ++i) {
+        /* (C1): alpha = 1 - exp(-dt/tau), without cancellation for dt << tau */
+        alpha[i] = -expm1(-dt / tau[i]);
+        c->beta += gain[i] * (1.0 - alpha[i]);            /* (C4) */
+        state[i] = initial_state ? initial_state[i] : 0.0;
+    }
+    return PIHYST_CREEP_OK;
+}
+
+void pihyst_creep_settle(pihyst_creep *c, double h)
+{
+    size_t i;
+    for (i = 0; i < c->n; ++i) c->state[i] = h;
+}
+
+/* H* = (y_d - sum_i g_i (1 - alpha_i) z_i) / (1 - beta)                           (C5) */
+double pihyst_creep_target(const pihyst_creep *c, double y_desired)
+{
+    size_t i;
+    double carry = 0.0;
+    for (i = 0; i < c->n; ++i) carry += c->gain[i] * (1.0 - c->alpha[i]) * c->state[i];
+    return (y_desired - carry) / (1.0 - c->beta);
+}
+
+/* z_i <- z_i + alpha_i (h - z_i)                                                  (C2)
+ * y    = h - sum_i g_i (h - z_i)                                                  (C3) */
+double pihyst_creep_step(pihyst_creep *c, double h)
+{
+    size_t i;
+    double lag = 0.0;
+    for (i = 0; i < c->n; ++i) {
+        c->state[i] += c->alpha[i] * (h - c->state[i]);
+        lag += c->gain[i] * (h - c->state[i]);
+    }
+    return h - lag;
+}
+
+double pihyst_creep_target_dt(const pihyst_creep *c, double dt, double y_desired)
+{
+    size_t i;
+    double carry = 0.0, beta = 0.0;
+    if (dt == c->dt) return pihyst_creep_target(c, y_desired); /* alpha_i known */
+    for (i = 0; i < c->n; ++i) {
+        const double keep = c->gain[i] * exp(-dt / c->tau[i]); /* g_i (1 - alpha_i) */
+        carry += keep * c->state[i];
+        beta += keep;
+    }
+    return (y_desired - carry) / (1.0 - beta);
+}
+
+double pihyst_creep_step_dt(pihyst_creep *c, double dt, double h)
+{
+    size_t i;
+    double lag = 0.0;
+    if (dt == c->dt) return pihyst_creep_step(c, h); /* alpha_i known: no exp */
+    for (i = 0; i < c->n; ++i) {
+        c->state[i] += -expm1(-dt / c->tau[i]) * (h - c->state[i]);
+        lag += c->gain[i] * (h - c->state[i]);
+    }
+    return h - lag;
+}
+
+void pihyst_creep_run(pihyst_creep *c, const double *h, const double *dt, double *y,
+                      size_t n)
+{
+    size_t t;
+    if (dt) {
+        for (t = 0; t < n; ++t) y[t] = pihyst_creep_step_dt(c, dt[t], h[t]);
+    } else {
+        for (t = 0; t < n; ++t) y[t] = pihyst_creep_step(c, h[t]);
+    }
+}
+
+double pihyst_creep_compensator_step(pihyst_creep *cr, pihyst_compensator *c, double dt,
+                                     double y_desired, double *y, pihyst_flags *flags)
+{
+    const int fixed = dt < 0.0;
+    /* a NaN desired value gives a NaN target: the compensator holds and flags it */
+    const double target = fixed ? pihyst_creep_target(cr, y_desired)
+                                : pihyst_creep_target_dt(cr, dt, y_desired);
+    const double u = pihyst_compensator_step(c, target, flags);
+    const double out = fixed ? pihyst_creep_step(cr, c->y_last)
+                             : pihyst_creep_step_dt(cr, dt, c->y_last);
+    if (y) *y = out;
+    return u;
+}
+
+size_t pihyst_creep_compensator_run(pihyst_creep *cr, pihyst_compensator *c,
+                                    const double *y_desired, const double *dt, double *u,
+                                    double *y, pihyst_flags *flags, size_t n)
+{
+    size_t t, count = 0;
+    for (t = 0; t < n; ++t) {
+        pihyst_flags fl = 0;
+        double out;
+        u[t] = pihyst_creep_compensator_step(cr, c, dt ? dt[t] : -1.0, y_desired[t], &out,
+                                             &fl);
+        if (y) y[t] = out;
+        if (flags) flags[t] = fl;
+        count += fl != 0;
+    }
+    return count;
+}
+
+const char *pihyst_creep_status_text(pihyst_creep_status status)
+{
+    switch (status) {
+    case PIHYST_CREEP_OK: return "ok";
+    case PIHYST_CREEP_ENULL: return "a required pointer is NULL";
+    case PIHYST_CREEP_ESIZE: return "creep needs at least one lag";
+    case PIHYST_CREEP_ENONFINITE: return "creep parameter or state is NaN or infinite";
+    case PIHYST_CREEP_ETAU: return "creep time constants must be > 0";
+    case PIHYST_CREEP_EGAIN: return "creep gains must be >= 0 and sum to less than 1";
+    case PIHYST_CREEP_EDT: return "creep sample interval must be finite and >= 0";
+    }
+    return "unknown status";
+}
