@@ -71,6 +71,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         ``"modified-pi"`` (classical + monotone input function), ``"kp"``
         (Krasnosel'skii-Pokrovskii kernels). Default: all of them, compared on the
         held-back cycles; the one with the lowest held-back RMS is returned.
+        ``"bouc-wen"`` alone fits a :class:`pihyst.model.BoucWenModel` instead
+        (only input_range, initial_state, holdout and refit apply).
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
         range) instead of choosing them.
@@ -152,6 +154,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     >>> [round(float(w), 6) for w in res.model.weights]
     [0.3, 0.2, 0.1]
     """
+    if family == "bouc-wen":   # not a PI family: its own fit (docs/theory/bouc-wen.md)
+        from pihyst.identify._boucwen import fit_result
+        return fit_result(u, y, input_range=input_range, initial_state=initial_state,
+                          holdout=holdout, refit=refit)
     rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
                   holdout=holdout, offset=offset, through=through)
     if family is None:

@@ -5,6 +5,7 @@ Voltage limits and a slew limit hold for every output of the compensator, whatev
 input.
 """
 
+from pihyst.inverse._boucwen import BoucWenCompensator
 from pihyst.inverse._compensator import (
     FLAG_NAN,
     FLAG_SATURATED_HIGH,
@@ -16,6 +17,6 @@ from pihyst.inverse._compensator import (
 )
 from pihyst.model import classical_inverse, reachable_output_range
 
-__all__ = ["FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW", "FLAG_SLEW",
+__all__ = ["BoucWenCompensator", "FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW", "FLAG_SLEW",
            "CompensationResult", "Compensator", "classical_inverse", "compensate",
            "reachable_output_range"]

@@ -245,8 +245,9 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
 
     Parameters
     ----------
-    model : PIModel
-        A model with non-negative weights.
+    model : PIModel or BoucWenModel
+        A model with non-negative weights, or a monotone Bouc-Wen model
+        (:class:`pihyst.inverse.BoucWenCompensator`).
     y_desired : array_like
         Desired displacements, one per sample.
     u_min, u_max, slew_rate, initial_voltage, initial_state
@@ -269,9 +270,11 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     >>> result.n_saturated, float(result.voltage[-1])   # 50 um is out of reach
     (1, 150.0)
     """
-    return Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                       initial_voltage=initial_voltage, initial_state=initial_state
-                       ).run(y_desired)
+    from pihyst.inverse._boucwen import BoucWenCompensator
+    from pihyst.model import BoucWenModel
+    cls = BoucWenCompensator if isinstance(model, BoucWenModel) else Compensator
+    return cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+               initial_voltage=initial_voltage, initial_state=initial_state).run(y_desired)
 
 
 def _number(value, name, allow_inf=False):

@@ -6,6 +6,7 @@ imports nothing else of the package. Theory: docs/theory/operators.md.
 """
 
 from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.model._boucwen import BoucWenModel, BoucWenStepper
 from pihyst.model._classical_inverse import classical_inverse, reachable_output_range
 from pihyst.model._models import (
     DEFAULT_INPUT_RANGE,
@@ -19,6 +20,8 @@ from pihyst.model._models import (
 )
 
 __all__ = [
+    "BoucWenModel",
+    "BoucWenStepper",
     "DEFAULT_INPUT_RANGE",
     "SCHEMA_VERSION",
     "ClassicalPI",

@@ -296,9 +296,12 @@ class PIModel(ABC):
             raise InvalidModelError(f"{source}: a model must be a JSON object, got "
                                     f"{type(d).__name__}")
         family = d.get("family")
+        if cls is PIModel and family == "bouc-wen":   # not a PI model: its own schema
+            from pihyst.model._boucwen import BoucWenModel
+            return BoucWenModel.from_dict(d, source)
         if not isinstance(family, str) or family not in PIModel._registry:
             raise InvalidModelError(f"{source}: key 'family' must be one of "
-                                    f"{', '.join(sorted(PIModel._registry))}; got "
+                                    f"{', '.join(sorted([*PIModel._registry, 'bouc-wen']))}; got "
                                     f"{family!r:.40}")
         target = PIModel._registry[family]
         if cls is not PIModel and target is not cls:
