@@ -7,7 +7,7 @@ import hides a cycle from Python, not from this test). Layers, lowest first
 0. ``_version``, ``_atomic``, ``_core``, ``_reference``, ``exceptions``, ``paper``, ``metrics``
 1. ``model``
 2. ``io``, ``inverse``
-3. ``identify``, ``sim``
+3. ``identify``, ``sim``, ``dynamics``
 4. ``study``, ``rig``
 5. ``cli``
 
@@ -27,7 +27,7 @@ LAYERS = [
     {"_version", "_atomic", "_core", "_reference", "exceptions", "paper", "metrics"},
     {"model"},
     {"io", "inverse"},
-    {"identify", "sim"},
+    {"identify", "sim", "dynamics"},
     {"study", "rig"},
     {"cli"},
 ]

@@ -41,7 +41,7 @@ def test_matches_the_closed_form_for_n_1(beta, gamma):
     assert err < 1e-8 * scale
 
 
-@settings(max_examples=30)
+@settings(max_examples=15)
 @given(beta=st.floats(0.3, 80), ratio=st.floats(-0.95, 0.95), n=st.floats(1, 4),
        seed=st.integers(0, 2**16))
 def test_state_stays_bounded_and_the_stepper_matches_the_batch(beta, ratio, n, seed):
@@ -58,7 +58,7 @@ def test_state_stays_bounded_and_the_stepper_matches_the_batch(beta, ratio, n, s
                           m.predict(np.r_[u, more])[u.size:])
 
 
-@settings(max_examples=30)
+@settings(max_examples=15)
 @given(beta=st.floats(0.3, 80), ratio=st.floats(-0.95, 0.95), n=st.floats(1, 4),
        seed=st.integers(0, 2**16))
 def test_monotone_by_the_bound(beta, ratio, n, seed):

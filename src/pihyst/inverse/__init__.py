@@ -17,6 +17,6 @@ from pihyst.inverse._compensator import (
 )
 from pihyst.model import classical_inverse, reachable_output_range
 
-__all__ = ["BoucWenCompensator", "FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW", "FLAG_SLEW",
-           "CompensationResult", "Compensator", "classical_inverse", "compensate",
+__all__ = ["BoucWenCompensator", "FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW",
+           "FLAG_SLEW", "CompensationResult", "Compensator", "classical_inverse", "compensate",
            "reachable_output_range"]

@@ -25,6 +25,7 @@ from pihyst.inverse._compensator import (
     FLAG_SATURATED_HIGH,
     FLAG_SATURATED_LOW,
     FLAG_SLEW,
+    OTHER_COMPENSATORS,
     CompensationResult,
     _desired,
     _number,
@@ -225,3 +226,6 @@ class BoucWenCompensator:
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
         return (f"BoucWenCompensator(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
                 f"{slew}, voltage={self.voltage:g})")
+
+
+OTHER_COMPENSATORS[BoucWenModel.family] = BoucWenCompensator

@@ -32,6 +32,7 @@ import numpy as np
 
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.model._models import OTHER_FAMILIES, Response
 
 FAMILY = "bouc-wen"
 SCHEMA_VERSION = 1
@@ -268,7 +269,6 @@ class BoucWenModel:
     def simulate(self, u, *, initial_state=None):
         """Run over the input ``u`` from ``initial_state`` (default: the model's own);
         returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z)."""
-        from pihyst.model._models import Response
         u = self._checked_input(u)
         u0, z0 = self._state(initial_state)
         z = trajectory(self._x(u), self._x(u0), z0, self.beta, self.gamma, self.n)
@@ -366,6 +366,9 @@ class BoucWenModel:
     def save(self, path):
         """Write the model as JSON to ``path`` (the file appears only once complete)."""
         write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
+
+
+OTHER_FAMILIES[FAMILY] = BoucWenModel
 
 
 class BoucWenStepper:
