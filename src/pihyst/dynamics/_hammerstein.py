@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pihyst.dynamics._linear import fit_oe, simulate
+from pihyst.dynamics._linear import fit_oe, fit_oe_periodic, response, simulate
 from pihyst.model import ClassicalPI
 
 
@@ -99,12 +99,21 @@ def default_thresholds(u, n_operators=4):
     return np.arange(n_operators) * (span / 2) / n_operators
 
 
-def fit_linear(records, na, nb, iterations=5):
-    """Linear-only MIMO model of the same structure: A_j y_j = sum_i B_ji u_i."""
+def fit_linear(records, na, nb, iterations=5, period=None):
+    """Linear-only MIMO model of the same structure: A_j y_j = sum_i B_ji u_i.
+
+    ``period``: the records are periodic with this many samples per period and in
+    steady state over their last period; the fit is then the frequency-domain
+    output-error fit of that period (:func:`pihyst.dynamics._linear.fit_oe_periodic`)."""
     recs = _as_records(records)
     a, b = [], []
     for j in range(recs[0][1].shape[1]):
-        aj, bj = fit_oe([(u, y[:, j]) for u, y in recs], na, nb, iterations)
+        if period:
+            spectra = [(np.fft.rfft(u[-period:], axis=0), np.fft.rfft(y[-period:, j]))
+                       for u, y in recs]
+            aj, bj = fit_oe_periodic(spectra, na, nb, period, iterations=2 * iterations)
+        else:
+            aj, bj = fit_oe([(u, y[:, j]) for u, y in recs], na, nb, iterations)
         a.append(aj)
         b.append(bj)
     return tuple(a), tuple(b)
@@ -116,11 +125,13 @@ def predict_linear(a, b, u):
 
 
 def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_range=None,
-                    iterations=5, refinements=10):
+                    iterations=5, refinements=10, period=None):
     """A :class:`HammersteinModel` fitted to ``records`` (list of (u, y), u (N, m), y (N,
     p)); module notes. ``thresholds``: one array per input (default
     :func:`default_thresholds` of all records' input). ``input_range``: per input
-    (default: 1.5 times the data's span about its centre)."""
+    (default: 1.5 times the data's span about its centre). ``period``: as for
+    :func:`fit_linear` (the fit then runs on the last period's spectrum; the operators
+    are run over the whole record, so the first period settles them)."""
     from scipy.optimize import lsq_linear
 
     recs = _as_records(records)
@@ -141,7 +152,16 @@ def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_ra
     offs = np.cumsum([0] + K)
     skip = max(na, nb)
 
+    if period:
+        # spectra of the last period: operator outputs (L x K per input) and outputs
+        spec_phi = [[np.fft.rfft(ph[i][-period:], axis=0) for i in range(m)] for ph in phis]
+        spec_y = [np.fft.rfft(y[-period:], axis=0) for _, y in recs]
+
     def dynamics(w):
+        if period:
+            hs = [np.column_stack([sp[i] @ w[i] for i in range(m)]) for sp in spec_phi]
+            return [fit_oe_periodic([(h, Y[:, j]) for h, Y in zip(hs, spec_y)], na, nb,
+                                    period, iterations=2 * iterations) for j in range(p)]
         hs = [np.column_stack([ph[i] @ w[i] for i in range(m)]) for ph in phis]
         return [fit_oe([(h, y[:, j]) for h, (_, y) in zip(hs, recs)], na, nb, iterations)
                 for j in range(p)]
@@ -149,6 +169,14 @@ def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_ra
     def filtered(dyn):
         # y_j = sum_ik w_ik (B_ji / A_j) f_ik: the simulated output is linear in w
         cols, target = [], []
+        if period:
+            resp = [response(a_j, b_j, period) for a_j, b_j in dyn]
+            for sp, Y in zip(spec_phi, spec_y):
+                for j in range(p):
+                    M = np.hstack([resp[j][:, i:i + 1] * sp[i] for i in range(m)])
+                    cols += [M.real, M.imag]
+                    target += [Y[:, j].real, Y[:, j].imag]
+            return np.vstack(cols), np.concatenate(target)
         for ph, (_, y) in zip(phis, recs):
             for j in range(p):
                 a_j, b_j = dyn[j]
@@ -173,11 +201,15 @@ def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_ra
         w_new = [sol[offs[i]:offs[i + 1]] for i in range(m)]
         gains = [max(wi.sum(), 1e-300) for wi in w_new]
         w_new = [wi / g for wi, g in zip(w_new, gains)]      # sum_k w_ik = 1
+        # the w step with the gains moved into B, then the dynamics refitted on it
+        moved = [(a_j, b_j * np.array(gains)[:, None]) for a_j, b_j in best[1]]
+        candidates = [(sim_rss(moved, w_new), moved, w_new)]
         dyn_new = dynamics(w_new)
-        rss = sim_rss(dyn_new, w_new)
-        if not rss < best[0]:
+        candidates.append((sim_rss(dyn_new, w_new), dyn_new, w_new))
+        step = min(candidates, key=lambda c: c[0])
+        if not step[0] < best[0] * (1 - 1e-6):
             break
-        best = (rss, dyn_new, w_new)
+        best = step
     _, dyn, w = best
     hyst = tuple(bases[i].replace(weights=w[i]) for i in range(m))
     return HammersteinModel(hysteresis=hyst, a=tuple(d[0] for d in dyn),
