@@ -8,7 +8,7 @@ core = Extension(
     "pihyst._core",
     sources=["src/pihyst/_core.pyx", *sorted(glob.glob("csrc/pihyst_*.c"))],
     include_dirs=["csrc"],
-    depends=["csrc/pihyst.h", "csrc/pihyst_internal.h"],
+    depends=sorted(glob.glob("csrc/pihyst*.h")),
     # -std=c99 turns off FMA contraction (ISO mode); -ffp-contract=fast turns it back on.
     extra_compile_args=["-std=c99", "-O3", "-ffp-contract=fast"],
 )

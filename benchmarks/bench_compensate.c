@@ -126,9 +126,12 @@ int main(int argc, char **argv)
         r[k] = (family ? 50.0 : 150.0) * k / K;
         w[k] = (k == 0 ? 0.2 : 0.0) + 0.1 * uniform();
     }
-    if (pihyst_model_init(&m, family ? PIHYST_MULTISLOPE : PIHYST_CLASSICAL, (size_t)K, r, w, 0.0,
-                          0.0, 150.0, &shape, NULL, coef, state, NULL) != PIHYST_OK)
-        return 1;
+    {
+        const pihyst_params params = {.family = family ? PIHYST_MULTISLOPE : PIHYST_CLASSICAL,
+                                      .n_ops = (size_t)K, .thresholds = r, .weights = w,
+                                      .u_min = 0.0, .u_max = 150.0, .shape = shape};
+        if (pihyst_model_init(&m, &params, coef, state) != PIHYST_OK) return 1;
+    }
     /* voltage walk: steps up to 0.5 V per sample, reversals at random levels; or ramps
      * at 0.25 V per sample between random levels */
     for (t = 0; t < n; ++t) {

@@ -58,8 +58,6 @@
 #include "pihyst.h"
 #include "pihyst_internal.h"
 
-#include <float.h>
-#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -79,16 +77,16 @@
 
 /* An event list is two arrays: distances d[i] and slope changes s[i]. */
 
-static void swap_events(double *d, double *s, size_t i, size_t j)
+static void swap_events(real *d, real *s, size_t i, size_t j)
 {
-    const double td = d[i], ts = s[i];
+    const real td = d[i], ts = s[i];
     d[i] = d[j];
     s[i] = s[j];
     d[j] = td;
     s[j] = ts;
 }
 
-static void heap_sift(double *d, double *s, size_t root, size_t n)
+static void heap_sift(real *d, real *s, size_t root, size_t n)
 {
     for (;;) {
         size_t child = 2 * root + 1;
@@ -100,7 +98,7 @@ static void heap_sift(double *d, double *s, size_t root, size_t n)
     }
 }
 
-static void heap_sort(double *d, double *s, size_t n)
+static void heap_sort(real *d, real *s, size_t n)
 {
     size_t i;
     if (n < 2) return;
@@ -114,12 +112,12 @@ static void heap_sort(double *d, double *s, size_t n)
 /* Sort by distance: insertion sort, O(n) on nearly sorted lists; if it has moved more
  * than 4n + 8 elements the list is far from sorted and heapsort finishes the job, so
  * the worst case stays O(n log n). */
-static void sort_events(double *d, double *s, size_t n)
+static void sort_events(real *d, real *s, size_t n)
 {
     size_t i, moves = 0;
     const size_t budget = 4 * n + 8;
     for (i = 1; i < n; ++i) {
-        const double di = d[i], si = s[i];
+        const real di = d[i], si = s[i];
         size_t j = i;
         while (j > 0 && d[j - 1] > di) {
             d[j] = d[j - 1];
@@ -137,7 +135,7 @@ static void sort_events(double *d, double *s, size_t n)
 }
 
 /* 1 if the n distances d are not in non-decreasing order */
-static int out_of_order(const double *d, size_t n)
+static int out_of_order(const real *d, size_t n)
 {
     size_t i;
     int bad = 0;
@@ -149,11 +147,11 @@ static int out_of_order(const double *d, size_t n)
 
 /* End of a walk past its last event: z(d) = z + s (d - d0) up to d = span. Returns 1 and
  * the d with z(d) = target if z(span) >= target, else 0 and d = span. */
-static PIHYST_INLINE int walk_last_segment(double z, double s, double d0, double target,
-                                           double span, double *d_out)
+static PIHYST_INLINE int walk_last_segment(real z, real s, real d0, real target,
+                                           real span, real *d_out)
 {
     if (z + s * (span - d0) >= target) {
-        const double d = d0 + (target - z) / s;
+        const real d = d0 + (target - z) / s;
         *d_out = d < span ? d : span;
         return 1;
     }
@@ -169,15 +167,15 @@ static PIHYST_INLINE int walk_last_segment(double z, double s, double d0, double
  * z(span) >= target, else 0 with d = span. Events passed are consumed: next and slope
  * then describe the voltage u_p + d. With `compensated` the slope is the sum hi + lo
  * (Knuth's TwoSum), for pwl slope changes that cancel; else slope[0] alone. */
-static PIHYST_INLINE int walk(const double *ad, const double *as, const double *bd,
-                              const double *bs, size_t next[2], double slope[2], double q_p,
-                              double target, double span, int compensated, double *d_out)
+static PIHYST_INLINE int walk(const real *ad, const real *as, const real *bd,
+                              const real *bs, size_t next[2], real slope[2], real q_p,
+                              real target, real span, int compensated, real *d_out)
 {
-    double z = 0.0, d0 = 0.0, hi = slope[0], lo = slope[1], s = hi + lo;
+    real z = RC(0.0), d0 = RC(0.0), hi = slope[0], lo = slope[1], s = hi + lo;
     size_t i = next[0], j = next[1];
     int hit = 0;
     for (;;) {
-        double de, ds, ze;
+        real de, ds, ze;
         const int from_b = bd[j] < ad[i];
         if (from_b) {
             de = bd[j] - q_p;
@@ -190,7 +188,7 @@ static PIHYST_INLINE int walk(const double *ad, const double *as, const double *
         if (!(de < span)) break;
         ze = z + s * (de - d0); /* z(d_e) = z(d_a) + s (d_e - d_a) */
         if (ze >= target) {
-            const double d = d0 + (target - z) * (1.0 / s); /* s > 0: z rose below target */
+            const real d = d0 + (target - z) * (RC(1.0) / s); /* s > 0: z rose below target */
             *d_out = d < de ? d : de;
             hit = 1;
             break;
@@ -198,7 +196,7 @@ static PIHYST_INLINE int walk(const double *ad, const double *as, const double *
         z = ze;
         d0 = de;
         if (compensated) { /* hi + lo += ds */
-            const double t = hi + ds, bp = t - hi;
+            const real t = hi + ds, bp = t - hi;
             lo += (hi - (t - bp)) + (ds - bp);
             hi = t;
             s = hi + lo;
@@ -232,23 +230,23 @@ static PIHYST_INLINE int walk(const double *ad, const double *as, const double *
  * walk (slope[0] only); *ahead is the distance of crossing next[0] from the base, kept
  * from the sample before (that operator has not moved since), so that a tracking step
  * does not wait for the state the model has just written. */
-static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, double base,
-                                        size_t next[2], double *ahead, double slope[2],
-                                        double q_p, double target, double span, double *d_out)
+static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, real base,
+                                        size_t next[2], real *ahead, real slope[2],
+                                        real q_p, real target, real span, real *d_out)
 {
     const size_t K = m->n_ops;
-    const double *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
-    const double sign = up ? 1.0 : -1.0, v = sign * base;
-    double z = 0.0, d0 = 0.0, s = slope[0], e = *ahead;
+    const real *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
+    const real sign = up ? RC(1.0) : -RC(1.0), v = sign * base;
+    real z = RC(0.0), d0 = RC(0.0), s = slope[0], e = *ahead;
     size_t k = next[0];
     int hit = 0;
     while (k < K) {
-        double de = e - q_p, ze;
+        real de = e - q_p, ze;
         if (de < d0) de = d0; /* passed already, to rounding */
         if (!(de < span)) break;
         ze = z + s * (de - d0);
         if (ze >= target) {
-            const double d = d0 + (target - z) * (1.0 / s); /* s > 0: z rose below target */
+            const real d = d0 + (target - z) * (RC(1.0) / s); /* s > 0: z rose below target */
             *d_out = d < de ? d : de;
             hit = 1;
             break;
@@ -258,10 +256,10 @@ static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, double ba
         s += w[k];
         if (++k < K) {
             /* up: (f + r) - base;  down: base - (f - r) = (r - f) + base */
-            const double x = sign * f[k] + r[k] - v;
-            e = x > 0.0 ? x : 0.0;
+            const real x = sign * f[k] + r[k] - v;
+            e = x > RC(0.0) ? x : RC(0.0);
         } else {
-            e = INFINITY;
+            e = R_INF;
         }
     }
     if (!hit) hit = walk_last_segment(z, s, d0, target, span, d_out);
@@ -275,14 +273,14 @@ static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, double ba
  * the largest |voltage| + r: |f_k - f_{k-1}| <= r_k - r_{k-1} + tol */
 static int lipschitz(const pihyst_compensator *c)
 {
-    const pihyst_model *m = c->model;
+    const pihyst_model *m = &c->work_model;
     const size_t K = m->n_ops;
-    const double *r = m->coef + K, *f = m->state;
-    const double u_big = fabs(c->u_min) > fabs(c->u_max) ? fabs(c->u_min) : fabs(c->u_max);
-    const double tol = 8.0 * DBL_EPSILON * (u_big + r[K - 1]);
+    const real *r = m->coef + K, *f = m->state;
+    const real u_big = R_FABS(c->u_min) > R_FABS(c->u_max) ? R_FABS(c->u_min) : R_FABS(c->u_max);
+    const real tol = RC(8.0) * R_EPS * (u_big + r[K - 1]);
     size_t k;
     int bad = 0;
-    for (k = 1; k < K; ++k) bad |= fabs(f[k] - f[k - 1]) > (r[k] - r[k - 1]) + tol;
+    for (k = 1; k < K; ++k) bad |= R_FABS(f[k] - f[k - 1]) > (r[k] - r[k - 1]) + tol;
     return !bad;
 }
 
@@ -291,23 +289,23 @@ static int lipschitz(const pihyst_compensator *c)
 /* Scratch: kinks (2K, multislope) | crossing list a: distances, slope changes
  * (events_cap + 1 each, the last a +inf sentinel) | kink list b likewise (K + 1 each). */
 typedef struct {
-    double *ad, *as; /* crossings (and pwl breakpoints) */
+    real *ad, *as; /* crossings (and pwl breakpoints) */
     size_t na;
-    double *bd, *bs; /* multislope kinks */
+    real *bd, *bs; /* multislope kinks */
     size_t nb;
-    double s0;       /* slope at distance 0+ (pwl; the others list it as events at 0) */
+    real s0;       /* slope at distance 0+ (pwl; the others list it as events at 0) */
 } events;
 
 static void lists(const pihyst_compensator *c, events *e)
 {
-    const size_t K = c->model->n_ops, cap = c->events_cap;
+    const size_t K = c->work_model.n_ops, cap = c->events_cap;
     e->ad = c->scratch + 2 * K;
     e->as = e->ad + (cap + 1);
     e->bd = e->as + (cap + 1);
     e->bs = e->bd + (K + 1);
 }
 
-static void push(events *e, double d, double ds)
+static void push(events *e, real d, real ds)
 {
     e->ad[e->na] = d;
     e->as[e->na] = ds;
@@ -318,27 +316,27 @@ static void push(events *e, double d, double ds)
  * Every crossing goes into a in operator order, as its distance from u_p clamped at 0
  * (an operator on its envelope at u_p joins at distance 0). Returns 1 if out of order. */
 PIHYST_HOT
-static int collect_classical(const pihyst_model *m, int up, double u_p, events *e)
+static int collect_classical(const pihyst_model *m, int up, real u_p, events *e)
 {
     const size_t K = m->n_ops;
-    const double *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
-    double *restrict ad = e->ad, *restrict as = e->as;
+    const real *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
+    real *restrict ad = e->ad, *restrict as = e->as;
     size_t k;
     if (up) {
         for (k = 0; k < K; ++k) {
-            const double d = (f[k] + r[k]) - u_p;
-            ad[k] = d > 0.0 ? d : 0.0;
+            const real d = (f[k] + r[k]) - u_p;
+            ad[k] = d > RC(0.0) ? d : RC(0.0);
         }
     } else {
         for (k = 0; k < K; ++k) {
-            const double d = u_p - (f[k] - r[k]);
-            ad[k] = d > 0.0 ? d : 0.0;
+            const real d = u_p - (f[k] - r[k]);
+            ad[k] = d > RC(0.0) ? d : RC(0.0);
         }
     }
     for (k = 0; k < K; ++k) as[k] = w[k];
     e->na = K;
     e->nb = 0;
-    e->s0 = 0.0;
+    e->s0 = RC(0.0);
     return out_of_order(ad, K);
 }
 
@@ -352,31 +350,31 @@ static int collect_classical(const pihyst_model *m, int up, double u_p, events *
  * No comparison picks anything, so the loops vectorize and noise data mispredicts
  * nothing. Returns 1 if the crossings are out of order. */
 PIHYST_HOT
-static int collect_multislope(const pihyst_model *m, const double *kinks, int up,
-                              double u_p, events *e)
+static int collect_multislope(const pihyst_model *m, const real *kinks, int up,
+                              real u_p, events *e)
 {
     const size_t K = m->n_ops;
-    const double a_ = m->shape.a, ba = m->shape.b - m->shape.a;
-    const double ia = 1.0 / a_, ib = 1.0 / m->shape.b;
-    const double *restrict w = m->weights, *restrict f = m->state, *restrict c = m->coef;
-    double *restrict ad = e->ad, *restrict as = e->as, *restrict bd = e->bd,
+    const real a_ = m->shape.a, ba = m->shape.b - m->shape.a;
+    const real ia = RC(1.0) / a_, ib = RC(1.0) / m->shape.b;
+    const real *restrict w = m->weights, *restrict f = m->state, *restrict c = m->coef;
+    real *restrict ad = e->ad, *restrict as = e->as, *restrict bd = e->bd,
                      *restrict bs = e->bs;
     size_t k;
     if (up) {
-        const double *restrict kr = kinks;
+        const real *restrict kr = kinks;
         for (k = 0; k < K; ++k) {
             /* R(u) = max(a u + c1, b u + c2) >= f  <=>  u >= min((f - c1)/a, (f - c2)/b) */
-            const double x1 = (f[k] - c[k]) * ia, x2 = (f[k] - c[K + k]) * ib;
-            const double x = x1 < x2 ? x1 : x2, xt = x > u_p ? x : u_p;
+            const real x1 = (f[k] - c[k]) * ia, x2 = (f[k] - c[K + k]) * ib;
+            const real x = x1 < x2 ? x1 : x2, xt = x > u_p ? x : u_p;
             ad[k] = xt - u_p;
             bd[k] = (kr[k] > xt ? kr[k] : xt) - u_p;
         }
     } else {
-        const double *restrict kf = kinks + K;
+        const real *restrict kf = kinks + K;
         for (k = 0; k < K; ++k) {
             /* F(u) = min(b u, a u + c3) <= f  <=>  u <= max(f/b, (f - c3)/a) */
-            const double x1 = f[k] * ib, x2 = (f[k] - c[2 * K + k]) * ia;
-            const double x = x1 > x2 ? x1 : x2, xt = x < u_p ? x : u_p;
+            const real x1 = f[k] * ib, x2 = (f[k] - c[2 * K + k]) * ia;
+            const real x = x1 > x2 ? x1 : x2, xt = x < u_p ? x : u_p;
             ad[k] = u_p - xt;
             bd[k] = u_p - (kf[k] < xt ? kf[k] : xt);
         }
@@ -387,12 +385,12 @@ static int collect_multislope(const pihyst_model *m, const double *kinks, int up
     }
     e->na = K;
     e->nb = K;
-    e->s0 = 0.0;
+    e->s0 = RC(0.0);
     return out_of_order(ad, K);
 }
 
 /* first index i in [0, n] with v[i] >= x (v non-decreasing) */
-static size_t lower_bound(const double *v, size_t n, double x)
+static size_t lower_bound(const real *v, size_t n, real x)
 {
     size_t lo = 0, hi = n;
     while (lo < hi) {
@@ -403,7 +401,7 @@ static size_t lower_bound(const double *v, size_t n, double x)
 }
 
 /* first index i in [0, n] with v[i] > x (v non-decreasing) */
-static size_t upper_bound(const double *v, size_t n, double x)
+static size_t upper_bound(const real *v, size_t n, real x)
 {
     size_t lo = 0, hi = n;
     while (lo < hi) {
@@ -414,26 +412,26 @@ static size_t upper_bound(const double *v, size_t n, double x)
 }
 
 /* slope of segment i, between breakpoints i and i + 1 */
-static double seg_slope(const double *x, const double *y, size_t i)
+static real seg_slope(const real *x, const real *y, size_t i)
 {
     return (y[i + 1] - y[i]) / (x[i + 1] - x[i]);
 }
 
 /* pwl going up, (3a), operator with rising polyline (x, y, n >= 2):
  * crossing = least u with R(u) >= f; segment `seg` holds it (extensions included). */
-static void collect_pwl_up(const double *x, const double *y, size_t n, double w, double f,
-                           double u_p, double span, events *e)
+static void collect_pwl_up(const real *x, const real *y, size_t n, real w, real f,
+                           real u_p, real span, events *e)
 {
     size_t i = lower_bound(y, n, f), seg, q;
-    double cross;
+    real cross;
     if (i == 0) { /* f <= y[0]: in the left extension, or R >= f everywhere */
-        const double s = seg_slope(x, y, 0);
+        const real s = seg_slope(x, y, 0);
         seg = 0;
-        cross = s > 0.0 ? x[0] - (y[0] - f) / s : -INFINITY;
+        cross = s > RC(0.0) ? x[0] - (y[0] - f) / s : -R_INF;
     } else if (i == n) { /* f > y[n-1]: in the right extension, or never */
-        const double s = seg_slope(x, y, n - 2);
+        const real s = seg_slope(x, y, n - 2);
         seg = n - 2;
-        cross = s > 0.0 ? x[n - 1] + (f - y[n - 1]) / s : INFINITY;
+        cross = s > RC(0.0) ? x[n - 1] + (f - y[n - 1]) / s : R_INF;
     } else { /* y[i-1] < f <= y[i] */
         seg = i - 1;
         cross = x[i - 1] + (f - y[i - 1]) * (x[i] - x[i - 1]) / (y[i] - y[i - 1]);
@@ -444,12 +442,12 @@ static void collect_pwl_up(const double *x, const double *y, size_t n, double w,
         seg = j == 0 ? 0 : (j - 1 < n - 2 ? j - 1 : n - 2);
         e->s0 += w * seg_slope(x, y, seg);
     } else {
-        const double d = cross - u_p;
+        const real d = cross - u_p;
         if (!(d < span)) return;
         push(e, d, w * seg_slope(x, y, seg));
     }
     for (q = seg + 1; q + 1 < n; ++q) { /* interior breakpoints beyond */
-        const double d = x[q] - u_p;
+        const real d = x[q] - u_p;
         if (!(d < span)) break;
         /* slope change as two events, + new and - old, summed exactly by the walk */
         push(e, d, w * seg_slope(x, y, q));
@@ -459,19 +457,19 @@ static void collect_pwl_up(const double *x, const double *y, size_t n, double w,
 
 /* pwl going down, (3b), operator with falling polyline (x, y, n >= 2):
  * crossing = greatest u with F(u) <= f. */
-static void collect_pwl_down(const double *x, const double *y, size_t n, double w, double f,
-                             double u_p, double span, events *e)
+static void collect_pwl_down(const real *x, const real *y, size_t n, real w, real f,
+                             real u_p, real span, events *e)
 {
     size_t i = upper_bound(y, n, f), seg, q;
-    double cross;
+    real cross;
     if (i == 0) { /* f < y[0]: in the left extension, or never */
-        const double s = seg_slope(x, y, 0);
+        const real s = seg_slope(x, y, 0);
         seg = 0;
-        cross = s > 0.0 ? x[0] - (y[0] - f) / s : -INFINITY;
+        cross = s > RC(0.0) ? x[0] - (y[0] - f) / s : -R_INF;
     } else if (i == n) { /* f >= y[n-1]: in the right extension, or F <= f everywhere */
-        const double s = seg_slope(x, y, n - 2);
+        const real s = seg_slope(x, y, n - 2);
         seg = n - 2;
-        cross = s > 0.0 ? x[n - 1] + (f - y[n - 1]) / s : INFINITY;
+        cross = s > RC(0.0) ? x[n - 1] + (f - y[n - 1]) / s : R_INF;
     } else { /* y[i-1] <= f < y[i] */
         seg = i - 1;
         cross = x[i - 1] + (f - y[i - 1]) * (x[i] - x[i - 1]) / (y[i] - y[i - 1]);
@@ -482,28 +480,28 @@ static void collect_pwl_down(const double *x, const double *y, size_t n, double 
         seg = j == 0 ? 0 : (j - 1 < n - 2 ? j - 1 : n - 2);
         e->s0 += w * seg_slope(x, y, seg);
     } else {
-        const double d = u_p - cross;
+        const real d = u_p - cross;
         if (!(d < span)) return;
         push(e, d, w * seg_slope(x, y, seg));
     }
     for (q = seg; q >= 1; --q) { /* interior breakpoints below */
-        const double d = u_p - x[q];
+        const real d = u_p - x[q];
         if (!(d < span)) break;
         push(e, d, w * seg_slope(x, y, q - 1));
         push(e, d, -w * seg_slope(x, y, q));
     }
 }
 
-static void collect_pwl(const pihyst_model *m, int up, double u_p, double span, events *e)
+static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, events *e)
 {
     const pihyst_pwl *p = &m->pwl;
     size_t k;
     e->na = 0;
     e->nb = 0;
-    e->s0 = 0.0;
+    e->s0 = RC(0.0);
     for (k = 0; k < m->n_ops; ++k) {
-        const double w = m->weights[k];
-        if (w == 0.0) continue;
+        const real w = m->weights[k];
+        if (w == RC(0.0)) continue;
         if (up) {
             const size_t s0 = p->rise_start[k], n = p->rise_start[k + 1] - s0;
             if (n >= 2) /* a single point is a constant: never a slope */
@@ -523,9 +521,9 @@ static void collect_pwl(const pihyst_model *m, int up, double u_p, double span, 
  * from u_p into a and b, sorted by distance, to be walked from u_p and kept for the
  * following samples. Classical and multislope lists arrive sorted for reachable states
  * (checked, in O(K)); others are sorted. */
-static PIHYST_NOINLINE void reverse(pihyst_compensator *c, int up, double u_p)
+static PIHYST_NOINLINE void reverse(pihyst_compensator *c, int up, real u_p)
 {
-    const pihyst_model *m = c->model;
+    const pihyst_model *m = &c->work_model;
     events e;
     int sorted = 0;
     lists(c, &e);
@@ -535,7 +533,7 @@ static PIHYST_NOINLINE void reverse(pihyst_compensator *c, int up, double u_p)
         break;
     case PIHYST_MULTISLOPE:
         sorted = !collect_multislope(m, c->scratch, up, u_p, &e) &&
-                 (c->in_order & (up ? 1u : 2u));
+                 (c->in_order & (up ? PIHYST_ORDER_RISING_KINKS : PIHYST_ORDER_FALLING_KINKS));
         break;
     default:
         collect_pwl(m, up, u_p, up ? c->u_max - u_p : u_p - c->u_min, &e);
@@ -545,36 +543,36 @@ static PIHYST_NOINLINE void reverse(pihyst_compensator *c, int up, double u_p)
         sort_events(e.ad, e.as, e.na);
         sort_events(e.bd, e.bs, e.nb);
     }
-    e.ad[e.na] = e.bd[e.nb] = INFINITY; /* sentinels */
-    e.as[e.na] = e.bs[e.nb] = 0.0;
+    e.ad[e.na] = e.bd[e.nb] = R_INF; /* sentinels */
+    e.as[e.na] = e.bs[e.nb] = RC(0.0);
     c->next[0] = c->next[1] = 0;
     c->slope[0] = e.s0;
-    c->slope[1] = 0.0;
+    c->slope[1] = RC(0.0);
 }
 
 /* The distance d in (0, span] at which |y - y_p| first reaches target (returns 1), or
  * d = span if the window ends first (returns 0). */
-static PIHYST_INLINE int solve(pihyst_compensator *c, int up, double u_p, double span,
-                               double target, double *d)
+static PIHYST_INLINE int solve(pihyst_compensator *c, int up, real u_p, real span,
+                               real target, real *d)
 {
-    const pihyst_model *m = c->model;
+    const pihyst_model *m = &c->work_model;
     events e;
     if (c->dir != (up ? 1 : -1)) { /* a reversal: start again from u_p */
         c->dir = up ? 1 : -1;
         c->base = u_p;
-        if (m->family == PIHYST_CLASSICAL && !(c->in_order & 4u) && lipschitz(c))
-            c->in_order |= 4u;
-        if (c->in_order & 4u) {
-            const double x = up ? (m->state[0] + m->coef[m->n_ops]) - u_p
+        if (m->family == PIHYST_CLASSICAL && !(c->in_order & PIHYST_ORDER_CLASSICAL) && lipschitz(c))
+            c->in_order |= PIHYST_ORDER_CLASSICAL;
+        if (c->in_order & PIHYST_ORDER_CLASSICAL) {
+            const real x = up ? (m->state[0] + m->coef[m->n_ops]) - u_p
                                 : u_p - (m->state[0] - m->coef[m->n_ops]);
             c->next[0] = c->next[1] = 0;
-            c->slope[0] = c->slope[1] = 0.0;
-            c->ahead = x > 0.0 ? x : 0.0;
+            c->slope[0] = c->slope[1] = RC(0.0);
+            c->ahead = x > RC(0.0) ? x : RC(0.0);
         } else {
             reverse(c, up, u_p);
         }
     }
-    if (c->in_order & 4u)
+    if (c->in_order & PIHYST_ORDER_CLASSICAL)
         return walk_classical(m, up, c->base, c->next, &c->ahead, c->slope,
                               up ? u_p - c->base : c->base - u_p, target, span, d);
     lists(c, &e);
@@ -596,9 +594,9 @@ static size_t pwl_points(const pihyst_model *m)
 size_t pihyst_compensator_scratch_len(const pihyst_model *m)
 {
     /* kinks 2K | crossing list 2 (K + 2 points + 1) | kink list 2 (K + 1) | working
-     * state K on a cache line (+ 8) */
+     * state K on a PIHYST_STATE_ALIGN boundary (+ the padding that takes) */
     const size_t K = m->n_ops;
-    return 7 * K + 4 * pwl_points(m) + 4 + PIHYST_ALIGN / sizeof(double);
+    return 7 * K + 4 * pwl_points(m) + 4 + PIHYST_STATE_ALIGN / sizeof(real);
 }
 
 /* Forget the kept events (the state was set): the next sample collects afresh, and a
@@ -606,57 +604,66 @@ size_t pihyst_compensator_scratch_len(const pihyst_model *m)
 static void forget_events(pihyst_compensator *c)
 {
     c->dir = 0;
-    c->in_order &= ~4u;
+    c->in_order &= ~PIHYST_ORDER_CLASSICAL;
     c->next[0] = c->next[1] = 0;
-    c->slope[0] = c->slope[1] = c->base = c->ahead = 0.0;
+    c->slope[0] = c->slope[1] = c->base = c->ahead = RC(0.0);
 }
 
-/* The state the compensator works on is c->work: the model's own array if that is
- * aligned to a cache line, else an aligned copy in the scratch. pihyst_model_run works
- * on a misaligned state through an aligned copy of its own (see pihyst_model.c), which
- * costs two copies per step, and the next sample reads the state right after them. So
- * while a compensator function runs, the model points at c->work (swap_in), and the
- * caller's array receives a copy when it returns (swap_out): the caller's alignment
- * does not matter, and between calls the model's state is the caller's array, current. */
-static double *swap_in(pihyst_compensator *c)
+/* The compensator steps its own copy of the model, c->work_model, and never writes the
+ * caller's model struct. The copy's state is the caller's array if that lies on a
+ * PIHYST_STATE_ALIGN boundary, else an aligned array at the end of the scratch (the
+ * model loops run up to twice as fast on an aligned state, see pihyst_model_run); then
+ * publish() copies it to the caller's array before a call returns, so that array is
+ * current between calls. */
+static real *working_state(pihyst_model *m, real *scratch)
 {
-    double *own = c->model->state;
-    c->model->state = c->work;
-    return own;
+#if PIHYST_STATE_ALIGN > 0
+    const size_t K = m->n_ops;
+    uintptr_t at;
+    if ((uintptr_t)m->state % PIHYST_STATE_ALIGN == 0) return m->state;
+    at = (uintptr_t)(scratch + pihyst_compensator_scratch_len(m) - K -
+                     PIHYST_STATE_ALIGN / sizeof(real));
+    at = (at + PIHYST_STATE_ALIGN - 1) / PIHYST_STATE_ALIGN * PIHYST_STATE_ALIGN;
+    return (real *)at;
+#else
+    (void)scratch;
+    return m->state;
+#endif
 }
 
-static void swap_out(pihyst_compensator *c, double *own, int changed)
+static void publish(pihyst_compensator *c)
 {
-    if (changed && own != c->work) memcpy(own, c->work, c->model->n_ops * sizeof *own);
-    c->model->state = own;
+    if (c->work_model.state != c->model->state)
+        memcpy(c->model->state, c->work_model.state, c->model->n_ops * sizeof(real));
 }
 
-/* apply u to the state (the model points at c->work) */
-static void apply(pihyst_compensator *c, double u)
+/* apply u to the working state */
+static void apply(pihyst_compensator *c, real u)
 {
-    c->y_last = pihyst_model_step(c->model, u);
+    c->y_last = pihyst_model_step(&c->work_model, u);
     c->u_last = u;
 }
 
-pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, double u_min,
-                                      double u_max, double max_step, double u_initial,
-                                      double *scratch, size_t scratch_len)
+pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, real u_min,
+                                      real u_max, real max_step, real u_initial,
+                                      real *scratch, size_t scratch_len)
 {
     size_t k, K;
-    double scale, *rise, *fall;
+    real scale, *rise, *fall;
     if (!c || !m || !scratch) return PIHYST_ENULL;
     K = m->n_ops;
     for (k = 0; k < K; ++k)
-        if (m->weights[k] < 0.0) return PIHYST_ENEGATIVE_WEIGHT;
+        if (m->weights[k] < RC(0.0)) return PIHYST_ENEGATIVE_WEIGHT;
     if (isnan(u_min)) u_min = m->u_min;
     if (isnan(u_max)) u_max = m->u_max;
     if (!(m->u_min <= u_min && u_min < u_max && u_max <= m->u_max)) return PIHYST_ELIMITS;
-    if (!(max_step > 0.0)) return PIHYST_ELIMITS; /* also NaN */
-    if (scratch_len < pihyst_compensator_scratch_len(m)) return PIHYST_ESIZE;
+    if (!(max_step > RC(0.0))) return PIHYST_ELIMITS; /* also NaN */
+    if (scratch_len < pihyst_compensator_scratch_len(m)) return PIHYST_ESCRATCH;
     if (!isfinite(u_initial)) return PIHYST_ENONFINITE;
     if (!(u_min <= u_initial && u_initial <= u_max)) return PIHYST_ELIMITS;
 
     c->model = m;
+    c->work_model = *m;
     c->u_min = u_min;
     c->u_max = u_max;
     c->max_step = max_step;
@@ -669,24 +676,24 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, do
      * a K-term sum is below (K + 2) eps times it. */
     rise = scratch + 2 * K;
     fall = scratch + 3 * K;
-    scale = fabs(m->offset);
+    scale = R_FABS(m->offset);
     pihyst_model_envelopes(m, u_min, rise, fall);
     for (k = 0; k < K; ++k) {
-        double v = fabs(rise[k]) > fabs(fall[k]) ? fabs(rise[k]) : fabs(fall[k]);
+        real v = R_FABS(rise[k]) > R_FABS(fall[k]) ? R_FABS(rise[k]) : R_FABS(fall[k]);
         scratch[4 * K + k] = v;
     }
     pihyst_model_envelopes(m, u_max, rise, fall);
     for (k = 0; k < K; ++k) {
-        double v = scratch[4 * K + k];
-        if (fabs(rise[k]) > v) v = fabs(rise[k]);
-        if (fabs(fall[k]) > v) v = fabs(fall[k]);
+        real v = scratch[4 * K + k];
+        if (R_FABS(rise[k]) > v) v = R_FABS(rise[k]);
+        if (R_FABS(fall[k]) > v) v = R_FABS(fall[k]);
         scale += m->weights[k] * v;
     }
-    c->tol = 4.0 * ((double)K + 2.0) * DBL_EPSILON * scale;
+    c->tol = RC(4.0) * ((real)K + RC(2.0)) * R_EPS * scale;
 
     if (m->family == PIHYST_MULTISLOPE) {
         /* rising kink: a u + c1 = b u + c2;  falling kink: b u = a u + c3 */
-        const double ba = m->shape.b - m->shape.a;
+        const real ba = m->shape.b - m->shape.a;
         for (k = 0; k < K; ++k) {
             scratch[k] = (m->coef[k] - m->coef[K + k]) / ba;
             scratch[K + k] = m->coef[2 * K + k] / ba;
@@ -694,84 +701,69 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, do
     }
     /* kinks in operator order by distance: rising ones increasing, falling ones
      * decreasing (a < 1 for both, and a h < 1 for the falling ones) */
-    c->in_order = 3u;
+    c->in_order = PIHYST_ORDER_RISING_KINKS | PIHYST_ORDER_FALLING_KINKS;
     for (k = 1; k < K && m->family == PIHYST_MULTISLOPE; ++k) {
-        if (scratch[k] < scratch[k - 1]) c->in_order &= ~1u;
-        if (scratch[K + k] > scratch[K + k - 1]) c->in_order &= ~2u;
+        if (scratch[k] < scratch[k - 1]) c->in_order &= ~PIHYST_ORDER_RISING_KINKS;
+        if (scratch[K + k] > scratch[K + k - 1]) c->in_order &= ~PIHYST_ORDER_FALLING_KINKS;
     }
-    if ((uintptr_t)m->state % PIHYST_ALIGN == 0) {
-        c->work = m->state;
-    } else { /* an aligned copy at the end of the scratch */
-        uintptr_t at = (uintptr_t)(scratch + pihyst_compensator_scratch_len(m) - K -
-                                   PIHYST_ALIGN / sizeof(double));
-        at = (at + PIHYST_ALIGN - 1) / PIHYST_ALIGN * PIHYST_ALIGN;
-        c->work = (double *)at;
-        memcpy(c->work, m->state, K * sizeof *c->work);
-    }
+    c->work_model.state = working_state(m, scratch);
+    if (c->work_model.state != m->state) memcpy(c->work_model.state, m->state, K * sizeof(real));
     forget_events(c);
-    {
-        double *own = swap_in(c);
-        apply(c, u_initial);
-        swap_out(c, own, 1);
-    }
+    apply(c, u_initial);
+    publish(c);
     return PIHYST_OK;
 }
 
-pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const double *state,
-                                       double u_last)
+pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const real *state,
+                                       real u_last)
 {
     size_t k;
     if (!c) return PIHYST_ENULL;
     if (!isfinite(u_last)) return PIHYST_ENONFINITE;
     if (!(c->u_min <= u_last && u_last <= c->u_max)) return PIHYST_ELIMITS;
     if (state)
-        for (k = 0; k < c->model->n_ops; ++k)
+        for (k = 0; k < c->work_model.n_ops; ++k)
             if (!isfinite(state[k])) return PIHYST_ENONFINITE;
-    pihyst_model_reset(c->model, state);
-    if (c->work != c->model->state)
-        memcpy(c->work, c->model->state, c->model->n_ops * sizeof *c->work);
+    pihyst_model_reset(&c->work_model, state);
     forget_events(c);
-    {
-        double *own = swap_in(c);
-        apply(c, u_last);
-        swap_out(c, own, 1);
-    }
+    apply(c, u_last);
+    publish(c);
     return PIHYST_OK;
 }
 
 /* Window end above u_p: min(u_max, u_p + max_step), with u_p + max_step lowered by
  * ulps until (end - u_p) <= max_step holds in floating point. */
-static double window_hi(const pihyst_compensator *c, double u_p, int *slew)
+static real window_hi(const pihyst_compensator *c, real u_p, int *slew)
 {
-    double h = u_p + c->max_step;
-    while (h - u_p > c->max_step) h = nextafter(h, u_p);
+    real h = u_p + c->max_step;
+    while (h - u_p > c->max_step) h = R_NEXTAFTER(h, u_p);
     *slew = h < c->u_max;
     return *slew ? h : c->u_max;
 }
 
-static double window_lo(const pihyst_compensator *c, double u_p, int *slew)
+static real window_lo(const pihyst_compensator *c, real u_p, int *slew)
 {
-    double l = u_p - c->max_step;
-    while (u_p - l > c->max_step) l = nextafter(l, u_p);
+    real l = u_p - c->max_step;
+    while (u_p - l > c->max_step) l = R_NEXTAFTER(l, u_p);
     *slew = l > c->u_min;
     return *slew ? l : c->u_min;
 }
 
-/* One sample, with the model pointing at c->work. Returns the flags. */
-static PIHYST_INLINE unsigned step(pihyst_compensator *c, double y_desired)
+/* One sample on the working state. Returns the flags. */
+static PIHYST_INLINE pihyst_flags step(pihyst_compensator *c, real y_desired)
 {
-    const double u_p = c->u_last, y_p = c->y_last;
-    unsigned fl = 0;
+    const real u_p = c->u_last, y_p = c->y_last;
+    pihyst_flags fl = 0;
     if (isnan(y_desired)) {
         fl = PIHYST_COMP_NAN;
-    } else if (!(fabs(y_desired - y_p) <= c->tol)) {
+    } else if (!(R_FABS(y_desired - y_p) <= c->tol)) {
         const int up = y_desired > y_p;
         int slew;
-        double u, d;
-        const double end = up ? window_hi(c, u_p, &slew) : window_lo(c, u_p, &slew);
-        const double span = up ? end - u_p : u_p - end;
-        const double target = up ? y_desired - y_p : y_p - y_desired;
-        if (span > 0.0 && solve(c, up, u_p, span, target, &d)) {
+        real u, d;
+        const real end = up ? window_hi(c, u_p, &slew) : window_lo(c, u_p, &slew);
+        const real span = up ? end - u_p : u_p - end;
+        const real target = up ? y_desired - y_p : y_p - y_desired;
+        if (span > RC(0.0) && solve(c, up, u_p, span, target, &d)) {
             /* u_p +- d, kept inside [u_p, end] against rounding */
             if (up) {
                 u = u_p + d;
@@ -786,33 +778,31 @@ static PIHYST_INLINE unsigned step(pihyst_compensator *c, double y_desired)
         }
         if (u != u_p) apply(c, u);
         /* at the window's end the model may meet y_d after all, to rounding: not a miss */
-        if (fl && fabs(y_desired - c->y_last) <= c->tol) fl = 0;
+        if (fl && R_FABS(y_desired - c->y_last) <= c->tol) fl = 0;
     }
     return fl;
 }
 
-double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned *flags)
+real pihyst_compensator_step(pihyst_compensator *c, real y_desired, pihyst_flags *flags)
 {
-    const double u_p = c->u_last;
-    double *const own = swap_in(c);
-    const unsigned fl = step(c, y_desired);
-    swap_out(c, own, c->u_last != u_p);
+    const real u_p = c->u_last;
+    const pihyst_flags fl = step(c, y_desired);
+    if (c->u_last != u_p) publish(c);
     if (flags) *flags = fl;
     return c->u_last;
 }
 
-size_t pihyst_compensator_run(pihyst_compensator *c, const double *y_desired, double *u,
-                              double *y, unsigned char *flags, size_t n)
+size_t pihyst_compensator_run(pihyst_compensator *c, const real *y_desired, real *u,
+                              real *y, pihyst_flags *flags, size_t n)
 {
     size_t t, count = 0;
-    double *const own = swap_in(c);
     for (t = 0; t < n; ++t) {
-        const unsigned fl = step(c, y_desired[t]);
+        const pihyst_flags fl = step(c, y_desired[t]);
         u[t] = c->u_last;
         if (y) y[t] = c->y_last;
-        if (flags) flags[t] = (unsigned char)fl;
+        if (flags) flags[t] = fl;
         count += fl != 0;
     }
-    swap_out(c, own, n > 0);
+    if (n > 0) publish(c);
     return count;
 }

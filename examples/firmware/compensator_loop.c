@@ -7,6 +7,7 @@
  *
  * Build (from the repository root):
  *     cc -std=c99 -O2 -Icsrc examples/firmware/compensator_loop.c csrc/pihyst_*.c -lm
+ * (pihyst_*_f32.c, the single-precision API, may be left out when it is not used).
  * `make -C csrc test` builds and runs it, and it checks its own result.
  */
 #include "pihyst.h"
@@ -18,7 +19,16 @@
 
 static const double thresholds[N_OPS] = {0.0, 20.0, 30.0, 40.0};      /* V */
 static const double weights[N_OPS] = {0.196, 0.026, 0.046, 0.028};     /* um/V */
-static const pihyst_shape shape = {150.0, 0.8, 1.2, 0.5};              /* U, a, b, h */
+static const pihyst_params params = {
+    .family = PIHYST_MULTISLOPE,
+    .n_ops = N_OPS,
+    .thresholds = thresholds,
+    .weights = weights,
+    .u_min = 0.0, /* V: the input range on which the model is valid */
+    .u_max = 150.0,
+    .shape = {.U = 150.0, .a = 0.8, .b = 1.2, .h = 0.5},
+    /* .offset = 0 and .initial_state = NULL (operators at rest) when left out */
+};
 
 static double coef[PIHYST_COEF_LEN(N_OPS)];
 static double state[N_OPS];
@@ -41,8 +51,7 @@ int main(void)
     int k, slewed = 0, out_of_reach = 0, limits_broken = 0;
     double worst = 0.0, u_prev = 0.0;
 
-    s = pihyst_model_init(&model, PIHYST_MULTISLOPE, N_OPS, thresholds, weights, 0.0, 0.0,
-                          150.0, &shape, NULL, coef, state, NULL);
+    s = pihyst_model_init(&model, &params, coef, state);
     if (s != PIHYST_OK) {
         printf("model: %s\n", pihyst_status_text(s));
         return 1;
@@ -56,7 +65,7 @@ int main(void)
     }
 
     for (k = 0; k <= 3000; ++k) { /* the timer interrupt, once per millisecond */
-        unsigned flags;
+        pihyst_flags flags;
         double y_d = desired_um(k);
         double volts = pihyst_compensator_step(&comp, y_d, &flags);
         /* dac_write(volts); */

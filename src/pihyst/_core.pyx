@@ -6,6 +6,8 @@ copies what it is given, so the caller's arrays are never modified.
 """
 import numpy as np
 
+from libc.string cimport memset
+
 cdef extern from "pihyst.h" nogil:
     int PIHYST_ABI_VERSION
     ctypedef enum pihyst_status:
@@ -26,15 +28,23 @@ cdef extern from "pihyst.h" nogil:
         const size_t *fall_start
         const double *fall_x
         const double *fall_y
+    ctypedef struct pihyst_params:
+        pihyst_family family
+        size_t n_ops
+        const double *thresholds
+        const double *weights
+        double offset
+        double u_min
+        double u_max
+        pihyst_shape shape
+        pihyst_pwl pwl
+        const double *initial_state
     ctypedef struct pihyst_model:
         size_t n_ops
         double *state
     size_t PIHYST_COEF_LEN(size_t n_ops)
-    pihyst_status pihyst_model_init(pihyst_model *m, pihyst_family family, size_t n_ops,
-                                    const double *thresholds, const double *weights,
-                                    double offset, double u_min, double u_max,
-                                    const pihyst_shape *shape, const pihyst_pwl *pwl,
-                                    double *coef, double *state, const double *initial_state)
+    pihyst_status pihyst_model_init(pihyst_model *m, const pihyst_params *params, double *coef,
+                                    double *state)
     void pihyst_model_reset(pihyst_model *m, const double *initial_state)
     double pihyst_model_step(pihyst_model *m, double u)
     void pihyst_model_run(pihyst_model *m, const double *u, double *y, size_t n)
@@ -74,16 +84,11 @@ cdef class Bank:
     def __init__(self, str family, thresholds, weights, double offset, double u_min,
                  double u_max, shape=None, rising=None, falling=None, initial_state=None):
         """rising/falling: for family "pwl", lists of K (x, y) breakpoint arrays."""
-        cdef pihyst_shape c_shape
-        cdef pihyst_pwl c_pwl
+        cdef pihyst_params params
         cdef const double[::1] thr_v, w_v, init_v
         cdef double[::1] coef_v, state_v
         cdef const size_t[::1] rs_v, fs_v
         cdef const double[::1] rx_v, ry_v, fx_v, fy_v
-        cdef const double *thr_p = NULL
-        cdef const double *init_p = NULL
-        cdef pihyst_shape *shape_p = NULL
-        cdef pihyst_pwl *pwl_p = NULL
         if family not in FAMILIES:
             raise ValueError(f"unknown family {family!r}; expected one of {sorted(FAMILIES)}")
         self._weights = _vector(weights, name="weights").copy()
@@ -92,13 +97,15 @@ cdef class Bank:
             raise CoreError("a model needs at least one operator")
         self._coef = _aligned_zeros(4 * self.n_ops)
         self._state = _aligned_zeros(self.n_ops)
+        memset(&params, 0, sizeof(params))
+        params.family = FAMILIES[family]
+        params.n_ops = self.n_ops
         if family != "pwl":
             self._thresholds = _vector(thresholds, self.n_ops, "thresholds").copy()
             thr_v = self._thresholds
-            thr_p = &thr_v[0]
+            params.thresholds = &thr_v[0]
         if family == "multislope":
-            c_shape.U, c_shape.a, c_shape.b, c_shape.h = shape
-            shape_p = &c_shape
+            params.shape.U, params.shape.a, params.shape.b, params.shape.h = shape
         if family == "pwl":
             if len(rising) != self.n_ops or len(falling) != self.n_ops:
                 raise ValueError("pwl needs one rising and one falling polyline per weight")
@@ -110,23 +117,24 @@ cdef class Bank:
             ry_v = self._rise_y
             fx_v = self._fall_x
             fy_v = self._fall_y
-            c_pwl.rise_start = &rs_v[0]
-            c_pwl.rise_x = &rx_v[0]
-            c_pwl.rise_y = &ry_v[0]
-            c_pwl.fall_start = &fs_v[0]
-            c_pwl.fall_x = &fx_v[0]
-            c_pwl.fall_y = &fy_v[0]
-            pwl_p = &c_pwl
+            params.pwl.rise_start = &rs_v[0]
+            params.pwl.rise_x = &rx_v[0]
+            params.pwl.rise_y = &ry_v[0]
+            params.pwl.fall_start = &fs_v[0]
+            params.pwl.fall_x = &fx_v[0]
+            params.pwl.fall_y = &fy_v[0]
         if initial_state is not None:
             init_arr = _vector(initial_state, self.n_ops, "initial_state")
             init_v = init_arr
-            init_p = &init_v[0]
+            params.initial_state = &init_v[0]
         w_v = self._weights
         coef_v = self._coef
         state_v = self._state
-        status = pihyst_model_init(&self.m, FAMILIES[family], self.n_ops, thr_p, &w_v[0],
-                                   offset, u_min, u_max, shape_p, pwl_p, &coef_v[0],
-                                   &state_v[0], init_p)
+        params.weights = &w_v[0]
+        params.offset = offset
+        params.u_min = u_min
+        params.u_max = u_max
+        status = pihyst_model_init(&self.m, &params, &coef_v[0], &state_v[0])
         if status != PIHYST_OK:
             raise CoreError(pihyst_status_text(status).decode())
 
@@ -231,6 +239,7 @@ def _concat(polylines, name):
 # ---------------------------------------------------------------- compensator (inverse)
 
 cdef extern from "pihyst.h" nogil:
+    ctypedef unsigned char pihyst_flags
     enum:
         PIHYST_COMP_SAT_LOW
         PIHYST_COMP_SAT_HIGH
@@ -249,9 +258,9 @@ cdef extern from "pihyst.h" nogil:
                                           double *scratch, size_t scratch_len)
     pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const double *state,
                                            double u_last)
-    double pihyst_compensator_step(pihyst_compensator *c, double y_desired, unsigned *flags)
+    double pihyst_compensator_step(pihyst_compensator *c, double y_desired, pihyst_flags *flags)
     size_t pihyst_compensator_run(pihyst_compensator *c, const double *y_desired, double *u,
-                                  double *y, unsigned char *flags, size_t n)
+                                  double *y, pihyst_flags *flags, size_t n)
 
 FLAG_SATURATED_LOW = PIHYST_COMP_SAT_LOW
 FLAG_SATURATED_HIGH = PIHYST_COMP_SAT_HIGH
@@ -326,7 +335,7 @@ cdef class Compensator:
 
     def step(self, double y_desired):
         """The voltage for one desired output; flags in ``last_flags``."""
-        cdef unsigned flags
+        cdef pihyst_flags flags
         u = pihyst_compensator_step(&self.c, y_desired, &flags)
         self.last_flags = flags
         return u
@@ -340,7 +349,7 @@ cdef class Compensator:
         flags = np.zeros(n, dtype=np.uint8)
         cdef double[::1] u_v = u
         cdef double[::1] y_v = y
-        cdef unsigned char[::1] f_v = flags
+        cdef pihyst_flags[::1] f_v = flags
         if n:
             with nogil:
                 pihyst_compensator_run(&self.c, &d_v[0], &u_v[0], &y_v[0], &f_v[0], n)

@@ -143,7 +143,7 @@ def test_kp_fits_a_preisach_type_record_and_keeps_weights_nonnegative():
     true = at_rest(fam.template(pairs, 150.0).replace(weights=w))
     u = rich_signal(seed=5, n_cycles=8)
     y = true.predict(u)
-    res = fit(u, y, family="kp", kp_grid=6)
+    res = fit(u, y, family=pihyst.identify.KrasnoselskiiPokrovskii(grid=6))
     f = res.report.family("kp")
     assert f["errors"]["held_back"]["rms"] < 1e-3 * np.ptp(y)
     assert np.all(res.model.weights > 0)
@@ -384,8 +384,8 @@ def test_cycled_state_matches_a_long_run():
 def test_shape_identification_with_U_keeps_the_operators_valid():
     true = MultislopePI([0, 15, 30], [0.2, 0.1, 0.15], U=170.0, input_range=(0, 150))
     u = rich_signal(seed=18)
-    res = fit(u, true.predict(u), family="multislope-identified", n_operators=3,
-              identify_shape="with-U")
+    res = fit(u, true.predict(u),
+              family=pihyst.identify.MultislopeIdentified(identify="with-U"), n_operators=3)
     f = res.report.family("multislope-identified")
     assert f["shape"]["U"] == pytest.approx(170.0, abs=2.0)
     assert f["errors"]["held_back"]["rms"] < 0.01

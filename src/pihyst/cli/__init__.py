@@ -10,10 +10,10 @@ import argparse
 import sys
 
 from pihyst._version import __version__
-from pihyst.cli import compensate, demo, fit, predict, report, simulate, track
+from pihyst.cli import compensate, demo, export, fit, predict, report, simulate, track
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict, fit, simulate, compensate, track, demo, report]
+COMMANDS = [predict, fit, simulate, compensate, track, demo, report, export]
 
 
 def build_parser():

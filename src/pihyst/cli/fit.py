@@ -7,8 +7,7 @@ import warnings
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
 from pihyst.exceptions import FitError, PihystWarning
-from pihyst.identify import INITIAL_STATES, fit
-from pihyst.identify._families import FAMILY_NAMES
+from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import CSVError, column_number, read_columns, save_model
 
 _COLUMNS = {"input": "voltage_V", "output": "displacement_um"}

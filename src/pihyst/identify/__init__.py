@@ -6,18 +6,39 @@ chooses thresholds, shape and family on held-back cycles, and returns a
 :class:`FitResult` (the model and a :class:`FitReport`). Theory:
 docs/theory/identification.md.
 
+A *fitting family* is a recipe for one model: :class:`Classical`, :class:`Multislope`,
+:class:`MultislopeIdentified`, :class:`ModifiedPI`, :class:`KrasnoselskiiPokrovskii`,
+and :class:`BoucWen` (not a PI model: remanence and drifting minor loops)
+(``fit(u, y, family=ModifiedPI(segments=8))``; a name such as ``"modified-pi"`` stands
+for the family with its default options). It is not the model's operator kind
+(``model.family``: classical, multislope or pwl); ``model.metadata["fit"]["family"]``
+records the fitting family.
+
 Behind it, one private module per step: ``_cycles`` (cutting a record),
-``_families`` (candidate operators of each family and the fitting frame), ``_gram``
-(normal equations), ``_qp`` (constrained least squares), ``_subsets`` (threshold subset
-search), ``_family_fit`` (one family's fit), ``_fit`` (every family, the choice),
-``_report`` (the result).
+``_families`` (the fitting families: candidate operators, frames, how each is fitted),
+``_gram`` (normal equations), ``_qp`` (constrained least squares), ``_subsets``
+(threshold subset search), ``_shape`` (multislope shape search), ``_family_fit`` (one
+family's fit, a :class:`FamilyFit`), ``_fit`` (every family, the choice), ``_report``
+(the result).
 """
 
 from pihyst.exceptions import FitError, IllConditionedWarning, InfeasibleConstraintsError
-from pihyst.identify._families import FAMILY_NAMES
+from pihyst.identify._families import (
+    FAMILY_NAMES,
+    BoucWen,
+    Classical,
+    Family,
+    KrasnoselskiiPokrovskii,
+    ModifiedPI,
+    Multislope,
+    MultislopeIdentified,
+)
 from pihyst.identify._family_fit import INITIAL_STATES, cycled_state
+from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._fit import fit
 from pihyst.identify._report import FitReport, FitResult
 
-__all__ = ["FAMILY_NAMES", "INITIAL_STATES", "FitError", "FitReport", "FitResult",
-           "IllConditionedWarning", "InfeasibleConstraintsError", "cycled_state", "fit"]
+__all__ = ["FAMILY_NAMES", "INITIAL_STATES", "BoucWen", "Classical", "Family", "FamilyFit",
+           "FitError", "FitReport", "FitResult", "IllConditionedWarning",
+           "InfeasibleConstraintsError", "KrasnoselskiiPokrovskii", "ModifiedPI", "Multislope",
+           "MultislopeIdentified", "cycled_state", "fit"]

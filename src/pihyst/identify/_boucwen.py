@@ -137,7 +137,7 @@ def _keep(u, target):
 
 
 def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="alternate",
-                refit=True, n=None, shape=None):
+                refit=True, n=None, shape=None, layout_=None):
     """Fit a :class:`pihyst.model.BoucWenModel` to a record (module notes).
 
     Parameters
@@ -159,6 +159,9 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         Fix the exponent (default: searched over 1 ... 3 and refined).
     shape : dict, optional
         {"beta", "gamma", "n"}: skip the search and use this shape.
+    layout_ : Layout, optional
+        The settle/fit/held-back cut of the record, when the caller has made it (the
+        comparison of families in :func:`pihyst.fit`).
 
     Returns
     -------
@@ -180,7 +183,7 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         raise FitError(f"initial_state must be 'auto', 'cycled' or 'settle', got "
                        f"{initial_state!r:.40}")
     settle = initial_state == "settle"
-    lay = layout(v, span, settle=settle, holdout=holdout)
+    lay = layout(v, span, settle=settle, holdout=holdout) if layout_ is None else layout_
     fit_i, held_i = lay.indices("fit"), lay.indices("held_back")
     if fit_i.size < 5:
         raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
@@ -304,9 +307,34 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     return model.replace(metadata={"fit": fit_meta}), report
 
 
-def fit_result(u, y, **kwargs):
-    """:func:`fit_boucwen` as a :class:`pihyst.identify.FitResult` (what
-    ``pihyst.fit(u, y, family="bouc-wen")`` returns)."""
-    from pihyst.identify._report import FitResult
-    model, report = fit_boucwen(u, y, **kwargs)
-    return FitResult(model=model, report=report, models={"bouc-wen": model})
+def family_fit(family, fitter):
+    """The Bouc-Wen family fitted on ``fitter``'s record, cut as for every family: a
+    :class:`~pihyst.identify._family_result.FamilyFit` for the comparison in
+    :func:`pihyst.fit` (docs/theory/bouc-wen.md)."""
+    from pihyst.identify._family_result import FamilyFit
+    rec = fitter.rec
+    unsupported = [name for name, given in (
+        ("thresholds", fitter.thresholds is not None),
+        ("candidates", fitter.candidates is not None),
+        ("n_operators", fitter.n_operators is not None),
+        ("bounds", fitter.bounds is not None), ("nonnegative=False", not fitter.nonnegative),
+        ("a fixed offset", not rec.fit_offset), ("through", len(rec.through) > 0),
+        ("an explicit or zero initial_state", rec.state_mode not in ("cycled", "settle")))
+        if given]
+    if unsupported:
+        raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
+                       f"state: drop {', '.join(unsupported)}")
+    kwargs = dict(input_range=(rec.lo, rec.lo + rec.S), initial_state=rec.state_mode,
+                  n=family.n, layout_=rec.layout)
+    model, report = fit_boucwen(rec.u, rec.y, refit=False, **kwargs)
+
+    def refit():
+        shape = {k: report.search[k] for k in ("beta", "gamma", "n")}
+        return fit_boucwen(rec.u, rec.y, refit=True, shape=shape, **kwargs)[0]
+
+    errors = fitter.errors(model)
+    judged = errors["held_back"]["rms"] if rec.has_held_back else errors["fit"]["rms"]
+    return FamilyFit(family=family, model=model, operators=(),
+                     weights=np.array([model.linear, model.quadratic, model.hysteretic]),
+                     offset=model.offset, errors=errors, judged_rms=judged, n_params=7,
+                     notes=(report.search["summary"],), refit=refit)

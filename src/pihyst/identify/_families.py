@@ -1,4 +1,4 @@
-"""Model families for identification: candidate operators, and models in two frames.
+"""Fitting families: candidate operators, how each family is fitted, models in two frames.
 
 Fitting works in a shifted input v = u - lo on [0, S], S = hi - lo, whatever range the
 data span (0-150 V, 0-3.6 V, +-150 V): the multislope operator's geometry is anchored at
@@ -16,10 +16,13 @@ affine change of variable:
   whose polylines are exactly the multislope envelopes (and the shape is in the metadata).
 """
 
+import copy
 from abc import ABC, abstractmethod
 
 import numpy as np
 
+from pihyst.exceptions import FitError
+from pihyst.identify._shape import identify_shape, refine_shape
 from pihyst.model import ClassicalPI, MultislopePI, PiecewiseLinearPI
 
 PAPER_A, PAPER_B, PAPER_H = 0.8, 1.2, 0.5
@@ -70,17 +73,40 @@ def _shift(polylines, lo):
 
 
 class Family(ABC):
-    """One model family: how to build its operators and map them to the raw input."""
+    """A fitting family: the recipe that turns a record into one model.
+
+    A family says which operators are candidates (``candidates``, or a kernel grid), how
+    they are built in the fitting frame (``template``) and mapped back to the raw input
+    (``final_model``), and how its structure is chosen (``fit``: threshold subset search
+    by default; the multislope shape search and the KP regularization override it). Its
+    own options (shape, input segments, kernel grid) are constructor arguments; options
+    common to all families are :func:`pihyst.identify.fit`'s.
+
+    A family is not the model's operator kind: ``model.family`` (``"classical"``,
+    ``"multislope"``, ``"pwl"``) names the operators a model is made of, while several
+    fitting families (``modified-pi``, ``kp``, and multislope on a range not starting at
+    0) produce ``pwl`` models. The fitting family is recorded in
+    ``model.metadata["fit"]["family"]``.
+    """
 
     name = None
     title = None
-    # thresholds chosen by subset search over ``candidates(S, n_candidates)``, which
-    # such families define
-    subset_search = True
+    # the report's key for the operators: thresholds (floats) or kernels (index pairs)
+    operators_key = "thresholds"
     n_fixed = 0            # operator columns always present after the thresholds'
+    # PI-type structure: the minor loops follow from the major loop (the operators'
+    # geometry fixes them), so a record of major loops alone is enough to fit it
+    minor_loops_fixed = True
 
     def max_threshold(self, S):
         return np.inf
+
+    def check_thresholds(self, thresholds, S):
+        """FitError if explicit thresholds are not valid for this family (beyond
+        sorted, distinct, >= 0, which every family needs); the limit of
+        :meth:`max_threshold` is checked by the data instead (an operator the input
+        never moves)."""
+        return None
 
     @abstractmethod
     def template(self, thresholds, S):
@@ -98,7 +124,34 @@ class Family(ABC):
     def v_state(self, state_u, lo):
         return np.asarray(state_u, dtype=float)
 
-    def describe(self):
+    def fit(self, fitter):
+        """Fit this family to ``fitter``'s record: a :class:`FamilyFit`. Default: the
+        thresholds chosen by subset search over ``candidates(S, n_candidates)``."""
+        return fitter.fit_subsets(self)
+
+    def prepare(self, fitter):
+        """The family to run the threshold search with (e.g. with an identified shape)."""
+        return self
+
+    def refine(self, fitter, fitted):
+        """A better fit of the chosen structure, or ``fitted`` itself."""
+        return fitted
+
+    def options(self, S):
+        """This family's own options as the report shows them (resolved on span S)."""
+        return {}
+
+    def __eq__(self, other):
+        return type(self) is type(other) and self.__dict__ == other.__dict__
+
+    def __hash__(self):
+        return hash((type(self), tuple(sorted(self.__dict__.items()))))
+
+    def __repr__(self):
+        args = ", ".join(f"{k}={v!r}" for k, v in self._args().items())
+        return f"{type(self).__name__}({args})"
+
+    def _args(self):
         return {}
 
 
@@ -129,18 +182,38 @@ class Classical(Family):
         return np.asarray(state_u, dtype=float) - lo
 
 
+SHAPE_KEYS = ("U", "a", "b", "h")
+
+
 class Multislope(Family):
-    """Multislope PI of Xu et al. (2020), eq. 6, with shape (U, a, b, h); U defaults to
-    the data's span S (the top of the range in the v frame)."""
+    """Multislope PI of Xu et al. (2020), eq. 6, with a fixed shape {"U", "a", "b", "h"}
+    (default the paper's a = 0.8, b = 1.2, h = 0.5; U defaults to the data's span S,
+    the top of the range in the fitting frame)."""
 
     name = "multislope"
     title = "multislope PI (paper's shape)"
 
-    def __init__(self, U=None, a=PAPER_A, b=PAPER_B, h=PAPER_H):
-        self.U, self.a, self.b, self.h = U, float(a), float(b), float(h)
+    def __init__(self, shape=None):
+        shape = {} if shape is None else dict(shape)
+        unknown = sorted(set(shape) - set(SHAPE_KEYS))
+        if unknown:
+            raise FitError(f"{self.name}: unknown shape parameter(s) {', '.join(unknown)}; "
+                           f"expected U, a, b, h")
+        try:
+            self.U = None if shape.get("U") is None else float(shape["U"])
+            self.a = float(shape.get("a", PAPER_A))
+            self.b = float(shape.get("b", PAPER_B))
+            self.h = float(shape.get("h", PAPER_H))
+        except (TypeError, ValueError):
+            raise FitError(f"{self.name}: shape values must be numbers, got {shape}") from None
 
     def with_shape(self, **shape):
-        return type(self)(**{"U": self.U, "a": self.a, "b": self.b, "h": self.h, **shape})
+        out = copy.copy(self)
+        Multislope.__init__(out, {**self._shape_dict(), **shape})
+        return out
+
+    def _shape_dict(self):
+        return {"U": self.U, "a": self.a, "b": self.b, "h": self.h}
 
     def shape(self, S):
         return {"U": S if self.U is None else float(self.U), "a": self.a, "b": self.b,
@@ -149,6 +222,14 @@ class Multislope(Family):
     def max_threshold(self, S):
         s = self.shape(S)
         return multislope_max_threshold(s["U"], s["a"], s["h"])
+
+    def check_thresholds(self, thresholds, S):
+        limit = self.max_threshold(S)
+        if np.max(thresholds) > limit * (1 + 1e-12):
+            s = self.shape(S)
+            raise FitError(f"{self.name}: threshold {np.max(thresholds):g} is above "
+                           f"(1 - a)U/(1 - a h) = {limit:g} for U={s['U']:g}, a={s['a']:g}, "
+                           f"h={s['h']:g}", column="input")
 
     def candidates(self, S, n_candidates):
         # n equally spaced over the valid range [0, (1 - a)U / (1 - a h)], both ends included
@@ -169,16 +250,38 @@ class Multislope(Family):
                                  _shift([p[1] for p in polys], lo), weights, offset=offset,
                                  input_range=(lo, lo + S), initial_state=state_v)
 
-    def describe(self):
-        return {"shape": {"U": self.U, "a": self.a, "b": self.b, "h": self.h}}
+    def options(self, S):
+        return {"shape": {k: float(v) for k, v in self.shape(S).items()}}
+
+    def _args(self):
+        return {"shape": self._shape_dict()}
 
 
 class MultislopeIdentified(Multislope):
-    """Multislope PI whose shape (a, b, h, optionally U) is identified from the data,
-    starting from the paper's values (see :func:`pihyst.identify.fit`)."""
+    """Multislope PI whose shape (a, b, h; with ``identify="with-U"`` U too) is
+    identified from the data, starting from ``shape`` (default the paper's); see
+    docs/theory/identification.md. ``identify=False`` keeps the starting shape."""
 
     name = "multislope-identified"
     title = "multislope PI (identified shape)"
+
+    def __init__(self, shape=None, identify=True):
+        super().__init__(shape)
+        if identify not in (True, False, "with-U"):
+            raise FitError(f"{self.name}: identify must be True, False or 'with-U', got "
+                           f"{identify!r}")
+        self.identify = identify
+
+    def prepare(self, fitter):
+        return identify_shape(fitter, self) if self.identify else self
+
+    def refine(self, fitter, fitted):
+        if not self.identify or fitted.threshold_choice is None:
+            return fitted            # explicit thresholds: nothing was chosen
+        return refine_shape(fitter, fitted)
+
+    def _args(self):
+        return {"shape": self._shape_dict(), "identify": self.identify}
 
 
 class PolylineFamily(Family):
@@ -202,7 +305,7 @@ class PolylineFamily(Family):
 
 class ModifiedPI(PolylineFamily):
     """Classical play operators plus a monotone input function p(v) = sum_j c_j g_j(v),
-    g_j(v) = clamp(v, s_j, s_{j+1}) - s_j on ``n_segments`` equal segments of [0, S]
+    g_j(v) = clamp(v, s_j, s_{j+1}) - s_j on ``segments`` equal segments of [0, S]
     (operators with R = F = g_j, i.e. without memory). With c_j >= 0, p is non-decreasing,
     so the model stays monotone and invertible; p bends the loop's centre line, which the
     point-symmetric classical loop cannot (the modified PI of Gu, Zhu and Su, with a
@@ -211,9 +314,14 @@ class ModifiedPI(PolylineFamily):
     name = "modified-pi"
     title = "classical PI + monotone input function"
 
-    def __init__(self, n_segments=4):
-        self.n_segments = int(n_segments)
-        self.n_fixed = self.n_segments
+    def __init__(self, segments=4):
+        if int(segments) != segments or segments < 1:
+            raise FitError(f"{self.name}: segments must be a positive integer, got {segments}")
+        self.segments = int(segments)
+
+    @property
+    def n_fixed(self):
+        return self.segments
 
     def candidates(self, S, n_candidates):
         # r = 0 is left out: that play is R = F = v, the sum of the input segments
@@ -227,43 +335,52 @@ class ModifiedPI(PolylineFamily):
         for r in thresholds:
             rising.append(_line(S, 1.0, -r))     # R(v) = v - r
             falling.append(_line(S, 1.0, r))     # F(v) = v + r
-        edges = np.linspace(0.0, S, self.n_segments + 1)
+        edges = np.linspace(0.0, S, self.segments + 1)
         for s0, s1 in zip(edges[:-1], edges[1:]):
             g = _ramp(s0, s1 - s0, s1 - s0)      # R(v) = F(v) = clamp(v, s0, s1) - s0
             rising.append(g)
             falling.append(g)
         return rising, falling
 
+    def options(self, S):
+        return {"input_function_segments": self.segments}
 
-    def describe(self):
-        return {"input_function_segments": self.n_segments}
+    def _args(self):
+        return {"segments": self.segments}
 
 
 class KrasnoselskiiPokrovskii(PolylineFamily):
     """Krasnosel'skii-Pokrovskii kernels (docs/theory/identification.md): ramp-smoothed relays
     R(v) = sat((v - c_j)/w + 1/2), F(v) = sat((v - c_i)/w + 1/2), c_i <= c_j on a grid of
-    ``n_grid`` centres over [0, S], width w = S/(n_grid - 1); sat clamps to [0, 1]. A
+    ``grid`` centres over [0, S], width w = S/(grid - 1); sat clamps to [0, 1]. A
     Preisach-type basis: captures asymmetric loops; where the data cannot decide, its
     weights are regularized towards a density that depends only on the loop width
     c_j - c_i (see :meth:`penalty`)."""
 
     name = "kp"
     title = "Krasnosel'skii-Pokrovskii kernels (regularized)"
-    subset_search = False
+    operators_key = "kernels"
+    # a kernel basis has a weight for every minor loop: a record of major loops alone
+    # leaves the interior of the Preisach plane to the regularization
+    minor_loops_fixed = False
 
-    def __init__(self, n_grid=16):
-        self.n_grid = int(n_grid)
+    def __init__(self, grid=16):
+        if int(grid) != grid or grid < 2:
+            raise FitError(f"{self.name}: grid must be an integer >= 2, got {grid}")
+        self.grid = int(grid)
+
+    def fit(self, fitter):
+        return fitter.fit_kernels(self)
 
     def pairs(self):
-        return [(i, j) for i in range(self.n_grid) for j in range(i, self.n_grid)]
+        return [(i, j) for i in range(self.grid) for j in range(i, self.grid)]
 
     def _polylines(self, pairs, S):
-        w = S / (self.n_grid - 1)
-        centres = np.arange(self.n_grid) * w
+        w = S / (self.grid - 1)
+        centres = np.arange(self.grid) * w
         rising = [_ramp(centres[j] - w / 2, w, 1.0) for _, j in pairs]
         falling = [_ramp(centres[i] - w / 2, w, 1.0) for i, _ in pairs]
         return rising, falling
-
 
     def penalty(self, pairs):
         """D^T D for D the differences of the weights of kernels (i, j) and (i+1, j+1):
@@ -285,8 +402,53 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
         D = np.array(rows)
         return D.T @ D
 
-    def describe(self):
-        return {"grid": self.n_grid}
+    def options(self, S):
+        return {"grid": self.grid}
+
+    def _args(self):
+        return {"grid": self.grid}
 
 
-FAMILY_NAMES = ("classical", "multislope", "multislope-identified", "modified-pi", "kp")
+class BoucWen(Family):
+    """Not a PI family: a :class:`pihyst.model.BoucWenModel` (remanence, minor loops that
+    drift), its linear part by bounded least squares and its shape (beta, gamma, n) by an
+    outer search (:mod:`pihyst.identify._boucwen`, docs/theory/bouc-wen.md). ``n``: a
+    fixed exponent, or None to search it."""
+
+    name = "bouc-wen"
+    title = "Bouc-Wen"
+    minor_loops_fixed = False
+
+    def __init__(self, n=None):
+        self.n = None if n is None else float(n)
+
+    def fit(self, fitter):
+        from pihyst.identify._boucwen import family_fit
+        return family_fit(self, fitter)
+
+    def template(self, thresholds, S):
+        raise FitError("bouc-wen has no PI operators (it is fitted by its own search)")
+
+    def final_model(self, thresholds, weights, offset, state_v, lo, S):
+        raise FitError("bouc-wen has no PI operators (it is fitted by its own search)")
+
+    def options(self, S):
+        return {"n": self.n}
+
+    def _args(self):
+        return {} if self.n is None else {"n": self.n}
+
+
+FAMILIES = {cls.name: cls for cls in (Classical, Multislope, MultislopeIdentified,
+                                        ModifiedPI, KrasnoselskiiPokrovskii, BoucWen)}
+FAMILY_NAMES = tuple(FAMILIES)
+
+
+def as_family(spec):
+    """A family object from a name (its default options) or a family object."""
+    if isinstance(spec, Family):
+        return spec
+    if isinstance(spec, str) and spec in FAMILIES:
+        return FAMILIES[spec]()
+    raise FitError(f"unknown model family {spec!r}; expected one of {', '.join(FAMILY_NAMES)} "
+                   f"or a family object such as pihyst.identify.Classical()")

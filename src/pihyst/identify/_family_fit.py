@@ -1,6 +1,7 @@
-"""Fitting one model family to a record: the record in the fitting frame (:class:`FramedRecord`)
-and the fit of one family's weights, thresholds, shape or regularization
-(:class:`FamilyFitter`). :func:`pihyst.identify.fit` runs it for every family.
+"""Fitting one family to a record: the record in the fitting frame (:class:`FramedRecord`)
+and the fit of one family's weights, thresholds or regularization (:class:`FamilyFitter`,
+whose methods the families call; the multislope shape search is in ``_shape``).
+:func:`pihyst.identify.fit` runs it for every family.
 
 Equations: the normal equations of ``_gram``, the QP of ``_qp``, the subset search of
 ``_subsets``; the frames of ``_families`` (docs/theory/identification.md).
@@ -10,15 +11,18 @@ import numpy as np
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
 from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
-from pihyst.identify._families import KrasnoselskiiPokrovskii, Multislope, MultislopeIdentified
+from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._qp import solve_qp
-from pihyst.identify._subsets import PATH_MAX_EXHAUSTIVE, SubsetProblem, choose_size
+from pihyst.identify._subsets import (
+    DEFAULT_MAX_EXHAUSTIVE,
+    PATH_MAX_EXHAUSTIVE,
+    SubsetProblem,
+    choose_size,
+)
 from pihyst.metrics import error_summary
-from pihyst.model import InvalidModelError
 
 INITIAL_STATES = ("auto", "cycled", "settle", "zero")
-SHAPE_BOUNDS = {"a": (0.05, 0.995), "b": (1.005, 3.0), "h": (0.0, 1.0)}
 KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
 KP_DEFAULT_LAMBDA = 1e-2
 CONSTANT_COLUMN = 1e-9  # an operator whose output varies less than this * S never moved
@@ -109,30 +113,39 @@ def cycled_state(model, S):
 
 
 class FamilyFitter:
-    """Fits one family to a record; results are plain dicts for the report."""
+    """Fits families to one record with the options common to all families; each
+    family's :meth:`~pihyst.identify._families.Family.fit` calls :meth:`fit_subsets` or
+    :meth:`fit_kernels`, which return a :class:`FamilyFit`."""
 
-    def __init__(self, rec, family, *, thresholds, candidates, n_candidates, n_operators,
-                 nonnegative, bounds, max_exhaustive, identify_shape):
-        self.rec, self.family = rec, family
+    def __init__(self, rec, *, thresholds=None, candidates=None, n_candidates=16,
+                 n_operators=None, nonnegative=True, bounds=None,
+                 max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+        self.rec = rec
         self.thresholds = None if thresholds is None else np.sort(np.asarray(thresholds, float))
         self.candidates = None if candidates is None else np.sort(np.asarray(candidates, float))
         self.n_candidates, self.n_operators = n_candidates, n_operators
         self.nonnegative, self.bounds = nonnegative, bounds
         self.max_exhaustive = max_exhaustive
-        self.identify_shape = identify_shape
         self.notes = []
 
+    def fit(self, family):
+        """``family`` fitted to the record (notes collected afresh)."""
+        self.notes = []
+        return family.fit(self)
+
     # ---------------------------------------------------------------- columns
-    def _grams(self, template, roles=("fit", "held_back")):
+    def grams(self, family, template, roles=("fit", "held_back")):
+        """Initial state, normal equations per role, and the rows of the ``through``
+        samples, of ``template``'s operators over the record."""
         rec = self.rec
-        state0 = rec.start_state(self.family, template)
+        state0 = rec.start_state(family, template)
         segments = [(a, z, r if r in roles or r == "settle" else "settle")
                     for a, z, r in rec.layout.segments]
         parts, rows = accumulate(template, rec.v, rec.d, segments, state0, offset=True,
                                  rows_at=rec.through)
         return state0, parts, rows
 
-    def _bounds(self, n_ops):
+    def _bounds(self, family, n_ops):
         """Bounds of the operator weights: w >= 0 by default, or the user's."""
         lo = np.full(n_ops, 0.0 if self.nonnegative else -np.inf)
         hi = np.full(n_ops, np.inf)
@@ -143,18 +156,18 @@ class FamilyFitter:
                 value = np.asarray(value, dtype=float)
                 if value.ndim and value.size != n_ops:
                     raise FitError(f"per-operator bounds need one value per operator "
-                                   f"({n_ops} for {self.family.name} here), got {value.size}")
+                                   f"({n_ops} for {family.name} here), got {value.size}")
                 (lo if k == 0 else hi)[:] = value
         return lo, hi
 
-    def _problem(self, parts, rows, n_cand, names):
+    def problem(self, family, parts, rows, n_cand, names):
         """SubsetProblem over columns [candidates..., fixed operators..., offset]."""
         rec = self.rec
         m = parts["fit"].G.shape[0]
         keep = list(range(m)) if rec.fit_offset else list(range(m - 1))
         fit = _restrict(parts["fit"], keep)
         judge = _restrict(parts["held_back"], keep) if rec.has_held_back else fit
-        lo, hi = self._bounds(m - 1)
+        lo, hi = self._bounds(family, m - 1)
         if rec.fit_offset:
             lo, hi = np.r_[lo, -np.inf], np.r_[hi, np.inf]
         A_eq = b_eq = None
@@ -174,76 +187,73 @@ class FamilyFitter:
         return np.flatnonzero(var <= (CONSTANT_COLUMN * self.rec.S) ** 2)
 
     # ---------------------------------------------------------------- subset families
-    def fit_subset_family(self):
-        fam, rec = self.family, self.rec
-        if isinstance(fam, MultislopeIdentified):
-            fam = self._identify_shape(fam)
-            self.family = fam
+    def fit_subsets(self, family):
+        """Thresholds chosen by subset search (or given), weights by QP."""
+        rec = self.rec
+        fam = family.prepare(self)
         explicit = self.thresholds is not None
-        if explicit:
-            cand = self.thresholds
-            self._check_thresholds(cand)
-        elif self.candidates is not None:
-            cand = self.candidates
-            self._check_thresholds(cand)
+        if explicit or self.candidates is not None:
+            cand = self.thresholds if explicit else self.candidates
+            self._check_thresholds(fam, cand)
         else:
             cand = fam.candidates(rec.S, self.n_candidates)
         template = fam.template(cand, rec.S)
-        state0, parts, rows = self._grams(template)
+        state0, parts, rows = self.grams(fam, template)
         const = self._constant_columns(parts, len(cand))
         if const.size and explicit:
             r = cand[const[0]]
             raise FitError(f"{fam.name}: the input never reaches threshold {r:g} (span of "
                            f"the fitted data {rec.S:g}): that operator's output is constant, "
                            f"so its weight is undetermined; use thresholds below "
-                           f"{_reach_limit(fam, rec.S):g}", column="input")
-        dropped = []
+                           f"{fam.max_threshold(rec.S):g}", column="input")
         if const.size:
             dropped = [float(cand[i]) for i in const]
-            keep_c = [i for i in range(len(cand)) if i not in set(const)]
-            cand = cand[keep_c]
+            cand = np.delete(cand, const)
             template = fam.template(cand, rec.S)
-            state0, parts, rows = self._grams(template)
+            state0, parts, rows = self.grams(fam, template)
             self.notes.append(f"candidate thresholds {_fmt_list(dropped)} dropped: the input "
                               f"never moves their operators")
         names = [f"r={r:g}" for r in cand] + [f"input segment {j}" for j in range(fam.n_fixed)]
-        prob = self._problem(parts, rows, len(cand), names)
-
+        prob = self.problem(fam, parts, rows, len(cand), names)
         if explicit:
-            chosen = tuple(range(len(cand)))
-            choice = None
+            chosen, choice = tuple(range(len(cand))), None
         else:
-            chosen, choice = self._choose(prob, cand)
-        cols, x = prob.solve(chosen, warn=True)
+            chosen, choice = self._choose(fam, prob, cand)
+        _, x = prob.solve(chosen, warn=True)
         if x is None:
             raise InfeasibleConstraintsError(f"{fam.name}: no weights satisfy the constraints")
-        if isinstance(fam, MultislopeIdentified) and not explicit and self.identify_shape:
-            fam, cand, chosen, cols, x, state0, parts, prob = self._refine_shape(
-                fam, cand, chosen, choice)
-            self.family = fam
-        return self._result(fam, cand, chosen, cols, x, state0, parts, prob, choice, dropped)
+        fitted = self.subset_result(fam, cand, chosen, x, state0, prob, choice)
+        return fam.refine(self, fitted)
 
-    def _check_thresholds(self, r):
+    def subset_result(self, fam, cand, chosen, x, state0, prob, choice):
+        """FamilyFit of the subset ``chosen`` of the candidates ``cand``, weights ``x``."""
+        def refit():
+            both = _both(prob)
+            joint = SubsetProblem(fit=both, judge=both, n_candidates=prob.n_candidates,
+                                  lower=prob.lower, upper=prob.upper, A_eq=prob.A_eq,
+                                  b_eq=prob.b_eq, names=prob.names)
+            _, x_all = joint.solve(chosen, warn=True)
+            return self._model(fam, cand, chosen, x_all, state0)[0]
+
+        model, ops, w, c = self._model(fam, cand, chosen, x, state0)
+        return self._fit_result(fam, model, ops, w, c, refit, threshold_choice=choice)
+
+    def _check_thresholds(self, fam, r):
         if r.size == 0:
             raise FitError("thresholds is empty")
         if np.any(r < 0) or np.any(np.diff(r) <= 0):
             raise FitError("thresholds must be >= 0 and distinct")
-        limit = self.family.max_threshold(self.rec.S)
-        if isinstance(self.family, Multislope) and r.max() > limit * (1 + 1e-12):
-            s = self.family.shape(self.rec.S)
-            raise FitError(f"{self.family.name}: threshold {r.max():g} is above (1 - a)U/(1 - a h) "
-                           f"= {limit:g} for U={s['U']:g}, a={s['a']:g}, h={s['h']:g}",
-                           column="input")
+        fam.check_thresholds(r, self.rec.S)
 
-    def _choose(self, prob, cand):
+    def _choose(self, fam, prob, cand):
         K = len(cand)
         if self.n_operators is not None:
             if not 1 <= self.n_operators <= K:
-                raise FitError(f"{self.family.name}: cannot choose {self.n_operators} operators "
+                raise FitError(f"{fam.name}: cannot choose {self.n_operators} operators "
                                f"from {K} candidate thresholds")
             best = prob.best_of_size(self.n_operators, self.max_exhaustive)
             if not np.isfinite(best.rms):
-                raise InfeasibleConstraintsError(f"{self.family.name}: no {self.n_operators} "
+                raise InfeasibleConstraintsError(f"{fam.name}: no {self.n_operators} "
                                                  f"operators satisfy the constraints")
             path = [best]
             size_rule = f"requested: {self.n_operators}"
@@ -269,177 +279,93 @@ class FamilyFitter:
         }
         return best.subset, choice
 
-    # ---------------------------------------------------------------- multislope shape
-    def _shape_vector(self, fam):
-        names = ["a", "b", "h"] + (["U"] if self.identify_shape == "with-U" else [])
-        s = fam.shape(self.rec.S)
-        return names, np.array([s[k] for k in names])
-
-    def _shape_bounds(self, names):
-        S = self.rec.S
-        return [SHAPE_BOUNDS[k] if k != "U" else (0.5 * S, 2.0 * S) for k in names]
-
-    def _shape_objective(self, fam, names, fractions=None):
-        """RMS error on the fitted samples as a function of the shape, weights by QP."""
+    # ---------------------------------------------------------------- kernel families
+    def fit_kernels(self, fam):
+        """All kernels of the family's grid, regularized by ``fam.penalty``; the strength
+        chosen on the held-back cycles."""
+        if self.thresholds is not None or self.candidates is not None or \
+                self.n_operators is not None:
+            raise FitError(f"{fam.name}: has no thresholds (a grid of kernels, regularized); "
+                           f"drop thresholds/candidates/n_operators")
         rec = self.rec
-        bad = 1e6 * (rec.measured_range + 1.0)
-
-        def objective(p):
-            shape = dict(zip(names, p))
-            cand_fam = fam.with_shape(**shape)
-            s = cand_fam.shape(rec.S)
-            if not (0 < s["a"] < 1 < s["b"] and 0 <= s["h"] <= 1):
-                return bad
-            if self.thresholds is not None:
-                cand = self.thresholds
-                if cand.max() > cand_fam.max_threshold(rec.S):
-                    return bad
-            elif fractions is not None:
-                cand = fractions * cand_fam.max_threshold(rec.S)
-            else:
-                cand = cand_fam.candidates(rec.S, self.n_candidates)
-            try:
-                template = cand_fam.template(cand, rec.S)
-            except InvalidModelError:
-                return bad
-            _, parts, rows = self._grams(template, roles=("fit",))
-            prob = self._problem(parts, rows, len(cand), [f"r{i}" for i in range(len(cand))])
-            cols, x = prob.solve(tuple(range(len(cand))))
-            return bad if x is None else prob.fit.rms(cols, x)
-        return objective
-
-    def _minimize_shape(self, fam, fractions=None):
-        names, x0 = self._shape_vector(fam)
-        objective = self._shape_objective(fam, names, fractions)
-        f0 = objective(x0)
-        from scipy.optimize import minimize  # lazy: SciPy optimize takes 0.2 s to load
-
-        res = minimize(objective, x0, method="Nelder-Mead", bounds=self._shape_bounds(names),
-                       options={"maxfev": 60 * len(names), "xatol": 1e-4,
-                                "fatol": 1e-7 * max(self.rec.measured_range, 1e-300)})
-        x = res.x if res.fun <= f0 else x0
-        at_bound = [f"{k} = {v:.4g}" for k, v, (lo, hi) in
-                    zip(names, x, self._shape_bounds(names))
-                    if min(v - lo, hi - v) <= 1e-3 * (hi - lo)]
-        if at_bound and res.fun < f0:
-            self.notes.append(f"identified shape at the edge of its search range: "
-                              f"{', '.join(at_bound)} (the data favour a shape beyond it)")
-        return fam.with_shape(**dict(zip(names, (float(v) for v in x)))), f0, min(res.fun, f0)
-
-    def _identify_shape(self, fam):
-        if not self.identify_shape:
-            return fam
-        start = fam.shape(self.rec.S)
-        new, f0, f1 = self._minimize_shape(fam)
-        end = new.shape(self.rec.S)
-        changes = ", ".join(f"{k} {start[k]:.4g} -> {end[k]:.4g}" for k in ("a", "b", "h", "U")
-                            if k != "U" or self.identify_shape == "with-U")
-        self.notes.append(f"shape identified with all candidate operators: {changes}; "
-                          f"fitted RMS {f0:.4g} -> {f1:.4g}")
-        return new
-
-    def _refine_shape(self, fam, cand, chosen, choice):
-        """Re-identify the shape for the chosen operators (thresholds kept as fractions of
-        the largest valid threshold), then refit."""
-        rmax = fam.max_threshold(self.rec.S)
-        fractions = np.asarray(cand)[list(chosen)] / rmax
-        new, f0, f1 = self._minimize_shape(fam, fractions)
-        if f1 < f0:
-            self.notes.append(f"shape refined for the chosen operators: a={new.a:.4g}, "
-                              f"b={new.b:.4g}, h={new.h:.4g}; fitted RMS {f0:.4g} -> {f1:.4g}")
-        fam = new
-        r = fractions * fam.max_threshold(self.rec.S)
-        template = fam.template(r, self.rec.S)
-        state0, parts, rows = self._grams(template)
-        names = [f"r={v:g}" for v in r]
-        prob = self._problem(parts, rows, len(r), names)
-        sub = tuple(range(len(r)))
-        cols, x = prob.solve(sub, warn=True)
-        if choice is not None:
-            choice["chosen"] = [float(v) for v in r]
-            choice["shape_refined"] = True
-            choice["note"] = ("the thresholds were chosen, and the reasons computed, with the "
-                              "shape identified on all candidates; the shape was then refined "
-                              "for the chosen operators (thresholds kept as fractions of the "
-                              "largest valid one)")
-        return fam, r, sub, cols, x, state0, parts, prob
-
-    # ---------------------------------------------------------------- KP family
-    def fit_kp(self):
-        fam, rec = self.family, self.rec
         pairs = fam.pairs()
         template = fam.template(pairs, rec.S)
-        state0, parts, rows = self._grams(template)
+        state0, parts, rows = self.grams(fam, template)
         const = self._constant_columns(parts, len(pairs))
         if const.size:
             # e.g. the widest kernel: after a full cycle it stays at 1/2 for good
             pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
             template = fam.template(pairs, rec.S)
-            state0, parts, rows = self._grams(template)
+            state0, parts, rows = self.grams(fam, template)
             self.notes.append(f"{const.size} kernels dropped: the input never moves them")
         names = [f"kernel {p}" for p in pairs]
-        prob = self._problem(parts, rows, len(pairs), names)
+        prob = self.problem(fam, parts, rows, len(pairs), names)
         n_ops = len(pairs)
         P = fam.penalty(pairs)
-        g = prob.fit
-        scale = np.trace(g.G[:n_ops, :n_ops]) / max(np.trace(P), 1e-300)
+        scale = np.trace(prob.fit.G[:n_ops, :n_ops]) / max(np.trace(P), 1e-300)
         cols = list(range(len(prob.lower)))
-        tried = []
+        chosen = tuple(range(n_ops))
 
-        def solve(lam, warn=False, gram=None):
-            gram = g if gram is None else gram
+        def solve(lam, gram, warn=False):
             H = gram.G.copy()
             H[:n_ops, :n_ops] += lam * scale * P
             return solve_qp(H, gram.b, lower=prob.lower, upper=prob.upper, A_eq=prob.A_eq,
                             b_eq=prob.b_eq, warn=warn, names=prob.names).x
 
+        tried = []
         if rec.has_held_back:
             for lam in KP_LAMBDAS:
-                x = solve(lam)
-                tried.append({"lambda": float(lam), "rms": prob.judge.rms(cols, x)})
+                tried.append({"lambda": float(lam),
+                              "rms": prob.judge.rms(cols, solve(lam, prob.fit))})
             lam = min(tried, key=lambda t: t["rms"])["lambda"]
             rule = "lowest held-back RMS"
         else:
             lam = KP_DEFAULT_LAMBDA
             rule = "default (nothing held back to choose it on)"
             self.notes.append("nothing held back: regularization strength not chosen from data")
-        x = solve(lam, warn=True)
+        x = solve(lam, prob.fit, warn=True)
         reg = {"lambda": lam, "scale": float(scale), "rule": rule, "tried": tried,
                "kernels": len(pairs),
                "penalty": "differences of neighbouring kernels along the diagonal (same width)"}
-        self._kp_solve = solve
-        return self._result(fam, pairs, tuple(range(n_ops)), cols, x, state0, parts, prob,
-                            None, [], regularization=reg)
+
+        def refit():
+            return self._model(fam, pairs, chosen, solve(lam, _both(prob), warn=True),
+                               state0)[0]
+
+        model, ops, w, c = self._model(fam, pairs, chosen, x, state0)
+        return self._fit_result(fam, model, ops, w, c, refit, regularization=reg)
 
     # ---------------------------------------------------------------- results
-    def _result(self, fam, cand, chosen, cols, x, state0, parts, prob, choice, dropped,
-                regularization=None):
+    def _model(self, fam, cand, chosen, x, state0):
+        """The raw-frame model of weights x over columns [chosen..., fixed..., offset]:
+        (model, operators, weights, offset). Operators with zero weight are left out of
+        a kernel model (they are many, and cost time in a compensator)."""
         rec = self.rec
-        n_fixed = fam.n_fixed
         ops = [cand[i] for i in chosen]
-        n_ops = len(ops) + n_fixed
+        n_ops = len(ops) + fam.n_fixed
         w = x[:n_ops]
         c = (x[n_ops] if rec.fit_offset else 0.0) + rec.fixed_offset
-        idx = list(chosen) + list(range(len(cand), len(cand) + n_fixed))
-        state_sel = state0[idx]
-        if isinstance(fam, KrasnoselskiiPokrovskii):
-            # kernels with zero weight are left out of the model
+        idx = list(chosen) + list(range(len(cand), len(cand) + fam.n_fixed))
+        state = state0[idx]
+        if fam.operators_key == "kernels":
             nz = np.flatnonzero(w != 0) if np.any(w != 0) else np.array([0])
-            ops, w, state_sel = [ops[i] for i in nz], w[nz], state_sel[nz]
-        fitted = fam.final_model(np.asarray(ops, dtype=float) if not isinstance(
-            fam, KrasnoselskiiPokrovskii) else ops, w, c, state_sel, rec.lo, rec.S)
-        errors = self._errors(fitted)
-        judged = errors["held_back"]["rms"] if rec.has_held_back else errors["fit"]["rms"]
-        return {
-            "family": fam.name, "title": fam.title, "fam": fam, "model": fitted,
-            "operators": ops, "cand": cand, "chosen": chosen, "prob": prob, "state0": state0,
-            "parts": parts, "n_operators": len(ops), "weights": w, "offset": float(c),
-            "errors": errors, "judged_rms": judged, "choice": choice,
-            "dropped": dropped, "regularization": regularization, "notes": list(self.notes),
-            "n_params": int(np.count_nonzero(w)) + int(rec.fit_offset),
-        }
+            ops, w, state = [ops[i] for i in nz], w[nz], state[nz]
+            model = fam.final_model(ops, w, c, state, rec.lo, rec.S)
+        else:
+            model = fam.final_model(np.asarray(ops, dtype=float), w, c, state, rec.lo, rec.S)
+        return model, tuple(ops), w, float(c)
 
-    def _errors(self, model):
+    def _fit_result(self, fam, model, ops, w, c, refit, **how):
+        rec = self.rec
+        errors = self.errors(model)
+        judged = errors["held_back"]["rms"] if rec.has_held_back else errors["fit"]["rms"]
+        return FamilyFit(family=fam, model=model, operators=ops, weights=w, offset=c,
+                         errors=errors, judged_rms=judged,
+                         n_params=int(np.count_nonzero(w)) + int(rec.fit_offset),
+                         notes=tuple(self.notes), refit=refit, **how)
+
+    def errors(self, model):
+        """Error summaries of ``model`` on the fitted and the held-back samples."""
         rec = self.rec
         # the model's initial state is the state the record was processed from
         y_hat = model.predict(rec.u)
@@ -451,12 +377,13 @@ class FamilyFitter:
         return out
 
 
+def _both(prob):
+    """Normal equations of the fitted and held-back samples together."""
+    return prob.fit + prob.judge if prob.judge is not prob.fit else prob.fit
+
+
 def _restrict(gram, keep):
     return Gram(gram.G[np.ix_(keep, keep)], gram.b[keep], gram.dd, gram.n)
-
-
-def _reach_limit(fam, S):
-    return fam.max_threshold(S)
 
 
 def _fmt_list(values):

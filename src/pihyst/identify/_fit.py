@@ -20,62 +20,47 @@
 
 import math
 import warnings
+from dataclasses import replace
 
 from pihyst._version import __version__
 from pihyst.exceptions import FitError, PihystWarning
-from pihyst.identify._families import (
-    FAMILY_NAMES,
-    Classical,
-    KrasnoselskiiPokrovskii,
-    ModifiedPI,
-    Multislope,
-    MultislopeIdentified,
-)
+from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
 from pihyst.identify._report import FitReport, FitResult
-from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE, SubsetProblem
+from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
 
 DEFAULT_N_CANDIDATES = 16
 
 
-def _family(name, shape, identify, input_segments=4, kp_grid=16):
-    if name == "classical":
-        return Classical()
-    if name in ("multislope", "multislope-identified"):
-        cls = Multislope if name == "multislope" else MultislopeIdentified
-        base = cls()
-        return base.with_shape(**(shape or {})) if shape else base
-    if name == "modified-pi":
-        return ModifiedPI(input_segments)
-    if name == "kp":
-        return KrasnoselskiiPokrovskii(kp_grid)
-    raise FitError(f"unknown model family {name!r}; expected one of {', '.join(FAMILY_NAMES)}")
-
-
 def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
-        n_candidates=DEFAULT_N_CANDIDATES, shape=None, identify_shape=True, offset=True,
-        nonnegative=True, bounds=None, through=None, initial_state="auto",
-        holdout="alternate", refit=True, input_range=None, input_segments=4, kp_grid=16,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+        n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
+        through=None, initial_state="auto", holdout="alternate", refit=True,
+        input_range=None, max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
     """Fit PI-type hysteresis models to a measured record and keep the most accurate.
 
     Parameters
     ----------
     u, y : array_like
         Input (e.g. voltage) and measured output (e.g. displacement), same length.
-    family : str or list of str, optional
-        ``"classical"``, ``"multislope"`` (the paper's shape a = 0.8, b = 1.2, h = 0.5 on
-        the data's range), ``"multislope-identified"`` (shape fitted to the data),
-        ``"modified-pi"`` (classical + monotone input function), ``"kp"``
-        (Krasnosel'skii-Pokrovskii kernels). Default: all of them, compared on the
-        held-back cycles; the one with the lowest held-back RMS is returned.
-        ``"bouc-wen"`` alone fits a :class:`pihyst.model.BoucWenModel` instead
-        (only input_range, initial_state, holdout and refit apply).
+    family : str, family object, or a list of them, optional
+        The fitting families (:mod:`pihyst.identify`): ``"classical"``
+        (:class:`~pihyst.identify.Classical`), ``"multislope"``
+        (:class:`~pihyst.identify.Multislope`: the paper's shape a = 0.8, b = 1.2,
+        h = 0.5 on the data's range, or ``Multislope(shape={...})``),
+        ``"multislope-identified"`` (:class:`~pihyst.identify.MultislopeIdentified`: shape
+        fitted to the data), ``"modified-pi"`` (:class:`~pihyst.identify.ModifiedPI`:
+        classical + monotone input function of ``segments`` pieces), ``"kp"``
+        (:class:`~pihyst.identify.KrasnoselskiiPokrovskii`: a ``grid`` of kernels). A
+        name stands for the family with its default options. ``"bouc-wen"``
+        (:class:`~pihyst.identify.BoucWen`) is not a PI family: a
+        :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md). Default: all of
+        them, compared on the held-back cycles; the one with the lowest held-back RMS is
+        returned.
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
-        range) instead of choosing them.
+        range) instead of choosing them (families with thresholds only).
     n_operators : int, optional
         Number of operators to choose from the candidates. Default: chosen from the data
         (the smallest number within 1 % of the lowest held-back RMS).
@@ -84,11 +69,6 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         family's useful range ([0, S/2) classical, [0, (1-a)U/(1-ah)] multislope).
     n_candidates : int
         Size of the default candidate grid (16, as in the paper).
-    shape : dict, optional
-        Multislope shape {"a", "b", "h", "U"}: fixed for ``"multislope"``, the starting
-        point for ``"multislope-identified"``. U defaults to the input span.
-    identify_shape : bool or "with-U"
-        For ``"multislope-identified"``: identify (a, b, h), and U too with "with-U".
     offset : bool or float
         True: fit a constant offset (the sensor's zero is arbitrary); a number: fixed.
     nonnegative : bool
@@ -112,10 +92,6 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         choice. The report's held-back errors are those of the fit before the refit.
     input_range : (min, max), optional
         Input range of the model; default the data's span.
-    input_segments : int
-        ``"modified-pi"``: number of equal segments of its monotone input function.
-    kp_grid : int
-        ``"kp"``: number of kernel centres per axis (kp_grid (kp_grid + 1) / 2 kernels).
     max_exhaustive : int
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
@@ -132,7 +108,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     ------
     FitError
         Too few samples, constant input, NaN, a threshold the input never reaches,
-        infeasible constraints (:class:`~pihyst.exceptions.InfeasibleConstraintsError`).
+        infeasible constraints (:class:`~pihyst.exceptions.InfeasibleConstraintsError`),
+        an unknown family.
 
     Warns
     -----
@@ -153,19 +130,22 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     ...                  initial_state="zero", offset=False)
     >>> [round(float(w), 6) for w in res.model.weights]
     [0.3, 0.2, 0.1]
+
+    A family with its own options:
+
+    >>> res = pihyst.fit(u, true.predict(u), family=pihyst.identify.ModifiedPI(segments=2),
+    ...                  n_operators=2)
+    >>> res.report.chosen, res.model.family
+    ('modified-pi', 'pwl')
     """
-    if family == "bouc-wen":   # not a PI family: its own fit (docs/theory/bouc-wen.md)
-        from pihyst.identify._boucwen import fit_result
-        return fit_result(u, y, input_range=input_range, initial_state=initial_state,
-                          holdout=holdout, refit=refit)
+    explicit_family = family is not None
+    specs = FAMILY_NAMES if family is None else (
+        [family] if isinstance(family, str) or not _is_sequence(family) else list(family))
+    families = [as_family(f) for f in specs]
+    if len({f.name for f in families}) < len(families):
+        raise FitError("each family may be given once (their results are reported by name)")
     rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
-                  holdout=holdout, offset=offset, through=through)
-    if family is None:
-        names = list(FAMILY_NAMES)
-        explicit_family = False
-    else:
-        names = [family] if isinstance(family, str) else list(family)
-        explicit_family = True
+                       holdout=holdout, offset=offset, through=through)
     if thresholds is not None and candidates is not None:
         raise FitError("give thresholds (used as they are) or candidates (chosen from), "
                        "not both")
@@ -176,70 +156,63 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         raise FitError("give thresholds or n_operators (how many to choose), not both")
     if n_operators is not None and (int(n_operators) != n_operators or n_operators < 1):
         raise FitError(f"n_operators must be a positive integer, got {n_operators}")
+    fitter = FamilyFitter(rec, thresholds=thresholds, candidates=candidates,
+                          n_candidates=n_candidates, n_operators=n_operators,
+                          nonnegative=nonnegative, bounds=bounds, max_exhaustive=max_exhaustive)
+    chooses_thresholds = (thresholds is not None or candidates is not None
+                          or n_operators is not None)
 
-    results, skipped = [], []
-    caught = {}
-    for name in names:
-        fam = _family(name, shape if name.startswith("multislope") else None,
-                      identify_shape, input_segments, kp_grid)
-        if not fam.subset_search and (thresholds is not None or candidates is not None
-                                      or n_operators is not None):
-            msg = "has no thresholds (a grid of kernels, regularized)"
-            if explicit_family:
-                raise FitError(f"{name}: {msg}; drop thresholds/candidates/n_operators")
-            skipped.append({"family": name, "reason": msg})
+    results, skipped, caught = [], [], {}
+    for fam in families:
+        kernels = fam.operators_key == "kernels"
+        if not explicit_family and kernels and chooses_thresholds:
+            skipped.append({"family": fam.name, "reason": "has no thresholds (a grid of "
+                            "kernels, regularized)"})
             continue
-        if not fam.subset_search and not rec.has_held_back and not explicit_family:
-            skipped.append({"family": name, "reason": "nothing held back to regularize it "
-                            "on: a kernel basis would overfit"})
+        if not explicit_family and kernels and not rec.has_held_back:
+            skipped.append({"family": fam.name, "reason": "nothing held back to regularize "
+                            "it on: a kernel basis would overfit"})
             continue
-        fitter = FamilyFitter(rec, fam, thresholds=thresholds, candidates=candidates,
-                              n_candidates=n_candidates, n_operators=n_operators,
-                              nonnegative=nonnegative, bounds=bounds,
-                              max_exhaustive=max_exhaustive, identify_shape=identify_shape)
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
             try:
-                res = fitter.fit_subset_family() if fam.subset_search else fitter.fit_kp()
+                res = fitter.fit(fam)
             except FitError as err:
                 if explicit_family:
                     raise
-                skipped.append({"family": name, "reason": str(err)})
+                skipped.append({"family": fam.name, "reason": str(err)})
                 continue
-        caught[name] = [x for x in w if issubclass(x.category, PihystWarning)]
+        caught[fam.name] = [x for x in w if issubclass(x.category, PihystWarning)]
         for x in w:
             if not issubclass(x.category, PihystWarning):
                 warnings.warn_explicit(x.message, x.category, x.filename, x.lineno)
-        res["warnings"] = [str(x.message) for x in caught[name]]
-        res["fitter"] = fitter
-        results.append(res)
+        results.append(replace(res, warnings=tuple(str(x.message) for x in caught[fam.name])))
     if not results:
         raise FitError("no family could be fitted: " + "; ".join(
             f"{s['family']}: {s['reason']}" for s in skipped))
 
     if rec.has_held_back:
-        best = min(results, key=lambda r: r["judged_rms"])
+        best = min(results, key=lambda r: r.judged_rms)
         criterion = "lowest held-back RMS error"
     else:
         n = rec.layout.count("fit")
-        best = min(results, key=lambda r: n * math.log(max(r["judged_rms"], 1e-300) ** 2)
-                   + r["n_params"] * math.log(n))
+        best = min(results, key=lambda r: n * math.log(max(r.judged_rms, 1e-300) ** 2)
+                   + r.n_params * math.log(n))
         criterion = "lowest BIC on the fitted data (nothing held back)"
-    for x in caught[best["family"]]:
-        warnings.warn(f"{best['family']}: {x.message}", x.category, stacklevel=2)
+    for x in caught[best.name]:
+        warnings.warn(f"{best.name}: {x.message}", x.category, stacklevel=2)
 
-    model = best["model"]
+    model = best.model
     final_errors = None
     if refit and rec.has_held_back:
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
-            model = _refit(rec, best)
-        if not caught[best["family"]]:
+            model = best.refit()
+        if not caught[best.name]:
             for x in w:
-                warnings.warn(f"{best['family']} (refit): {x.message}", x.category,
-                              stacklevel=2)
-        final_errors = best["fitter"]._errors(model)
-    report = FitReport.build(rec, results, skipped, best["family"], criterion,
+                warnings.warn(f"{best.name} (refit): {x.message}", x.category, stacklevel=2)
+        final_errors = fitter.errors(model)
+    report = FitReport.build(rec, results, skipped, best.name, criterion,
                              refit=bool(refit and rec.has_held_back),
                              final_errors=final_errors)
     fit_summary = report.model_summary()
@@ -250,23 +223,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         fit_summary["settled"] = {
             "sample": end, "state": model.simulate(rec.u[:end]).final_state.tolist()}
     model = model.replace(metadata={"fit": fit_summary, "pihyst_version": __version__})
-    models = {r["family"]: r["model"] for r in results}
-    models[best["family"]] = model
+    models = {r.name: r.model for r in results}
+    models[best.name] = model
     return FitResult(model=model, report=report, models=models)
 
 
-def _refit(rec, res):
-    """Weights of the chosen structure fitted on fitted and held-back samples together."""
-    prob = res["prob"]
-    both = prob.fit + prob.judge if prob.judge is not prob.fit else prob.fit
-    fam = res["fam"]
-    if isinstance(fam, KrasnoselskiiPokrovskii):
-        x = res["fitter"]._kp_solve(res["regularization"]["lambda"], warn=True, gram=both)
-    else:
-        joint = SubsetProblem(fit=both, judge=both, n_candidates=prob.n_candidates,
-                              lower=prob.lower, upper=prob.upper, A_eq=prob.A_eq,
-                              b_eq=prob.b_eq, names=prob.names)
-        _, x = joint.solve(res["chosen"], warn=True)
-    out = res["fitter"]._result(fam, res["cand"], res["chosen"], None, x, res["state0"],
-                                res["parts"], prob, None, [])
-    return out["model"]
+def _is_sequence(x):
+    return isinstance(x, (list, tuple))

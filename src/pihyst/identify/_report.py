@@ -10,8 +10,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.identify._families import KrasnoselskiiPokrovskii, Multislope
-
 _STATE_TEXT = {
     "cycled": "at rest at the bottom of the range after a full cycle (docs/interfaces.md)",
     "settle": "unknown; settled by the first full sweep of the input range (not fitted)",
@@ -63,7 +61,7 @@ class FitReport:
     @classmethod
     def build(cls, rec, results, skipped, chosen, criterion, *, refit, final_errors):
         lay = rec.layout
-        units = dict(results[0]["model"].units)
+        units = dict(results[0].model.units)
         data = {
             "n_samples": int(rec.u.size),
             "input_range": [rec.lo, rec.lo + rec.S],
@@ -82,31 +80,30 @@ class FitReport:
             "offset": "fitted" if rec.fit_offset else f"fixed at {rec.fixed_offset:g}",
             "through": list(rec.through),
         }
-        families = [cls._family_entry(r, r["family"] == chosen) for r in results]
+        families = [cls._family_entry(r, r.name == chosen, rec.S) for r in results]
         out = {"data": data, "families": families, "skipped": skipped, "chosen": chosen,
                "criterion": criterion,
                "final": {"refit": refit, "errors": final_errors}}
         return cls(_num(out))
 
     @staticmethod
-    def _family_entry(r, is_chosen):
-        fam = r["fam"]
-        entry = {"family": r["family"], "title": r["title"], "chosen": is_chosen,
-                 "n_operators": r["n_operators"]}
-        if isinstance(fam, KrasnoselskiiPokrovskii):
-            entry["kernels"] = [list(p) for p in r["operators"]]
-            entry["regularization"] = r["regularization"]
-        else:
-            entry["thresholds"] = [float(t) for t in r["operators"]]
-        if isinstance(fam, Multislope):
-            entry["shape"] = {k: float(v) for k, v in fam.shape(r["fitter"].rec.S).items()}
-        entry.update({k: v for k, v in fam.describe().items() if k != "shape"})
-        entry["weights"] = [float(w) for w in r["weights"]]
-        entry["offset"] = r["offset"]
-        entry["errors"] = r["errors"]
-        entry["threshold_choice"] = r["choice"]
-        entry["notes"] = r["notes"]
-        entry["warnings"] = r["warnings"]
+    def _family_entry(r, is_chosen, S):
+        fam = r.family
+        entry = {"family": r.name, "title": fam.title, "recipe": repr(fam),
+                 "operator_kind": r.model.family, "chosen": is_chosen,
+                 "n_operators": r.n_operators}
+        entry[fam.operators_key] = ([list(p) for p in r.operators]
+                                    if fam.operators_key == "kernels"
+                                    else [float(t) for t in r.operators])
+        if r.regularization is not None:
+            entry["regularization"] = r.regularization
+        entry.update(fam.options(S))
+        entry["weights"] = [float(w) for w in r.weights]
+        entry["offset"] = r.offset
+        entry["errors"] = r.errors
+        entry["threshold_choice"] = r.threshold_choice
+        entry["notes"] = list(r.notes)
+        entry["warnings"] = list(r.warnings)
         return entry
 
     # ------------------------------------------------------------------ access
@@ -136,9 +133,9 @@ class FitReport:
     def model_summary(self):
         """What a saved model records about its fit (``model.metadata["fit"]``)."""
         best = self.family(self.chosen)
-        keep = ("family", "title", "n_operators", "thresholds", "kernels", "shape",
-                "input_function_segments", "regularization", "errors", "threshold_choice",
-                "notes")
+        keep = ("family", "title", "recipe", "operator_kind", "n_operators", "thresholds",
+                "kernels", "shape", "input_function_segments", "grid", "regularization",
+                "errors", "threshold_choice", "notes")
         summary = {k: best[k] for k in keep if k in best}
         if summary.get("threshold_choice"):
             summary["threshold_choice"] = {k: v for k, v in best["threshold_choice"].items()

@@ -1,0 +1,102 @@
+"""Fitting families as objects: names stand for the default objects, a family's own
+options travel in it, the fitting family is recorded next to the model's operator kind."""
+
+import numpy as np
+import pytest
+
+import pihyst
+from pihyst import ClassicalPI, FitError, fit
+from pihyst.identify import (
+    FAMILY_NAMES,
+    Classical,
+    FamilyFit,
+    KrasnoselskiiPokrovskii,
+    ModifiedPI,
+    Multislope,
+    MultislopeIdentified,
+)
+from pihyst.identify._families import as_family
+from pihyst.identify._family_fit import FamilyFitter, FramedRecord
+
+
+def _record(seed=0):
+    rng = np.random.default_rng(seed)
+    levels = [0.0]
+    for _ in range(4):
+        inner = np.sort(rng.uniform(0, 150, 4))
+        levels += [150.0, 0.0, inner[3], inner[0], inner[2], 0.0]
+    u = np.concatenate([np.linspace(a, b, 40, endpoint=False) for a, b in
+                        zip(levels[:-1], levels[1:])] + [[0.0]])
+    true = ClassicalPI([0, 20, 45], [0.3, 0.2, 0.1])
+    true = true.replace(initial_state=true.simulate(np.array([0.0, 150, 0])).final_state)
+    return u, true.predict(u)
+
+
+def test_names_stand_for_the_default_family_objects():
+    assert [as_family(n) for n in FAMILY_NAMES] == [
+        Classical(), Multislope(), MultislopeIdentified(), ModifiedPI(4),
+        KrasnoselskiiPokrovskii(16)]
+    assert ModifiedPI(segments=8) != ModifiedPI(segments=4)
+    assert Multislope(shape={"a": 0.7}) == Multislope(shape={"a": 0.7, "b": 1.2})
+    assert repr(ModifiedPI(8)) == "ModifiedPI(segments=8)"
+    with pytest.raises(FitError, match="unknown model family"):
+        as_family(42)
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: Multislope(shape={"c": 1}), "unknown shape parameter"),
+    (lambda: ModifiedPI(segments=0), "segments must be"),
+    (lambda: KrasnoselskiiPokrovskii(grid=1), "grid must be"),
+    (lambda: MultislopeIdentified(identify="maybe"), "identify must be"),
+])
+def test_bad_family_options_are_fit_errors(make, match):
+    with pytest.raises(FitError, match=match):
+        make()
+
+
+def test_family_options_reach_the_fit_and_the_metadata():
+    u, y = _record()
+    res = fit(u, y, family=[ModifiedPI(segments=2), "classical"], n_operators=3)
+    assert {f["family"] for f in res.report.families} == {"modified-pi", "classical"}
+    mpi = res.report.family("modified-pi")
+    assert mpi["input_function_segments"] == 2 and mpi["recipe"] == "ModifiedPI(segments=2)"
+    assert mpi["operator_kind"] == "pwl"
+    assert res.models["modified-pi"].n_operators == 3 + 2
+    meta = res.model.metadata["fit"]
+    assert meta["family"] == res.report.chosen
+    assert meta["operator_kind"] == res.model.family
+
+
+def test_a_fixed_multislope_shape_is_used():
+    u, y = _record(1)
+    shape = {"a": 0.6, "b": 1.5, "h": 0.2}
+    res = fit(u, y, family=Multislope(shape=shape), n_operators=2)
+    model = res.model
+    assert (model.a, model.b, model.h, model.U) == (0.6, 1.5, 0.2, 150.0)
+    assert res.report.family("multislope")["shape"] == {"U": 150.0, **shape}
+
+
+def test_the_same_family_twice_is_an_error():
+    u, y = _record()
+    with pytest.raises(FitError, match="once"):
+        fit(u, y, family=["classical", Classical()])
+
+
+def test_family_fit_is_a_typed_result_whose_refit_uses_all_cycles():
+    u, y = _record(2)
+    y = y + np.random.default_rng(0).normal(0, 0.05, u.size)
+    rec = FramedRecord(u, y, input_range=None, initial_state="auto", holdout="alternate",
+                       offset=True, through=None)
+    fitted = FamilyFitter(rec, thresholds=[0, 20, 45]).fit(Classical())
+    assert isinstance(fitted, FamilyFit) and fitted.name == "classical"
+    assert fitted.operators == (0.0, 20.0, 45.0) and fitted.n_operators == 3
+    assert fitted.judged_rms == fitted.errors["held_back"]["rms"]
+    both = fitted.refit()
+    # fitted on fitted + held-back samples: the least-squares optimum over both
+    used = np.concatenate([rec.layout.indices("fit"), rec.layout.indices("held_back")])
+    e_fit = np.sum((fitted.model.predict(u)[used] - y[used]) ** 2)
+    e_both = np.sum((both.predict(u)[used] - y[used]) ** 2)
+    assert e_both <= e_fit
+    assert not np.allclose(both.weights, fitted.weights)
+    assert pihyst.identify.Classical().minor_loops_fixed
+    assert not pihyst.identify.KrasnoselskiiPokrovskii().minor_loops_fixed
