@@ -441,7 +441,10 @@ class BoucWen(Family):
 
 FAMILIES = {cls.name: cls for cls in (Classical, Multislope, MultislopeIdentified,
                                         ModifiedPI, KrasnoselskiiPokrovskii, BoucWen)}
-FAMILY_NAMES = tuple(FAMILIES)
+# the default comparison: the PI families. Bouc-Wen takes part when asked for
+# (family=[..., "bouc-wen"] or BoucWen()): its model is not a PI model, and the C export,
+# the firmware compensator and the rig's controller take PI models only
+FAMILY_NAMES = tuple(name for name in FAMILIES if name != BoucWen.name)
 
 
 def as_family(spec):
@@ -450,5 +453,5 @@ def as_family(spec):
         return spec
     if isinstance(spec, str) and spec in FAMILIES:
         return FAMILIES[spec]()
-    raise FitError(f"unknown model family {spec!r}; expected one of {', '.join(FAMILY_NAMES)} "
+    raise FitError(f"unknown model family {spec!r}; expected one of {', '.join(FAMILIES)} "
                    f"or a family object such as pihyst.identify.Classical()")

@@ -55,9 +55,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         (:class:`~pihyst.identify.KrasnoselskiiPokrovskii`: a ``grid`` of kernels). A
         name stands for the family with its default options. ``"bouc-wen"``
         (:class:`~pihyst.identify.BoucWen`) is not a PI family: a
-        :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md). Default: all of
-        them, compared on the held-back cycles; the one with the lowest held-back RMS is
-        returned.
+        :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md), compared with the
+        others when listed (``family=[*pihyst.identify.FAMILY_NAMES, "bouc-wen"]``).
+        Default: the PI families (``FAMILY_NAMES``), compared on the held-back cycles;
+        the one with the lowest held-back RMS is returned.
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
         range) instead of choosing them (families with thresholds only).
