@@ -9,6 +9,7 @@ The package is laid out as the pipeline (docs/architecture.md):
 - :mod:`pihyst.identify`: fitting models to records;
 - :mod:`pihyst.sim`: simulated beams and test signals;
 - :mod:`pihyst.study`: the paper's study and its report;
+- :mod:`pihyst.fleet`: many records fitted at once, serially or on a Dask cluster;
 - :mod:`pihyst.cli`: the ``pihyst`` command.
 
 The names below are the public API of the README.
@@ -24,6 +25,7 @@ from pihyst.exceptions import (
     InvalidModelError,
     PihystWarning,
 )
+from pihyst.fleet import FleetResult, RecordOutcome, fit_many
 from pihyst.identify import FitReport, FitResult, fit
 from pihyst.inverse import BoucWenCompensator, CompensationResult, Compensator, compensate
 from pihyst.io import load_model, save_model
@@ -47,6 +49,7 @@ __all__ = [
     "FitError",
     "FitReport",
     "FitResult",
+    "FleetResult",
     "IllConditionedWarning",
     "InfeasibleConstraintsError",
     "InputRangeError",
@@ -55,11 +58,13 @@ __all__ = [
     "PIModel",
     "PiecewiseLinearPI",
     "PihystWarning",
+    "RecordOutcome",
     "Response",
     "Stepper",
     "__version__",
     "compensate",
     "fit",
+    "fit_many",
     "load_model",
     "save_model",
 ]

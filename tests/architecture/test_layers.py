@@ -7,8 +7,8 @@ import hides a cycle from Python, not from this test). Layers, lowest first
 0. ``_version``, ``_atomic``, ``_core``, ``_reference``, ``exceptions``, ``paper``, ``metrics``
 1. ``model``
 2. ``io``, ``inverse``
-3. ``identify``, ``sim``, ``dynamics``
-4. ``study``, ``rig``
+3. ``identify``, ``sim``, ``control``, ``dynamics``
+4. ``study``, ``rig``, ``fleet``
 5. ``cli``
 
 A module may import its own sub-package and lower layers, never a higher layer nor a
@@ -27,8 +27,8 @@ LAYERS = [
     {"_version", "_atomic", "_core", "_reference", "exceptions", "paper", "metrics"},
     {"model"},
     {"io", "inverse"},
-    {"identify", "sim", "dynamics"},
-    {"study", "rig"},
+    {"identify", "sim", "control", "dynamics"},
+    {"study", "rig", "fleet"},
     {"cli"},
 ]
 LAYER_OF = {unit: i for i, units in enumerate(LAYERS) for unit in units}

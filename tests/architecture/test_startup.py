@@ -1,5 +1,6 @@
 """A fast start: ``import pihyst`` and ``pihyst --help`` load neither SciPy's heavy
-sub-packages nor matplotlib (they are imported where they are used). The time itself is
+sub-packages nor matplotlib, nor the optional Dask and python-control (they are imported
+where they are used). The time itself is
 measured in benchmarks/bench_startup.py, not asserted here."""
 
 import subprocess
@@ -7,7 +8,8 @@ import sys
 
 import pytest
 
-HEAVY = ("scipy.optimize", "scipy.signal", "scipy.linalg", "scipy.special", "matplotlib")
+HEAVY = ("scipy.optimize", "scipy.signal", "scipy.linalg", "scipy.special", "matplotlib",
+         "dask", "distributed", "control")
 
 
 @pytest.mark.parametrize("code", [

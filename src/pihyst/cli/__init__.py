@@ -10,10 +10,20 @@ import argparse
 import sys
 
 from pihyst._version import __version__
-from pihyst.cli import compensate, demo, export, fit, predict, report, simulate, track
+from pihyst.cli import (
+    compensate,
+    demo,
+    export,
+    fit,
+    fit_many,
+    predict,
+    report,
+    simulate,
+    track,
+)
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict, fit, simulate, compensate, track, demo, report, export]
+COMMANDS = [predict, fit, fit_many, simulate, compensate, track, demo, report, export]
 
 
 def build_parser():

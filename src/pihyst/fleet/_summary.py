@@ -1,0 +1,54 @@
+"""The summary of a fleet as files: JSON (everything) and CSV (one row per record)."""
+
+import csv
+import io
+import json
+
+from pihyst._atomic import write_atomically
+
+__all__ = ["SUMMARY_COLUMNS", "summary_csv", "summary_json"]
+
+#: Columns of the CSV summary, in order.
+SUMMARY_COLUMNS = ("record", "status", "error", "family", "n_operators", "held_back_rms_um",
+                   "fit_time_s", "model_file")
+
+
+def _rows(result, model_files):
+    for o in result:
+        row = o.summary()
+        yield {"record": row["record"], "status": row["status"], "error": row["error"],
+               "family": row["family"], "n_operators": row["n_operators"],
+               "held_back_rms_um": row["held_back_rms"], "fit_time_s": row["seconds"],
+               "model_file": model_files.get(o.record), "warnings": row["warnings"]}
+
+
+def summary_json(result, path, *, model_files=None, **extra):
+    """Write the fleet's summary as JSON: ``extra`` keys, the counts, then one object per
+    record (the CSV's columns and the warnings)."""
+    rows = list(_rows(result, model_files or {}))
+    data = {**extra, "records": len(rows), "fitted": len(result.fitted),
+            "failed": len(result.failed), "scheduler": result.scheduler,
+            "wall_time_s": result.seconds, "rows": rows}
+    write_atomically(path, json.dumps(data, indent=2) + "\n")
+
+
+def summary_csv(result, path, *, model_files=None, comments=()):
+    """Write the fleet's summary as CSV (:data:`SUMMARY_COLUMNS`), after ``#`` comment
+    lines; numbers with 17 significant digits, empty fields where a value does not
+    apply."""
+    out = io.StringIO()
+    for c in comments:
+        out.write(f"# {c}\n")
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(SUMMARY_COLUMNS)
+    for row in _rows(result, model_files or {}):
+        writer.writerow([_field(row[c]) for c in SUMMARY_COLUMNS])
+    write_atomically(path, out.getvalue())
+
+
+def _field(value):
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return f"{value:.17g}"
+    return str(value)
