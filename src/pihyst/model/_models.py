@@ -299,7 +299,8 @@ class PIModel(ABC):
             raise InvalidModelError(f"{source}: a model must be a JSON object, got "
                                     f"{type(d).__name__}")
         family = d.get("family")
-        if cls is PIModel and family in OTHER_FAMILIES:   # not PI models: their own schema
+        if cls is PIModel and isinstance(family, str) and family in OTHER_FAMILIES:
+            # not PI models: their own schema
             return OTHER_FAMILIES[family].from_dict(d, source)
         if not isinstance(family, str) or family not in PIModel._registry:
             known = sorted([*PIModel._registry, *OTHER_FAMILIES])
