@@ -1,6 +1,6 @@
 """Every Python example of the README runs as written (in order, in one namespace, in a
 scratch folder holding a copy of examples/). The few names the text leaves to the reader
-(a measured record u, y and a desired trajectory y_desired) are provided first."""
+(a measured record u, y, a second one u2, y2 and a desired trajectory y_desired) are provided first."""
 
 import re
 import shutil
@@ -29,7 +29,9 @@ def test_every_python_example_of_the_readme_runs(tmp_path, monkeypatch, capsys):
 
     t, u = decaying_triangles(dt=1.0)
     y = make_plant("paper-beam").run(u, t)
-    namespace = {"u": u, "y": y, "t": t,
+    t2, u2 = decaying_triangles(n_triangles=3, ratio=0.7, dt=1.0)
+    y2 = make_plant("paper-beam", seed=1).run(u2, t2)
+    namespace = {"u": u, "y": y, "t": t, "u2": u2, "y2": y2,
                  "y_desired": np.interp(np.arange(300.0), [0, 150, 299], [0.0, 30.0, 5.0])}
     for i, block in enumerate(blocks):
         try:

@@ -100,3 +100,26 @@ def test_family_fit_is_a_typed_result_whose_refit_uses_all_cycles():
     assert not np.allclose(both.weights, fitted.weights)
     assert pihyst.identify.Classical().minor_loops_fixed
     assert not pihyst.identify.KrasnoselskiiPokrovskii().minor_loops_fixed
+
+
+def test_subsampled_record_keeps_exact_operator_outputs():
+    # rate-independent operators: with every input extremum kept, their outputs at the
+    # kept samples are those of the full record
+    rng = np.random.default_rng(3)
+    levels = np.r_[0, 150, 0, rng.uniform(0, 150, 30), 0]
+    u = np.concatenate([np.linspace(a, b, 2000, endpoint=False) for a, b in
+                        zip(levels[:-1], levels[1:])] + [[0.0]])
+    y = 0.3 * u + rng.normal(0, 0.01, u.size)
+    rec = FramedRecord(u, y, input_range=None, initial_state="auto", holdout="alternate",
+                       offset=True, through="top")
+    sub = rec.subsampled(5000)
+    assert sub is not rec and sub.u.size < 0.2 * u.size
+    np.testing.assert_array_equal(sub.u, u[sub.kept])
+    assert [r for *_, r in sub.layout.segments] == [r for *_, r in rec.layout.segments]
+    assert sub.u[sub.through[0]] == u.max()
+    for fam in (Classical(), Multislope(), MultislopeIdentified(shape={"a": 0.6})):
+        cand = fam.candidates(150.0, 16)
+        model = fam.template(cand, 150.0)
+        full = model.operators(u)
+        np.testing.assert_allclose(model.operators(sub.u), full[sub.kept], atol=1e-12)
+    assert rec.subsampled(10 ** 6) is rec

@@ -15,6 +15,53 @@ def ramps(levels, n=20):
                            zip(levels[:-1], levels[1:])] + [levels[-1:]])
 
 
+def turning_points_loop(v, tolerance):
+    """The per-sample loop that turning_points vectorizes: the reference."""
+    points = []
+    hi_i = lo_i = 0
+    direction = 0          # +1 rising (looking for a maximum), -1 falling, 0 unknown
+    for t in range(1, v.size):
+        x = v[t]
+        if x > v[hi_i]:
+            hi_i = t
+        if x < v[lo_i]:
+            lo_i = t
+        if direction >= 0 and v[hi_i] - x > tolerance:
+            if hi_i > 0:
+                points.append((hi_i, +1))
+            direction, lo_i = -1, t
+        elif direction <= 0 and x - v[lo_i] > tolerance:
+            if lo_i > 0:
+                points.append((lo_i, -1))
+            direction, hi_i = +1, t
+    return points
+
+
+@settings(max_examples=200, deadline=None)
+@given(levels=st.lists(st.floats(-50, 50), min_size=1, max_size=15),
+       n=st.integers(1, 40), noise=st.sampled_from([0.0, 0.1, 1.0, 5.0]),
+       tol=st.sampled_from([0.0, 0.5, 1.0, 3.0]), seed=st.integers(0, 10**6),
+       quantum=st.sampled_from([0.0, 1.0]))
+def test_turning_points_match_the_per_sample_loop(levels, n, noise, tol, seed, quantum):
+    v = ramps(levels, n=n)
+    v = v + noise * np.random.default_rng(seed).normal(size=v.size)
+    if quantum:                          # plateaus and ties: first-occurrence extremes
+        v = np.round(v / quantum) * quantum
+    assert turning_points(v, tol) == turning_points_loop(v, tol)
+
+
+def test_turning_points_match_the_loop_on_long_noisy_signals():
+    rng = np.random.default_rng(0)
+    for k in range(5):
+        v = np.cumsum(rng.normal(size=20000)) + 30 * np.sin(np.arange(20000) / (50 + 300 * k))
+        for tol in (0.5, 3.0, 20.0):
+            assert turning_points(v, tol) == turning_points_loop(v, tol)
+    assert turning_points(np.array([1.0]), 0.1) == [] == turning_points_loop(np.array([1.0]),
+                                                                             0.1)
+    flat = np.zeros(1000)
+    assert turning_points(flat, 0.0) == [] == turning_points_loop(flat, 0.0)
+
+
 def test_turning_points_of_a_known_signal():
     v = ramps([0, 10, 2, 8, 0], n=10)
     pts = turning_points(v, 0.5)

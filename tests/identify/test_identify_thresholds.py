@@ -123,3 +123,34 @@ def test_reasons_report_the_error_without_each_threshold():
         assert r["increase_without"] == pytest.approx(r["rms_without"] - best.rms)
         # the chosen subset is optimal, so no replacement beats it
         assert r["rms_with_replacement"] >= best.rms * (1 - 1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10**6), size=st.integers(1, 5),
+       lower=st.sampled_from([0.0, -np.inf, 0.05]), upper=st.sampled_from([np.inf, 0.2]),
+       duplicate=st.booleans())
+def test_batched_subset_qps_equal_one_solve_each(seed, size, lower, upper, duplicate):
+    # score_many (batched in NumPy, quadprog for the constrained ones) against the
+    # plain path: solve_qp per subset, then eq. (1)
+    u = _record(seed)
+    rng = np.random.default_rng(seed)
+    r = np.arange(8) * 9.0
+    if duplicate:                      # two indistinguishable columns: solve_qp's ridge
+        r[3] = r[2] + 1e-9
+    model = ClassicalPI(r, np.ones(8))
+    d = model.operators(u) @ rng.uniform(-0.1, 0.3, 8) + rng.normal(0, 0.1, u.size)
+    parts, _ = accumulate(model, u, d, _segments(u.size), model.initial_state)
+
+    def problem():
+        return SubsetProblem(fit=parts["fit"], judge=parts["held_back"], n_candidates=8,
+                             lower=np.r_[np.full(8, lower), -np.inf],
+                             upper=np.r_[np.full(8, upper), np.inf])
+
+    batched, plain = problem(), problem()
+    subsets = list(itertools.combinations(range(8), size))
+    scores = batched.score_many(subsets)
+    for s, value in zip(subsets, scores):
+        cols, x = plain.solve(s)
+        expected = plain.judge.rms(cols, x)
+        assert value == pytest.approx(expected, rel=1e-7, abs=1e-9), s
+    assert batched.evaluations == len(subsets)

@@ -1,4 +1,4 @@
-"""Figures (pihyst.plot): they draw what they are given and nothing else."""
+"""Figures (pihyst.study._plot): they draw what they are given and nothing else."""
 
 import matplotlib.pyplot as plt
 import numpy as np

@@ -154,10 +154,12 @@ def test_demo_command_is_the_papers_study(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "[1/8]" in printed and "[8/8]" in printed and "report.html" in printed
+    assert "[1/9]" in printed and "[9/9]" in printed and "report.html" in printed
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["timing_s"]["total_computation"] < 120
     h = metrics["headline"]
     assert h["fit_improvement_pct"] > 60
     assert h["tracking_mean_abs_pct_of_range"] < 1.0
-    assert len([n for n in os.listdir(out) if n.endswith(".png")]) == 10
+    assert len([n for n in os.listdir(out) if n.endswith(".png")]) == 11   # Fig. 17: the rig
+    assert metrics["rig"]["tracking"]["feedback"]["mean_abs"] < \
+        metrics["rig"]["tracking"]["open_loop"]["mean_abs"]

@@ -18,12 +18,13 @@ from pihyst.cli import (
     fit_many,
     predict,
     report,
+    rig,
     simulate,
     track,
 )
 from pihyst.cli.errors import USER_ERRORS
 
-COMMANDS = [predict, fit, fit_many, simulate, compensate, track, demo, report, export]
+COMMANDS = [predict, fit, fit_many, simulate, compensate, track, demo, report, export, rig]
 
 
 def build_parser():

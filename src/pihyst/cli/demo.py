@@ -28,6 +28,8 @@ def register(sub):
                    help="noise seed of the first record (default 0)")
     p.add_argument("--no-variants", action="store_true",
                    help="skip the comparison on the other simulated beams")
+    p.add_argument("--no-rig", action="store_true",
+                   help="skip the experiment through the emulated instruments (pihyst rig)")
     p.set_defaults(run=run)
 
 
@@ -50,9 +52,9 @@ def run(args):
     t0 = time.perf_counter()
     say = _printer("pihyst demo")
     study = paper_study(args.plant, seed=args.seed, variants=not args.no_variants,
-                        progress=say)
+                        rig=not args.no_rig, progress=say)
     command = f"pihyst demo --out {args.out} --plant {args.plant} --seed {args.seed}" + \
-        (" --no-variants" if args.no_variants else "")
+        (" --no-variants" if args.no_variants else "") + (" --no-rig" if args.no_rig else "")
     try:
         files = write_report(study, args.out, command=command, progress=say)
     except OSError as err:
@@ -71,3 +73,9 @@ def run(args):
           f"{paper['tracking']['mean_abs']}), RMS {h['tracking_rms_multislope_um']:.4f} um "
           f"(paper {paper['tracking']['rms']:.4f}), {h['tracking_mean_abs_pct_of_range']:.2f} "
           f"% of the range")
+    if study.rig is not None:
+        o, f = study.rig.tracking["open_loop"], study.rig.tracking["feedback"]
+        print(f"  through the emulated instruments: mean |error| open loop {o['mean_abs']:.4f} "
+              f"um, with feedback {f['mean_abs']:.4f} um; busy "
+              f"{study.rig.timing['record']['busy_mean_ms']:.1f} ms per tick at "
+              f"{study.rig.rate_hz:g} Hz")

@@ -1,4 +1,5 @@
-"""pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N] [--json]
+"""pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N]
+[--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency US] [--json]
 -o MODEL.json"""
 
 import sys
@@ -17,9 +18,11 @@ def register(sub):
     p = sub.add_parser(
         "fit", help="fit hysteresis models to a measured loop",
         description="Fit PI-type models to the voltage_V and displacement_um columns of "
-                    "DATA.csv, judge them on held-back cycles, save the most accurate as "
-                    "MODEL.json and print a report (errors, family comparison, why each "
-                    "threshold was chosen).",
+                    "DATA.csv, judge them on held-back cycles (and on another record with "
+                    "--validate), save the smallest, fastest of those within 2 %% of the "
+                    "best as MODEL.json and print a report (errors per kind of held-back "
+                    "data, compensator latency, why each threshold was chosen, what the "
+                    "data could not determine).",
         epilog="example: pihyst fit loop.csv -o model.json   "
                "(then: pihyst predict model.json loop.csv -o predicted.csv)")
     p.add_argument("data", metavar="DATA.csv", help="CSV with voltage_V and displacement_um")
@@ -49,6 +52,18 @@ def register(sub):
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit an output offset (default: fitted, the sensor's zero "
                         "is arbitrary)")
+    p.add_argument("--validate", metavar="OTHER.csv",
+                   help="a second record (same columns), judged but not fitted: every "
+                        "family's error on it is reported and counts in the choice")
+    p.add_argument("--delay", metavar="N", default="0",
+                   help="samples by which the displacement lags the voltage (the model "
+                        "maps u[k] to y[k+N]), or 'auto' to choose it on held-back cycles "
+                        "(default 0; the report says which delay the record favours)")
+    p.add_argument("--max-operators", metavar="N", type=int,
+                   help="choose only among models with at most N operators")
+    p.add_argument("--max-latency", metavar="US", type=float,
+                   help="choose only among models whose compensator takes at most US "
+                        "microseconds per sample in the worst case (measured)")
     p.add_argument("--json", action="store_true",
                    help="print the report as JSON instead of a table")
     p.set_defaults(run=run)
@@ -82,6 +97,18 @@ def _holdout(text):
     return f
 
 
+def _delay(text):
+    if text == "auto":
+        return text
+    try:
+        d = int(text)
+    except ValueError:
+        d = -1
+    if d < 0:
+        raise UsageError(f"--delay: expected a number of samples >= 0 or 'auto', got {text!r}")
+    return d
+
+
 def _error(err, path, lines):
     """A FitError as a one-line file:line:column error."""
     col = column_number(path, _COLUMNS[err.column]) if err.column in _COLUMNS else 0
@@ -99,8 +126,18 @@ def run(args):
         raise UsageError(f"--n-operators must be at least 1, got {args.n_operators}")
     if args.candidates < 2:
         raise UsageError(f"--candidates must be at least 2, got {args.candidates}")
+    if args.max_operators is not None and args.max_operators < 1:
+        raise UsageError(f"--max-operators must be at least 1, got {args.max_operators}")
+    if args.max_latency is not None and not args.max_latency > 0:
+        raise UsageError(f"--max-latency must be a positive number of microseconds, got "
+                         f"{args.max_latency:g}")
+    delay = _delay(args.delay)
     columns, lines = read_columns(args.data, list(_COLUMNS.values()))
     u, y = columns["voltage_V"], columns["displacement_um"]
+    validate = validate_lines = None
+    if args.validate is not None:
+        other, validate_lines = read_columns(args.validate, list(_COLUMNS.values()))
+        validate = (other["voltage_V"], other["displacement_um"])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PihystWarning)
         try:
@@ -108,8 +145,13 @@ def run(args):
                          n_operators=args.n_operators, n_candidates=args.candidates,
                          holdout=holdout, initial_state=args.initial_state,
                          through="top" if args.through_top else None,
-                         offset=not args.no_offset)
+                         offset=not args.no_offset, validate=validate, delay=delay,
+                         max_operators=args.max_operators,
+                         max_latency=(None if args.max_latency is None
+                                      else 1e-6 * args.max_latency))
         except FitError as err:
+            if str(err).startswith("validate:"):
+                raise _error(err, args.validate, validate_lines) from None
             raise _error(err, args.data, lines) from None
     model = result.model.replace(metadata={
         **result.model.metadata,

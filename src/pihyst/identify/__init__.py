@@ -18,8 +18,10 @@ Behind it, one private module per step: ``_cycles`` (cutting a record),
 ``_families`` (the fitting families: candidate operators, frames, how each is fitted),
 ``_gram`` (normal equations), ``_qp`` (constrained least squares), ``_subsets``
 (threshold subset search), ``_shape`` (multislope shape search), ``_family_fit`` (one
-family's fit, a :class:`FamilyFit`), ``_fit`` (every family, the choice), ``_report``
-(the result).
+family's fit) and ``_family_result`` (its :class:`FamilyFit`), ``_delay`` (the
+input-output delay), ``_assess`` (errors per kind of held-back data, what the data
+cannot determine), ``_latency`` (compensator cost), ``_choice`` (which family is
+returned), ``_fit`` (all of it), ``_report`` (the result).
 """
 
 from pihyst.exceptions import FitError, IllConditionedWarning, InfeasibleConstraintsError

@@ -60,47 +60,94 @@ def checked_signals(u, y):
 
 def turning_points(v, tolerance):
     """Indices where v reverses by more than ``tolerance``, with +1 (maximum) or -1
-    (minimum), in time order."""
+    (minimum), in time order.
+
+    A phase rising from sample s ends at the first t where the running maximum
+    max v[s..t] exceeds v[t] by more than the tolerance; its maximum (the first sample
+    reaching it) is a turning point, and a falling phase starts at t (and the other way
+    round). Before the first reversal both running extremes are watched from sample 0
+    (a maximum first if both trip at once); a turning point at sample 0 is not reported.
+    One Python step per reversal, the samples in vectorized chunks (the per-sample loop
+    this replaces is the reference in tests/identify/test_identify_records.py).
+    """
+    v = np.asarray(v, dtype=float)
     points = []
-    hi_i = lo_i = 0
-    direction = 0          # +1 rising (looking for a maximum), -1 falling, 0 unknown
-    for t in range(1, v.size):
-        x = v[t]
-        if x > v[hi_i]:
-            hi_i = t
-        if x < v[lo_i]:
-            lo_i = t
-        if direction >= 0 and v[hi_i] - x > tolerance:
-            if hi_i > 0:
-                points.append((hi_i, +1))
-            direction, lo_i = -1, t
-        elif direction <= 0 and x - v[lo_i] > tolerance:
-            if lo_i > 0:
-                points.append((lo_i, -1))
-            direction, hi_i = +1, t
-    return points
+    if v.size < 2:
+        return points
+    t_hi = _phase_end(v, 0, +1, tolerance)
+    t_lo = _phase_end(v, 0, -1, tolerance)
+    if t_hi is None and t_lo is None:
+        return points
+    kind = +1 if t_lo is None or (t_hi is not None and t_hi <= t_lo) else -1
+    start, t = 0, (t_hi if kind > 0 else t_lo)
+    chunk = FIRST_CHUNK
+    while True:
+        seg = v[start:t + 1]
+        i = start + int(np.argmax(seg) if kind > 0 else np.argmin(seg))
+        if i > 0:
+            points.append((i, kind))
+        start, kind = t, -kind
+        end = _phase_end(v, start, kind, tolerance, chunk)
+        if end is None:
+            return points
+        chunk = max(FIRST_CHUNK, 2 * (end - start))   # the next phase is likely as long
+        t = end
+
+
+FIRST_CHUNK = 256
+
+
+def _phase_end(v, start, kind, tolerance, chunk=FIRST_CHUNK):
+    """First t >= start where a phase from ``start`` reverses: for kind +1 (rising)
+    max v[start..t] - v[t] > tolerance, for -1 (falling) v[t] - min v[start..t] >
+    tolerance; None if it never does."""
+    extreme = v[start]
+    a, n = start, v.size
+    while a < n:
+        z = min(n, a + chunk)
+        seg = v[a:z]
+        if kind > 0:
+            run = np.maximum(np.maximum.accumulate(seg), extreme)
+            hit = np.flatnonzero(run - seg > tolerance)
+        else:
+            run = np.minimum(np.minimum.accumulate(seg), extreme)
+            hit = np.flatnonzero(seg - run > tolerance)
+        if hit.size:
+            return a + int(hit[0])
+        extreme = run[-1]
+        a, chunk = z, 2 * chunk
+    return None
 
 
 @dataclass
 class Layout:
     """How a record is used: segments (start, stop, role) covering it in order, with role
-    "settle", "fit" or "held_back", and a description for the report."""
+    "settle", "fit" or "held_back", the kind of each ("settle", "major" or "minor"
+    cycle), and a description for the report."""
 
     segments: list
     n_cycles: int
     n_minor: int
     settle_end: int
     holdout: str
+    kinds: list = None
+    points: list = None      # the turning points the cycles were cut at
 
-    def indices(self, role):
-        return np.concatenate([np.arange(a, z) for a, z, r in self.segments if r == role]
+    def _chosen(self, role, kind):
+        kinds = self.kinds or [None] * len(self.segments)
+        return [(a, z) for (a, z, r), k in zip(self.segments, kinds)
+                if r == role and (kind is None or k == kind)]
+
+    def indices(self, role, kind=None):
+        """Sample indices of the segments with this role (and kind of cycle)."""
+        return np.concatenate([np.arange(a, z) for a, z in self._chosen(role, kind)]
                               or [np.zeros(0, dtype=int)])
 
-    def count(self, role):
-        return int(sum(z - a for a, z, r in self.segments if r == role))
+    def count(self, role, kind=None):
+        return int(sum(z - a for a, z in self._chosen(role, kind)))
 
-    def cycles(self, role):
-        return int(sum(1 for *_, r in self.segments if r == role))
+    def cycles(self, role, kind=None):
+        return len(self._chosen(role, kind))
 
 
 def starts_at_rest(v, span):
@@ -171,6 +218,8 @@ def layout(v, span, *, settle, holdout):
         description = "none"
     segments = ([(0, settle_end, "settle")] if settle_end else []) + \
         [(a, z, role) for (a, z), role in zip(pieces, roles)]
+    kinds = (["settle"] if settle_end else []) + ["major" if m else "minor" for m in major]
     return Layout(segments=segments, n_cycles=len(pieces),
                   n_minor=int(len(major) - sum(major)), settle_end=settle_end,
-                  holdout=description if "held_back" in roles else "none")
+                  holdout=description if "held_back" in roles else "none", kinds=kinds,
+                  points=points)

@@ -7,10 +7,13 @@ Equations: the normal equations of ``_gram``, the QP of ``_qp``, the subset sear
 ``_subsets``; the frames of ``_families`` (docs/theory/identification.md).
 """
 
+import copy
+from dataclasses import replace
+
 import numpy as np
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
-from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
+from pihyst.identify._cycles import MIN_SAMPLES, checked_signals, layout, starts_at_rest
 from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._qp import solve_qp
@@ -26,6 +29,8 @@ INITIAL_STATES = ("auto", "cycled", "settle", "zero")
 KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
 KP_DEFAULT_LAMBDA = 1e-2
 CONSTANT_COLUMN = 1e-9  # an operator whose output varies less than this * S never moved
+PREDICTIONS_KEPT = 8
+KERNEL_SAMPLES = 100_000
 
 
 class FramedRecord:
@@ -73,6 +78,75 @@ class FramedRecord:
         self.layout = layout(self.v, self.S, settle=(mode == "settle"), holdout=holdout)
         self.has_held_back = self.layout.count("held_back") > 0
         self.through = self._through_indices(through)
+
+    def shifted(self, delay, stop=None):
+        """This record with its output ``delay`` samples later (u[k] paired with
+        y[k + delay]), cut at sample ``stop``: the same cycles (the layout follows the
+        input), the last ones shortened. A FitError if nothing is left to fit."""
+        n = self.u.size - delay if stop is None else min(stop, self.u.size - delay)
+        out = copy.copy(self)
+        out.u, out.v = self.u[:n], self.v[:n]
+        out.y = self.y[delay:delay + n]
+        out.d = out.y - self.fixed_offset
+        out.measured_range = float(np.ptp(out.y))
+        lay = self.layout
+        kept = [((a, min(z, n), r), k) for (a, z, r), k in zip(lay.segments, lay.kinds)
+                if a < n]
+        out.layout = replace(lay, segments=[s for s, _ in kept], kinds=[k for _, k in kept])
+        out.has_held_back = out.layout.count("held_back") > 0
+        if out.layout.count("fit") < MIN_SAMPLES:
+            raise FitError(f"with a delay of {delay} samples too little is left to fit")
+        late = [i for i in self.through if i >= n]
+        if late:
+            raise FitError(f"through: sample {late[0]} is beyond the record once the output "
+                           f"is delayed by {delay} samples")
+        return out
+
+    def subsampled(self, max_samples):
+        """This record on at most about ``max_samples`` samples plus every local extremum
+        of the input, or itself if it is that short. The operators are rate-independent:
+        their outputs at the kept samples depend only on the input's extrema before them,
+        which are all kept, so they are exactly those of the full record; only the sums
+        of squares are taken over fewer samples. For searches that need many passes
+        (the multislope shape), with one full pass at the end."""
+        keep = self.sample_indices(max_samples)
+        return self if keep is None else self.taken(keep)
+
+    def sample_indices(self, max_samples):
+        """The samples :meth:`subsampled` keeps (None: all of them)."""
+        n = self.u.size
+        step = int(np.ceil(n / max_samples))
+        if step <= 1:
+            return None
+        dv = np.diff(self.v)
+        turns = np.flatnonzero(dv[1:] * dv[:-1] <= 0) + 1       # local extrema, plateaus
+        bounds = [a for a, z, r in self.layout.segments] + [n - 1]
+        keep = np.unique(np.concatenate([np.arange(0, n, step), turns, bounds,
+                                         np.asarray(self.through, dtype=int)]))
+        return None if keep.size > n // 2 else keep
+
+    def taken(self, keep, delay=0):
+        """This record at the samples ``keep`` (sorted indices, every input extremum
+        among them), the output ``delay`` samples later: u[keep] with y[keep + delay]
+        (those beyond the record dropped)."""
+        n = self.y.size - delay
+        keep = keep[keep < n]
+        out = copy.copy(self)
+        out.kept = keep
+        out.u, out.v = self.u[keep], self.v[keep]
+        out.y = self.y[keep + delay]
+        out.d = out.y - self.fixed_offset
+        if delay:
+            out.measured_range = float(np.ptp(out.y))
+        at = np.searchsorted(keep, [a for a, z, r in self.layout.segments] + [n])
+        kept = [((int(a), int(z), r), k) for (_, _, r), k, a, z in
+                zip(self.layout.segments, self.layout.kinds, at[:-1], at[1:]) if z > a]
+        out.layout = replace(
+            self.layout, settle_end=int(np.searchsorted(keep, self.layout.settle_end)),
+            segments=[s for s, _ in kept], kinds=[k for _, k in kept], points=None)
+        out.has_held_back = out.layout.count("held_back") > 0
+        out.through = [int(np.searchsorted(keep, i)) for i in self.through if i < n]
+        return out
 
     def _through_indices(self, through):
         if through is None:
@@ -127,6 +201,20 @@ class FamilyFitter:
         self.nonnegative, self.bounds = nonnegative, bounds
         self.max_exhaustive = max_exhaustive
         self.notes = []
+        self._predictions = []
+
+    def subsampled(self, max_samples):
+        """This fitter on the record subsampled to about ``max_samples`` samples and
+        every input extremum (``FramedRecord.subsampled``: exact operator outputs, fewer
+        squares summed), or itself for a record that short; a note says so."""
+        rec = self.rec.subsampled(max_samples)
+        if rec is self.rec:
+            return self
+        out = copy.copy(self)
+        out.rec, out._predictions = rec, []
+        self.notes.append(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly "
+                          f"spaced, and every input extremum); errors on all")
+        return out
 
     def fit(self, family):
         """``family`` fitted to the record (notes collected afresh)."""
@@ -288,18 +376,20 @@ class FamilyFitter:
             raise FitError(f"{fam.name}: has no thresholds (a grid of kernels, regularized); "
                            f"drop thresholds/candidates/n_operators")
         rec = self.rec
+        # a Gram pass costs (kernels)^2 per sample: long records are subsampled
+        on = self.subsampled(KERNEL_SAMPLES)
         pairs = fam.pairs()
         template = fam.template(pairs, rec.S)
-        state0, parts, rows = self.grams(fam, template)
+        state0, parts, rows = on.grams(fam, template)
         const = self._constant_columns(parts, len(pairs))
         if const.size:
             # e.g. the widest kernel: after a full cycle it stays at 1/2 for good
             pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
             template = fam.template(pairs, rec.S)
-            state0, parts, rows = self.grams(fam, template)
+            state0, parts, rows = on.grams(fam, template)
             self.notes.append(f"{const.size} kernels dropped: the input never moves them")
         names = [f"kernel {p}" for p in pairs]
-        prob = self.problem(fam, parts, rows, len(pairs), names)
+        prob = on.problem(fam, parts, rows, len(pairs), names)
         n_ops = len(pairs)
         P = fam.penalty(pairs)
         scale = np.trace(prob.fit.G[:n_ops, :n_ops]) / max(np.trace(P), 1e-300)
@@ -364,11 +454,21 @@ class FamilyFitter:
                          n_params=int(np.count_nonzero(w)) + int(rec.fit_offset),
                          notes=tuple(self.notes), refit=refit, **how)
 
+    def predict(self, model):
+        """``model``'s prediction of the record (the last few kept: the report asks for
+        the same model's several times)."""
+        for m, y_hat in self._predictions:
+            if m is model:
+                return y_hat
+        # the model's initial state is the state the record was processed from
+        y_hat = model.predict(self.rec.u)
+        self._predictions = [(model, y_hat)] + self._predictions[:PREDICTIONS_KEPT - 1]
+        return y_hat
+
     def errors(self, model):
         """Error summaries of ``model`` on the fitted and the held-back samples."""
         rec = self.rec
-        # the model's initial state is the state the record was processed from
-        y_hat = model.predict(rec.u)
+        y_hat = self.predict(model)
         out = {}
         for role in ("fit", "held_back"):
             i = rec.layout.indices(role)

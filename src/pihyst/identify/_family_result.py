@@ -53,4 +53,5 @@ class FamilyFit:
 
     @property
     def n_operators(self):
-        return len(self.operators)
+        """Operators in the model (thresholds' and the family's fixed ones)."""
+        return self.model.n_operators

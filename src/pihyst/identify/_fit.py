@@ -14,31 +14,49 @@
 4. chooses the thresholds as the subset of the candidates with the lowest held-back
    error (:mod:`pihyst.identify._subsets`), identifies the multislope shape (a, b, h) with an
    outer Nelder-Mead search, regularizes the Krasnosel'skii-Pokrovskii basis;
-5. returns the family with the lowest held-back error, its weights refitted on all the
-   cycles, and a report (:mod:`pihyst.identify._report`) of every family.
+5. judges every family on each kind of held-back data (:mod:`pihyst.identify._assess`:
+   held-back major and minor cycles, a validation record), measures its compensator's
+   latency (:mod:`pihyst.identify._latency`), and returns the smallest, fastest family
+   within 2 % of the best judged error (:mod:`pihyst.identify._choice`), its weights
+   refitted on all the cycles, with a report (:mod:`pihyst.identify._report`) of every
+   family and of what the data could not determine.
 """
 
-import math
 import warnings
 from dataclasses import replace
 
+import numpy as np
+
 from pihyst._version import __version__
 from pihyst.exceptions import FitError, PihystWarning
+from pihyst.identify import _delay
+from pihyst.identify._assess import (
+    ValidationRecord,
+    errors_by_kind,
+    judged_rms,
+    minor_loops_determined,
+)
+from pihyst.identify._choice import Candidate, choose
 from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
+from pihyst.identify._latency import measure_latency
 from pihyst.identify._report import FitReport, FitResult
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
+from pihyst.model import InvalidModelError
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
 
 DEFAULT_N_CANDIDATES = 16
+DELAY_NOTE_GAIN = 0.02   # a delay is worth a note when it lowers the probe's RMS by 2 %
 
 
 def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
         n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
         through=None, initial_state="auto", holdout="alternate", refit=True,
-        input_range=None, max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
-    """Fit PI-type hysteresis models to a measured record and keep the most accurate.
+        input_range=None, validate=None, delay=0, max_operators=None, max_latency=None,
+        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+    """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
+    one of those that generalize best.
 
     Parameters
     ----------
@@ -57,8 +75,11 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         (:class:`~pihyst.identify.BoucWen`) is not a PI family: a
         :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md), compared with the
         others when listed (``family=[*pihyst.identify.FAMILY_NAMES, "bouc-wen"]``).
-        Default: the PI families (``FAMILY_NAMES``), compared on the held-back cycles;
-        the one with the lowest held-back RMS is returned.
+        Default: all of the PI families (``FAMILY_NAMES``),
+        judged on held-back data (and ``validate``); of those within 2 % of the lowest
+        judged RMS, the fewest operators, then the fastest compensator, is returned.
+        When the data do not determine the minor loops (no reversals inside the range),
+        families whose structure fixes them (all but ``kp``) are preferred.
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
         range) instead of choosing them (families with thresholds only).
@@ -93,6 +114,21 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         choice. The report's held-back errors are those of the fit before the refit.
     input_range : (min, max), optional
         Input range of the model; default the data's span.
+    validate : (u2, y2), optional
+        A second record (another trajectory), judged but not fitted: every family's
+        error on it is reported, and counts in the choice (the worse of it and the
+        held-back cycles). Its mean error is removed (the sensor's zero differs between
+        records); it is judged once its input has swept its own range.
+    delay : int or "auto"
+        Samples by which the output lags the input: the model maps u[k] to y[k + delay]
+        (predict with ``model.predict(u)[:-delay]`` against ``y[delay:]``). "auto": the
+        delay with the lowest held-back RMS of a probe model, 0 to 5 % of a cycle. With
+        0 (default) the report still says which delay the record favours.
+    max_operators : int, optional
+        Choose only among models with at most this many operators.
+    max_latency : float, optional
+        Choose only among models whose compensator's worst-case time per sample
+        (measured, see the report) is at most this many seconds.
     max_exhaustive : int
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
@@ -101,9 +137,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     -------
     FitResult
         ``.model`` (the fitted model, with the fit recorded in ``model.metadata["fit"]``),
-        ``.report`` (a :class:`FitReport`: errors, per-family comparison, threshold
-        choice and its reasons; ``print(report)`` or ``report.to_json()``) and ``.models``
-        (every family's fitted model by name).
+        ``.report`` (a :class:`FitReport`: errors per kind of held-back data, compensator
+        latency and operator count per family, threshold choice and its reasons, what
+        the data could not determine; ``print(report)`` or ``report.to_json()``) and
+        ``.models`` (every family's fitted model by name).
 
     Raises
     ------
@@ -145,21 +182,32 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     families = [as_family(f) for f in specs]
     if len({f.name for f in families}) < len(families):
         raise FitError("each family may be given once (their results are reported by name)")
-    rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
-                       holdout=holdout, offset=offset, through=through)
     if thresholds is not None and candidates is not None:
         raise FitError("give thresholds (used as they are) or candidates (chosen from), "
                        "not both")
-    if rec.state_mode == "explicit" and thresholds is None:
-        raise FitError("an explicit initial_state needs explicit thresholds (one value "
-                       "per operator)")
     if n_operators is not None and thresholds is not None:
         raise FitError("give thresholds or n_operators (how many to choose), not both")
     if n_operators is not None and (int(n_operators) != n_operators or n_operators < 1):
         raise FitError(f"n_operators must be a positive integer, got {n_operators}")
-    fitter = FamilyFitter(rec, thresholds=thresholds, candidates=candidates,
-                          n_candidates=n_candidates, n_operators=n_operators,
-                          nonnegative=nonnegative, bounds=bounds, max_exhaustive=max_exhaustive)
+    _check_bounds(max_operators, max_latency, delay)
+
+    def fitter_of(r):
+        return FamilyFitter(r, thresholds=thresholds, candidates=candidates,
+                            n_candidates=n_candidates, n_operators=n_operators,
+                            nonnegative=nonnegative, bounds=bounds,
+                            max_exhaustive=max_exhaustive)
+
+    rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
+                       holdout=holdout, offset=offset, through=through)
+    if rec.state_mode == "explicit" and thresholds is None:
+        raise FitError("an explicit initial_state needs explicit thresholds (one value "
+                       "per operator)")
+    delay_info = _delay_choice(rec, fitter_of, delay)
+    if delay_info["samples"]:
+        rec = rec.shifted(delay_info["samples"])
+    validation = (None if validate is None else
+                  ValidationRecord.build(validate, rec.lo, rec.S, delay_info["samples"]))
+    fitter = fitter_of(rec)
     chooses_thresholds = (thresholds is not None or candidates is not None
                           or n_operators is not None)
 
@@ -192,14 +240,17 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         raise FitError("no family could be fitted: " + "; ".join(
             f"{s['family']}: {s['reason']}" for s in skipped))
 
-    if rec.has_held_back:
-        best = min(results, key=lambda r: r.judged_rms)
-        criterion = "lowest held-back RMS error"
-    else:
-        n = rec.layout.count("fit")
-        best = min(results, key=lambda r: n * math.log(max(r.judged_rms, 1e-300) ** 2)
-                   + r.n_params * math.log(n))
-        criterion = "lowest BIC on the fitted data (nothing held back)"
+    known, unknown_reason = minor_loops_determined(rec, validation)
+    cands = []
+    for r in results:
+        by_kind = errors_by_kind(fitter, r.model, validation)
+        cands.append(Candidate(r, by_kind, judged_rms(r, by_kind), _latency(r.model)))
+    best_c, criterion = choose(
+        cands, minor_loops_known=known, unknown_reason=unknown_reason,
+        judged_on_held_back=rec.has_held_back or validation is not None,
+        n_fitted=rec.layout.count("fit"), max_operators=max_operators,
+        max_latency=max_latency)
+    best = best_c.fitted
     for x in caught[best.name]:
         warnings.warn(f"{best.name}: {x.message}", x.category, stacklevel=2)
 
@@ -213,9 +264,14 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
             for x in w:
                 warnings.warn(f"{best.name} (refit): {x.message}", x.category, stacklevel=2)
         final_errors = fitter.errors(model)
-    report = FitReport.build(rec, results, skipped, best.name, criterion,
+        if validation is not None:
+            final_errors["validation"] = validation.errors(model)
+    undetermined = _undetermined(rec, validation, known, unknown_reason, delay_info, cands)
+    report = FitReport.build(rec, cands, skipped, best.name, criterion,
                              refit=bool(refit and rec.has_held_back),
-                             final_errors=final_errors)
+                             final_errors=final_errors, delay=delay_info,
+                             validation=None if validation is None else validation.describe(),
+                             undetermined=undetermined)
     fit_summary = report.model_summary()
     if rec.layout.settle_end:
         # the operator state once the first sweep has settled it: predictions of the same
@@ -231,3 +287,69 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
 
 def _is_sequence(x):
     return isinstance(x, (list, tuple))
+
+
+def _check_bounds(max_operators, max_latency, delay):
+    if max_operators is not None and (int(max_operators) != max_operators
+                                      or max_operators < 1):
+        raise FitError(f"max_operators must be a positive integer, got {max_operators}")
+    if max_latency is not None and not (isinstance(max_latency, (int, float))
+                                        and max_latency > 0):
+        raise FitError(f"max_latency must be a positive number of seconds, got {max_latency!r}")
+    if delay != "auto" and not (isinstance(delay, (int, np.integer)) and delay >= 0):
+        raise FitError(f"delay must be a number of samples >= 0 or 'auto', got {delay!r}")
+
+
+def _delay_choice(rec, fitter_of, delay):
+    """The delay used (given, or the best of the scan) and the scan of the record."""
+    if rec.state_mode == "explicit":     # a state of other operators than the probe's
+        tried = []
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            tried = _delay.scan(rec, fitter_of, _delay.max_delay(rec))
+    finite = [t for t in tried if np.isfinite(t["rms"])]
+    best = min(finite, key=lambda t: t["rms"]) if finite else None
+    if delay == "auto" and best is None:
+        raise FitError("delay='auto': no delay could be judged (the probe model cannot be "
+                       "fitted to this record, e.g. with an explicit initial_state); give "
+                       "the delay as a number of samples")
+    if delay == "auto":
+        used, rule = best["samples"], ("lowest judged RMS of the probe model (classical PI, "
+                                       f"{_delay.PROBE_PLAYS} plays)")
+    else:
+        used, rule = int(delay), "given" if delay else "none assumed (delay=0)"
+    return {"samples": used, "rule": rule, "best": None if best is None else best["samples"],
+            "tried": tried,
+            "probe": f"classical PI, {_delay.PROBE_PLAYS} equally spaced plays"}
+
+
+def _latency(model):
+    try:
+        return measure_latency(model)
+    except InvalidModelError:        # negative weights (nonnegative=False): no compensator
+        return None
+
+
+def _undetermined(rec, validation, known, unknown_reason, delay_info, cands):
+    """What the data could not determine, as sentences for the report."""
+    out = []
+    if not rec.has_held_back and validation is None:
+        out.append("nothing is held back and there is no validation record: every error "
+                   "is on the fitted data (optimistic), and the choices were made by BIC")
+    if not known:
+        dropped = [c.name for c in cands if c.excluded and "minor loops" in c.excluded]
+        out.append(f"the minor loops (reversals inside the range): {unknown_reason}. "
+                   f"Families whose structure fixes them from the major loop were preferred"
+                   + (f" ({', '.join(dropped)} not chosen)" if dropped else "")
+                   + "; a record with reversals inside the range, or validate=(u2, y2), "
+                     "would tell")
+    tried = {t["samples"]: t["rms"] for t in delay_info["tried"]}
+    used, best = delay_info["samples"], delay_info["best"]
+    if best is not None and best != used and \
+            tried[best] < (1 - DELAY_NOTE_GAIN) * tried.get(used, np.inf):
+        out.append(f"the input-output delay: the record fits best with the output lagging "
+                   f"by {best} samples (probe RMS {tried[best]:.4g} against "
+                   f"{tried[used]:.4g} at {used}); the models assume {used}. A delay is not "
+                   f"hysteresis: align the record, or fit with delay='auto'")
+    return out

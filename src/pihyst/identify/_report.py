@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pihyst.identify._assess import KINDS
+
 _STATE_TEXT = {
     "cycled": "at rest at the bottom of the range after a full cycle (docs/interfaces.md)",
     "settle": "unknown; settled by the first full sweep of the input range (not fitted)",
@@ -59,9 +61,10 @@ class FitReport:
         self._data = data
 
     @classmethod
-    def build(cls, rec, results, skipped, chosen, criterion, *, refit, final_errors):
+    def build(cls, rec, candidates, skipped, chosen, criterion, *, refit, final_errors,
+              delay, validation, undetermined):
         lay = rec.layout
-        units = dict(results[0].model.units)
+        units = dict(candidates[0].fitted.model.units)
         data = {
             "n_samples": int(rec.u.size),
             "input_range": [rec.lo, rec.lo + rec.S],
@@ -77,17 +80,21 @@ class FitReport:
             "fit_cycles": lay.cycles("fit"),
             "held_back_samples": lay.count("held_back"),
             "held_back_cycles": lay.cycles("held_back"),
+            "held_back_minor_cycles": lay.cycles("held_back", "minor"),
             "offset": "fitted" if rec.fit_offset else f"fixed at {rec.fixed_offset:g}",
             "through": list(rec.through),
+            "delay": delay,
+            "validation": validation,
         }
-        families = [cls._family_entry(r, r.name == chosen, rec.S) for r in results]
+        families = [cls._family_entry(c, c.name == chosen, rec.S) for c in candidates]
         out = {"data": data, "families": families, "skipped": skipped, "chosen": chosen,
-               "criterion": criterion,
+               "criterion": criterion, "undetermined": list(undetermined),
                "final": {"refit": refit, "errors": final_errors}}
         return cls(_num(out))
 
     @staticmethod
-    def _family_entry(r, is_chosen, S):
+    def _family_entry(c, is_chosen, S):
+        r = c.fitted
         fam = r.family
         entry = {"family": r.name, "title": fam.title, "recipe": repr(fam),
                  "operator_kind": r.model.family, "chosen": is_chosen,
@@ -101,6 +108,10 @@ class FitReport:
         entry["weights"] = [float(w) for w in r.weights]
         entry["offset"] = r.offset
         entry["errors"] = r.errors
+        entry["held_back_by_kind"] = {KINDS[k]: e for k, e in c.by_kind.items()}
+        entry["judged_rms"] = c.judged_rms
+        entry["latency"] = None if c.latency is None else c.latency.to_dict()
+        entry["excluded"] = c.excluded
         entry["threshold_choice"] = r.threshold_choice
         entry["notes"] = list(r.notes)
         entry["warnings"] = list(r.warnings)
@@ -135,16 +146,17 @@ class FitReport:
         best = self.family(self.chosen)
         keep = ("family", "title", "recipe", "operator_kind", "n_operators", "thresholds",
                 "kernels", "shape", "input_function_segments", "grid", "regularization",
-                "errors", "threshold_choice", "notes")
+                "errors", "held_back_by_kind", "judged_rms", "latency", "threshold_choice",
+                "notes")
         summary = {k: best[k] for k in keep if k in best}
         if summary.get("threshold_choice"):
             summary["threshold_choice"] = {k: v for k, v in best["threshold_choice"].items()
                                            if k != "sizes"}
         summary["data"] = self._data["data"]
         summary["criterion"] = self._data["criterion"]
+        summary["undetermined"] = self._data["undetermined"]
         summary["final"] = self._data["final"]
-        summary["compared"] = {f["family"]: (f["errors"]["held_back"] or f["errors"]["fit"])
-                               ["rms"] for f in self._data["families"]}
+        summary["compared"] = {f["family"]: f["judged_rms"] for f in self._data["families"]}
         summary["threshold_frame"] = ("thresholds are measured from the bottom of the "
                                       "input range (input_range[0])")
         return summary
@@ -159,7 +171,7 @@ class FitReport:
             f"{d['output_range'][1]:.6g} {uout} (range {d['measured_range']:.4g} {uout})",
             f"initial state: {_STATE_TEXT.get(d['initial_state'], d['initial_state'])}"
             + (f" ({d['settle_samples']} samples)" if d["settle_samples"] else ""),
-            f"{d['cycles']} cycles ({d['minor_cycles']} with reversals inside the range); "
+            f"{d['cycles']} cycles ({d['minor_cycles']} not spanning the whole range: minor); "
             f"fitted: {d['fit_cycles']} cycles, {d['fit_samples']} samples; held back: "
             + (f"{d['held_back_cycles']} cycles, {d['held_back_samples']} samples "
                f"({d['holdout']})" if d["held_back_samples"] else "none") +
@@ -167,30 +179,59 @@ class FitReport:
             "",
         ]
         held = d["held_back_samples"] > 0
+        fams = self._data["families"]
+        kinds = [k for k in ("held-back minor cycles", "validation record")
+                 if any(k in f["held_back_by_kind"] for f in fams)]
+        short = {"held-back minor cycles": "minor", "validation record": "validation"}
         head = (f"  {'family':<24}{'ops':>5}{'fit RMS':>10}"
-                + (f"{'held-back RMS':>15}{'mean |e|':>10}{'max |e|':>10}{'% range':>9}"
-                   if held else f"{'mean |e|':>10}{'max |e|':>10}{'% range':>9}"))
-        judged = "judged on held-back cycles" if held else "on the fitted data"
-        lines += [f"errors in {uout} ({judged}):", head]
-        for f in self._data["families"]:
+                + (f"{'held-back RMS':>15}" if held else "")
+                + "".join(f"{short[k]:>12}" for k in kinds)
+                + f"{'max |e|':>10}{'% range':>9}{'latency us':>16}")
+        judged = ("judged on held-back data" if held or kinds else "on the fitted data")
+        lines += [f"errors in {uout} ({judged}; RMS unless stated), compensator latency "
+                  f"per sample (typical / worst case):", head]
+        for f in fams:
             e = f["errors"]
             j = e["held_back"] if held else e["fit"]
-            mark = "*" if f["chosen"] else " "
+            mark = "*" if f["chosen"] else ("x" if f["excluded"] else " ")
             row = f"{mark} {f['family']:<24}{f['n_operators']:>5}{e['fit']['rms']:>10.4g}"
             if held:
                 row += f"{j['rms']:>15.4g}"
-            row += f"{j['mean_abs']:>10.4g}{j['max_abs']:>10.4g}{j['rms_pct']:>8.3g}%"
+            for k in kinds:
+                v = f["held_back_by_kind"].get(k)
+                row += f"{v['rms']:>12.4g}" if v else f"{'-':>12}"
+            row += f"{j['max_abs']:>10.4g}{j['rms_pct']:>8.3g}%"
+            lat = f["latency"]
+            row += (f"{lat['typical_us']:>8.3g} /{lat['worst_us']:>6.3g}" if lat
+                    else f"{'-':>16}")
             lines.append(row)
         for s in self._data["skipped"]:
             lines.append(f"  {s['family']:<24} skipped: {s['reason']}")
+        for f in fams:
+            if f["excluded"]:
+                lines.append(f"x {f['family']}: not chosen, {f['excluded']}")
+        val = d.get("validation")
+        if val:
+            lines.append(f"validation record: {val['samples']} samples, judged from sample "
+                         f"{val['judged_from']} (once its input had swept its range), "
+                         f"{val['interior_reversals']} reversals inside the range; mean "
+                         f"error removed")
+        delay = d.get("delay")
+        if delay and delay["samples"]:
+            lines.append(f"delay: the output follows the input by {delay['samples']} samples "
+                         f"({delay['rule']}); the model maps u[k] to y[k + {delay['samples']}]")
+        if self._data["undetermined"]:
+            lines.append("what the data could not determine:")
+            lines += [f"  - {t}" for t in self._data["undetermined"]]
         best = self.family(self.chosen)
         lines += ["", f"chosen: {best['family']} ({best['title']}), {self._data['criterion']}"]
         fin = self._data["final"]
         if fin["refit"]:
             ef = fin["errors"]
             lines.append(f"weights refitted on all used cycles: RMS {ef['fit']['rms']:.4g} "
-                         f"(fitted cycles), {ef['held_back']['rms']:.4g} (held-back cycles) "
-                         f"{uout}")
+                         f"(fitted cycles), {ef['held_back']['rms']:.4g} (held-back cycles)"
+                         + (f", {ef['validation']['rms']:.4g} (validation record)"
+                            if ef.get("validation") else "") + f" {uout}")
         if "shape" in best:
             s = best["shape"]
             lines.append(f"shape: U = {s['U']:.6g} {uin}, a = {s['a']:.4g}, b = {s['b']:.4g}, "
@@ -211,7 +252,7 @@ class FitReport:
                          f"{ch['search']} ({ch['subsets_evaluated']} subsets fitted and "
                          f"judged on the {where} data); size: {ch['size_rule']}")
             if len(ch["sizes"]) > 1:
-                n_best = best["n_operators"]
+                n_best = len(ch["chosen"])
                 lines.append(f"{where} RMS of the best set of each size: " + ", ".join(
                     f"{s['n_operators']}: {s['rms']:.4g}" + ("*" if s["n_operators"] == n_best
                                                              else "")

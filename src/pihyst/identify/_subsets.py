@@ -17,14 +17,19 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import quadprog
 
 from pihyst.exceptions import InfeasibleConstraintsError
-from pihyst.identify._qp import solve_qp
+from pihyst.identify._qp import DEFAULT_RCOND, solve_qp
 
 DEFAULT_MAX_EXHAUSTIVE = 2000     # a requested size: 4 of 16 (1820 subsets) is exhaustive
 PATH_MAX_EXHAUSTIVE = 600         # every size in turn: 1..3 of 16 exhaustive, then greedy
 SIZE_TOLERANCE = 0.01  # automatic size: the smallest within 1 % of the best held-back RMS
 STALL = 0.002          # automatic size: a size gaining less than 0.2 % does not count
+# batched subset QPs: only matrices whose condition number is below this fraction of
+# solve_qp's limit (1 / DEFAULT_RCOND) take the batched path; the others get its ridge
+BATCH_CONDITION_MARGIN = 1e-2
+TIE = 1e-9             # judged RMS values this close (relative) are equal
 
 
 @dataclass
@@ -102,6 +107,81 @@ class SubsetProblem:
             self._cache[key] = np.inf if x is None else self.judge.rms(cols, x)
         return self._cache[key]
 
+    def score_many(self, subsets):
+        """Judged RMS of many subsets (cached like :meth:`score`), those of one size
+        at a time solved together: the same QP as :func:`~pihyst.identify._qp.solve_qp`
+        (variables scaled to a unit diagonal; the unconstrained minimizer when it is
+        within the bounds, else quadprog), batched in NumPy. Subsets whose scaled
+        matrix is not clearly well-conditioned, or with equality constraints, go
+        through :meth:`score` (solve_qp's ridge and checks)."""
+        keys = [k for k in dict.fromkeys(tuple(sorted(s)) for s in subsets)
+                if k not in self._cache]
+        if self.A_eq is not None:
+            return [self.score(k) for k in subsets]
+        by_size = {}
+        for k in keys:
+            by_size.setdefault(len(k), []).append(k)
+        for group in by_size.values():
+            self._batch(group)
+        return [self.score(k) for k in subsets]
+
+    def best(self, subsets):
+        """The subset of ``subsets`` with the lowest judged RMS; among those within a
+        relative ``TIE`` of it (equal but for rounding: the data cannot tell them apart)
+        the lexicographically first, so the choice does not depend on rounding."""
+        keys = [tuple(sorted(s)) for s in subsets]
+        scores = self.score_many(keys)
+        lowest = min(scores)
+        return min(k for k, v in zip(keys, scores) if v <= lowest + TIE * abs(lowest)
+                   or v == lowest)
+
+    def _batch(self, keys):
+        cols = np.array([list(k) + self.fixed for k in keys], dtype=int)
+        m, p = cols.shape
+        if p == 0:
+            return
+        G = self.fit.G[cols[:, :, None], cols[:, None, :]]
+        b = self.fit.b[cols]
+        diag = np.diagonal(G, axis1=1, axis2=2)
+        s = np.sqrt(np.where(diag > 0, diag, 1.0))
+        Hs = G / (s[:, :, None] * s[:, None, :])
+        Hs = 0.5 * (Hs + np.swapaxes(Hs, 1, 2))
+        gs = b / s
+        sv = np.linalg.svd(Hs, compute_uv=False)
+        # 1-norm condition <= p * 2-norm condition: clearly below solve_qp's threshold
+        good = (sv[:, -1] > 0) & (p * sv[:, 0] < BATCH_CONDITION_MARGIN / DEFAULT_RCOND
+                                  * sv[:, -1])
+        idx = np.flatnonzero(good)
+        if not idx.size:
+            return
+        x = np.linalg.solve(Hs[idx], gs[idx][:, :, None])[:, :, 0] / s[idx]
+        lo, hi = self.lower[cols[idx]], self.upper[cols[idx]]
+        inside = np.all((x >= lo) & (x <= hi), axis=1)
+        ok = inside.copy()
+        for j in np.flatnonzero(~inside):
+            k = idx[j]
+            has_lo, has_hi = np.isfinite(lo[j]), np.isfinite(hi[j])
+            eye = np.eye(p)
+            C = np.hstack([eye[:, has_lo], -eye[:, has_hi]])
+            c = np.concatenate([lo[j][has_lo] * s[k][has_lo], -hi[j][has_hi] * s[k][has_hi]])
+            try:
+                xs = quadprog.solve_qp(Hs[k], gs[k], C, c, 0)[0]
+            except ValueError:
+                continue                       # left to score()
+            x[j] = np.clip(xs / s[k], lo[j], hi[j])
+            ok[j] = True
+        # judged RMS by eq. (1) of _gram, for all at once
+        Gj = self.judge.G[cols[idx][:, :, None], cols[idx][:, None, :]]
+        bj = self.judge.b[cols[idx]]
+        sse = self.judge.dd - 2 * np.einsum("ij,ij->i", bj, x) + np.einsum(
+            "ij,ijk,ik->i", x, Gj, x)
+        rms = np.sqrt(np.maximum(sse, 0.0) / self.judge.n)
+        for j in np.flatnonzero(ok):
+            key = keys[idx[j]]
+            if key not in self._cache:
+                self.evaluations += 1
+                self._cache[key] = float(rms[j])
+
     # ------------------------------------------------------------------ search
     def best_of_size(self, size, max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, start=None):
         """Best subset of ``size`` candidates (exhaustive or greedy + swaps)."""
@@ -110,7 +190,7 @@ class SubsetProblem:
             raise ValueError(f"cannot choose {size} of {K} candidates")
         before = self.evaluations
         if math.comb(K, size) <= max_exhaustive:
-            best = min(itertools.combinations(range(K), size), key=self.score)
+            best = self.best(itertools.combinations(range(K), size))
             method = "exhaustive"
         else:
             best = self._swap_refine(start if start is not None else self.greedy(size))
@@ -122,7 +202,7 @@ class SubsetProblem:
         chosen = []
         for _ in range(size):
             rest = [c for c in range(self.n_candidates) if c not in chosen]
-            chosen.append(min(rest, key=lambda c: self.score(chosen + [c])))
+            chosen = list(self.best([chosen + [c] for c in rest]))
         return tuple(sorted(chosen))
 
     def _swap_refine(self, subset):
@@ -134,7 +214,7 @@ class SubsetProblem:
                      if new not in current]
             if not swaps:
                 return current
-            cand = min(swaps, key=self.score)
+            cand = self.best(swaps)
             if self.score(cand) >= best * (1 - 1e-12):
                 return current
             current, best = cand, self.score(cand)
@@ -156,7 +236,7 @@ class SubsetProblem:
             # Greedy path: extend the previous greedy set by one, then refine by swaps.
             rest = [c for c in range(self.n_candidates) if c not in greedy]
             if len(greedy) < size and rest:
-                greedy = sorted(greedy + [min(rest, key=lambda c: self.score(greedy + [c]))])
+                greedy = sorted(self.best([greedy + [c] for c in rest]))
             out.append(self.best_of_size(size, max_exhaustive, start=tuple(greedy)))
             if len(out) > 1 and np.isfinite(out[-2].rms):
                 stalled = stalled + 1 if out[-1].rms > out[-2].rms * (1 - STALL) else 0
@@ -174,7 +254,10 @@ class SubsetProblem:
             rest = [i for i in subset if i != c]
             without = self.score(rest) if rest or self.fixed else self._zero_rms()
             others = [i for i in range(self.n_candidates) if i not in subset]
-            repl = min(others, key=lambda i: self.score(rest + [i])) if others else None
+            repl = None
+            if others:
+                added = set(self.best([rest + [i] for i in others])) - set(rest)
+                repl = added.pop()
             out.append({
                 "index": c,
                 "rms_without": without,

@@ -230,6 +230,12 @@ class BoucWenModel:
         return (self.beta + self.gamma) ** (-1.0 / self.n)
 
     @property
+    def n_operators(self):
+        """1: one hysteresis state, z (what a comparison with the PI models' operator
+        counts uses)."""
+        return 1
+
+    @property
     def min_slope(self):
         """Lower bound of dy/dx over every reachable state (module notes): the model is
         monotone, hence invertible, when it is >= 0."""

@@ -84,6 +84,7 @@ class Study:
     tracking: dict = field(default_factory=dict)   # experiment name -> dict of arrays
     variants: list = field(default_factory=list)
     variant_loops: dict = field(default_factory=dict)
+    rig: object = None              # pihyst.study._rig_study.RigStudy: the study through the rig
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -297,7 +298,8 @@ def _concat(*signals, dt):
 
 
 # ----------------------------------------------------------------------------- demo
-def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, progress=print):
+def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, rig=False,
+                progress=print):
     """The paper's study on the simulated beam ``plant``.
 
     Parameters
@@ -311,6 +313,9 @@ def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, progress=p
         records use max(dt, 0.2 s) and max(dt, 0.5 s).
     variants : bool
         Repeat the comparison on every other simulated beam.
+    rig : bool
+        Also run the experiment through the emulated instruments (pihyst.rig), in
+        virtual time: record, fit, track open loop and with feedback.
     progress : callable or None
         Receives one line per step.
 
@@ -326,7 +331,7 @@ def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, progress=p
     >>> study.models["multislope"].model.thresholds.tolist()
     [0.0, 20.0, 30.0, 40.0]
     """
-    n_steps = 7 + (1 if variants else 0)
+    n_steps = 7 + (1 if variants else 0) + (1 if rig else 0)
     prog = Progress(progress, n_steps)
     beam = make_plant(plant, seed=seed)
     u_max = beam.u_max
@@ -373,6 +378,12 @@ def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, progress=p
                                    "12 ramps between random levels in 0-90 % of the "
                                    "recorded peak")
 
+    rig_results = None
+    if rig:
+        from pihyst.study._rig_study import rig_study
+        prog.step("the experiment through the emulated instruments' protocols (virtual time)")
+        rig_results = rig_study(plant, seed=seed + 5, realtime_s=3.0, progress=progress)
+
     variant_rows, variant_loops = [], {}
     if variants:
         prog.step("repeating the comparison on the other simulated beams")
@@ -390,7 +401,9 @@ def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, progress=p
                   "piezoelectric beam: the paper's study on pihyst's simulated beam",
                   beam.describe(), loop, models, predictions,
                   operators, metrics, records=records, tracking=tracking,
-                  variants=variant_rows, variant_loops=variant_loops)
+                  variants=variant_rows, variant_loops=variant_loops, rig=rig_results)
+    if rig_results is not None:
+        metrics["rig"] = rig_results.metrics()
     metrics["timing_s"] = {"steps": dict(prog.timings)}
     metrics["timing_s"]["total_computation"] = prog.done()
     metrics["timing_s"]["steps"].update(prog.timings)

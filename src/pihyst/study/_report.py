@@ -180,6 +180,11 @@ def _demo_figures(study, figs, short):
         figs.add("fig16_beams.png", "Fig. 16 (pihyst): the simulated beams",
                  "Each beam's loop for the 0-150-0 V, 300 s triangle.",
                  plot.loops_grid_plot(study.variant_loops))
+    if study.rig is not None:
+        from pihyst.study._rig_study import rig_figure
+        figs.add("fig17_rig_tracking.png", "Fig. 17 (pihyst): tracking through the rig",
+                 "The triangle tracked through the emulated instruments, open loop and "
+                 "with feedback; error = measured - desired.", rig_figure(study.rig))
 
 
 # ----------------------------------------------------------------------------- tables
@@ -418,6 +423,9 @@ def render_html(study, figs, files, command):
                       "triangle; validation: random ramps), mean absolute errors in um.</p>",
                       _variants_table(study), figs.html("fig15_variants.png"),
                       figs.html("fig16_beams.png")]
+    if study.rig is not None:
+        from pihyst.study._rig_study import rig_html
+        parts.append(rig_html(study.rig, figs.html("fig17_rig_tracking.png")))
     parts += ["<h2>pihyst's automatic choice</h2>", _best_section(study),
               "<h2>Notes</h2>", _notes(study),
               "<h2>Files</h2>", _files_list(files), "</body></html>"]
@@ -483,4 +491,6 @@ def _write_data(study, out_dir):
                                 "measured displacements per compensation (none = voltage "
                                 "proportional to the desired displacement)"])
         names.append(name)
+    if study.rig is not None:
+        names += study.rig.write_logs(out_dir)
     return names

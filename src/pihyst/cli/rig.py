@@ -1,0 +1,331 @@
+"""pihyst rig check|record|track|emulate --config RIG.toml
+
+Runs the experiment on the instruments of a rig configuration: the real supply and
+sensor, or the emulated ones (ports ``pihystsim://...``: started in this process, in
+virtual time unless --real-time).
+"""
+
+import argparse
+import math
+import sys
+
+import numpy as np
+
+from pihyst.cli.errors import UsageError
+from pihyst.exceptions import CSVError
+from pihyst.io import column_number, load_model, read_columns
+
+SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
+
+
+def _common(p, output=True):
+    p.add_argument("--config", metavar="RIG.toml", required=True,
+                   help="rig configuration (see examples/rig/)")
+    p.add_argument("--plant", default=None, metavar="NAME",
+                   help="emulated instruments only: the simulated beam (default: [emulator] "
+                        "plant of the configuration)")
+    p.add_argument("--real-time", action="store_true",
+                   help="emulated instruments only: run in wall-clock time (default: virtual "
+                        "time, as fast as the computation goes)")
+    _fault_option(p)
+    if output:
+        p.add_argument("-o", "--output", metavar="LOG.csv", required=True,
+                       help="run log, written as the run goes: CSV that 'pihyst fit' reads, "
+                            "or HDF5 for a name ending in .h5 (needs pihyst[hdf5])")
+        p.add_argument("--fsync", action="store_true",
+                       help="force every log row to the disk (survives a power cut)")
+
+
+def register(sub):
+    p = sub.add_parser(
+        "rig", help="run the experiment on the instruments (or emulated ones)",
+        description="Drive the high-voltage supply and read the laser displacement sensor "
+                    "of a rig configuration at a fixed rate: check the instruments, record "
+                    "a loop, track a trajectory (feedforward, optionally with feedback), or "
+                    "start emulated instruments on pseudo-terminals. Every run starts at 0 V "
+                    "and ends at 0 V with the output off, whatever stops it.",
+        epilog="example (emulated instruments): pihyst rig record --config "
+               "examples/rig/emulated.toml -o loop.csv && pihyst fit loop.csv --model "
+               "multislope -o model.json && pihyst rig track model.json "
+               "examples/triangle_desired.csv --config examples/rig/emulated.toml "
+               "--feedback 1,10 -o run.csv")
+    rig_sub = p.add_subparsers(dest="rig_command", metavar="ACTION", required=True)
+
+    c = rig_sub.add_parser("check", help="open both instruments, one reading, supply at 0 V",
+                           description="Open the supply and the sensor, command 0 V, read "
+                                       "the supply back (if configured) and take one sensor "
+                                       "reading. The supply is left at 0 V, output off.")
+    _common(c, output=False)
+    c.set_defaults(run=run_check)
+
+    r = rig_sub.add_parser(
+        "record", help="drive a voltage signal and log the loop",
+        description="Drive a voltage signal, one sample per tick (default: the paper's "
+                    "0-150-0 V triangle, 300 s period), and log every tick.")
+    r.add_argument("--signal", choices=SIGNALS, default="triangle",
+                   help="drive signal (default: triangle)")
+    r.add_argument("--voltages", metavar="FILE.csv",
+                   help="drive the voltage_V column of a CSV instead (resampled at the tick "
+                        "rate if it has time_s, else one value per tick)")
+    r.add_argument("--min", type=float, default=None, metavar="V", dest="u_min",
+                   help="lowest voltage (default: [rig] u_min)")
+    r.add_argument("--max", type=float, default=None, metavar="V", dest="u_max",
+                   help="highest voltage (default: [rig] u_max)")
+    r.add_argument("--period", type=float, default=300.0, metavar="S",
+                   help="period of triangle and sine (default 300 s)")
+    r.add_argument("--cycles", type=int, default=1, metavar="N", help="cycles (default 1)")
+    _common(r)
+    r.set_defaults(run=run_record)
+
+    t = rig_sub.add_parser(
+        "track", help="track a desired displacement (feedforward, optional feedback)",
+        description="Compensate the desired displacement_um of DESIRED.csv (resampled at "
+                    "the tick rate) with the exact inverse of MODEL.json and send the "
+                    "voltages; with --feedback, add PID feedback on the measured error. "
+                    "Prints the tracking errors.")
+    t.add_argument("model", metavar="MODEL.json")
+    t.add_argument("desired", metavar="DESIRED.csv", help="CSV with time_s, displacement_um")
+    t.add_argument("--feedback", metavar="KP,KI[,KD]", default=None,
+                   help="PID gains on the error in um (KP in V/um, KI in V/(um s), KD in V s/um), "
+                        "e.g. 1,10")
+    _common(t)
+    t.set_defaults(run=run_track)
+
+    e = rig_sub.add_parser(
+        "emulate", help="emulated instruments on pseudo-terminals",
+        description="Start the emulated supply and sensor of the configuration on "
+                    "pseudo-terminals and print their device paths; any program can then "
+                    "talk to them as to the real instruments. Runs until Ctrl-C.")
+    e.add_argument("--config", metavar="RIG.toml", required=True)
+    e.add_argument("--plant", default=None, metavar="NAME", help="the simulated beam")
+    _fault_option(e)
+    e.add_argument("--duration", type=float, default=None, metavar="S",
+                   help="stop after S seconds (default: run until Ctrl-C)")
+    e.set_defaults(run=run_emulate)
+
+
+# ----------------------------------------------------------------------------- helpers
+def _fault_option(p):
+    p.add_argument("--fault", action="append", default=[], metavar="DEVICE:KIND[:START[:N]]",
+                   help="emulated instruments only: inject a fault, e.g. sensor:over-range:5 "
+                        "(from 5 s on) or supply:no-reply:10:3 (3 replies from 10 s on); "
+                        "kinds: no-reply, late-reply, truncated, garbled, bad-crc, "
+                        "error-code, stuck, over-range, vanish. Repeatable.")
+
+
+def _faults(args):
+    from pihyst.rig import Fault
+    faults = []
+    for text in args.fault:
+        parts = text.split(":")
+        try:
+            if not 2 <= len(parts) <= 4:
+                raise ValueError("expected DEVICE:KIND[:START[:N]]")
+            start = float(parts[2]) if len(parts) > 2 else 0.0
+            count = int(parts[3]) if len(parts) > 3 else None
+            faults.append(Fault(parts[1], parts[0], start_s=start, count=count))
+        except ValueError as err:
+            raise UsageError(f"--fault {text}: {err}") from None
+    return faults
+
+
+def _config(args):
+    from pihyst.rig import ConfigError, load_config
+    from pihyst.rig._plants import PLANT_NAMES
+    try:
+        config = load_config(args.config)
+    except ConfigError as err:
+        raise UsageError(str(err)) from None
+    if getattr(args, "plant", None) is not None and args.plant not in PLANT_NAMES:
+        raise UsageError(f"--plant {args.plant}: choose one of {', '.join(PLANT_NAMES)}")
+    return config
+
+
+def _open(args, config):
+    from pihyst.rig import Rig, RigError, is_emulated
+    faults = _faults(args)
+    if faults and not is_emulated(config):
+        raise UsageError("--fault: only for emulated instruments (pihystsim:// ports)")
+    try:
+        return Rig(config, real_time=args.real_time, plant=args.plant, faults=faults)
+    except RigError as err:
+        raise UsageError(f"{args.config}: {err}") from None
+
+
+def _check_output(path):
+    import os
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise UsageError(f"-o {path}: the folder {folder} does not exist")
+    if path.lower().endswith((".h5", ".hdf5")):
+        try:
+            import h5py  # noqa: F401
+        except ImportError:
+            raise UsageError(f"-o {path}: HDF5 logs need h5py: pip install "
+                             "'pihyst[hdf5]'") from None
+
+
+def _report(result, args, rig):
+    t = result.timing()
+    say = print
+    say(f"{rig.describe()}: {t['ticks']} ticks at {1 / result.period_s:g} Hz; "
+        f"busy {t.get('busy_mean_ms', 0):.1f} ms per tick (max {t.get('busy_max_ms', 0):.1f}); "
+        f"start jitter mean {t.get('jitter_mean_ms', 0):.2f} ms, max "
+        f"{t.get('jitter_max_ms', 0):.2f} ms; overruns {t['overruns']}")
+    final = "0 V, output off" if result.zeroed else "WARNING: the supply could not be zeroed"
+    say(f"stopped: {result.reason}; {final}; log in {args.output}")
+    if not result.completed:
+        print(f"pihyst rig: error: the run stopped early: {result.reason}", file=sys.stderr)
+        raise SystemExit(1)
+
+
+def _resample(path, column, rate_hz, what):
+    """(values per tick, tick times) from a CSV column, resampled at the tick rate when the
+    file has time_s."""
+    columns, lines = read_columns(path, [column], optional=["time_s"])
+    v = columns[column]
+    if "time_s" not in columns:
+        return v
+    t = columns["time_s"]
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        i = back[0] + 1
+        raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
+                       f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g})")
+    ticks = t[0] + np.arange(int(math.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1) / rate_hz
+    return np.interp(ticks, t, v)
+
+
+# ----------------------------------------------------------------------------- actions
+def run_check(args):
+    config = _config(args)
+    from pihyst.rig import RigError
+    with _open(args, config) as rig:
+        try:
+            rig.supply.set_voltage(0.0)
+            rig.supply.output_off()
+            readback = rig.supply.read_voltage()
+            reading = rig.sensor.read()
+        except OSError as err:
+            raise UsageError(f"{args.config}: {err}") from None
+        finally:
+            try:
+                rig.supply.set_voltage(0.0)
+                rig.supply.output_off()
+            except (OSError, RigError):
+                pass
+    print(f"supply: {rig.supply.describe()}: 0 V sent, output off"
+          + ("" if readback is None else f", readback {readback:.3f} V"))
+    value = f"{reading.value:.4f} um" if reading.valid else f"no value ({reading.status})"
+    print(f"sensor: {rig.sensor.describe()}: {value}")
+
+
+def run_record(args):
+    from pihyst.rig import VoltageProgram
+    config = _config(args)
+    r = config.rig
+    u_min = r.u_min if args.u_min is None else args.u_min
+    u_max = r.u_max if args.u_max is None else args.u_max
+    if not r.u_min <= u_min < u_max <= r.u_max:
+        raise UsageError(f"--min/--max {u_min:g}..{u_max:g} V must lie within the rig's "
+                         f"limits [{r.u_min:g}, {r.u_max:g}] V with min < max")
+    if args.voltages:
+        u = _resample(args.voltages, "voltage_V", r.rate_hz, "voltages")
+        bad = np.flatnonzero((u < r.u_min) | (u > r.u_max))
+        if bad.size:
+            raise UsageError(f"{args.voltages}: voltage {u[bad[0]]:g} V (tick {bad[0]}) is "
+                             f"outside the rig's limits [{r.u_min:g}, {r.u_max:g}] V")
+        description = f"voltages of {args.voltages}"
+    else:
+        from pihyst.cli.simulate import make_signal
+        options = argparse.Namespace(signal=args.signal, u_min=u_min, dt=1.0 / r.rate_hz,
+                                     period=args.period, cycles=args.cycles, triangles=5,
+                                     ratio=0.7, ramps=20, rate=None, seed=0, steps=10,
+                                     step_time=10.0)
+        _, u = make_signal(options, u_max)
+        description = (f"{args.signal} {u_min:g}-{u_max:g} V, period {args.period:g} s, "
+                       f"{args.cycles} cycle(s)")
+    _check_output(args.output)
+    program = VoltageProgram(u, description)
+    with _open(args, config) as rig:
+        result = rig.run(program, args.output, fsync=args.fsync)
+    y = result.column("displacement_um", phase="run")
+    y = y[np.isfinite(y)]
+    if y.size:
+        print(f"recorded {y.size} ticks: displacement {y.min():.4g} .. {y.max():.4g} um")
+    _report(result, args, rig)
+
+
+def _gains(text):
+    try:
+        gains = [float(g) for g in text.split(",")]
+    except ValueError:
+        gains = []
+    if len(gains) not in (2, 3) or not all(math.isfinite(g) and g >= 0 for g in gains):
+        raise UsageError(f"--feedback {text}: expected KP,KI or KP,KI,KD (numbers >= 0)")
+    return gains + [0.0] * (3 - len(gains))
+
+
+def run_track(args):
+    from pihyst import metrics
+    from pihyst.rig import FeedbackProgram, FeedforwardProgram
+    config = _config(args)
+    r = config.rig
+    model = load_model(args.model)
+    gains = _gains(args.feedback) if args.feedback is not None else None
+    desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
+    max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz
+    try:
+        if gains is None:
+            program = FeedforwardProgram(model, desired, r.u_min, r.u_max, max_step,
+                                         description=args.desired)
+        else:
+            program = FeedbackProgram(model, desired, r.u_min, r.u_max, 1.0 / r.rate_hz,
+                                      *gains, max_step=max_step, description=args.desired)
+    except ValueError as err:
+        raise UsageError(f"{args.model}: {err}") from None
+    _check_output(args.output)
+    with _open(args, config) as rig:
+        result = rig.run(program, args.output, notes=[f"model: {args.model}: {model!r}"],
+                         fsync=args.fsync)
+    y = result.column("displacement_um", phase="run")
+    ref = result.column("reference", phase="run")
+    ok = np.isfinite(y)
+    if ok.any():
+        span = float(np.ptp(desired))
+        s = metrics.error_summary(ref[ok], y[ok], span)
+        pct = f" = {s['mean_abs_pct']:.2f} % of the range {span:.4g} um" if span > 0 else ""
+        mode = "with feedback" if gains else "open loop"
+        print(f"tracking error {mode} (measured - desired, {int(ok.sum())} ticks): mean "
+              f"absolute {s['mean_abs']:.4g} um{pct}; RMS {s['rms']:.4g} um; max "
+              f"{s['max_abs']:.4g} um")
+    _report(result, args, rig)
+
+
+def run_emulate(args):
+    import signal
+    import threading
+
+    from pihyst.rig._pty import PtyEmulators
+    config = _config(args)
+    stop = threading.Event()
+
+    def _stop(signum, frame):
+        stop.set()
+    old = signal.signal(signal.SIGTERM, _stop)
+    try:
+        with PtyEmulators(config, plant=args.plant, faults=_faults(args)) as emu:
+            for what, path in emu.paths.items():
+                c = getattr(config, what)
+                print(f"{what}: {path}  ({c.protocol}, {c.baudrate} baud)", flush=True)
+            print(f"simulated beam: {emu.emulators.plant.name}; Ctrl-C to stop", flush=True)
+            try:
+                stop.wait(args.duration)
+            except KeyboardInterrupt:
+                pass
+            st = emu.emulators.supply_state
+            print(f"stopped; supply: {emu.emulators.supply.requests} requests, last setpoint "
+                  f"{st.last_setpoint_V:g} V, output {'on' if st.output_on else 'off'}; "
+                  f"sensor: {emu.emulators.sensor.requests} requests", flush=True)
+    finally:
+        signal.signal(signal.SIGTERM, old)

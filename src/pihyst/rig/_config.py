@@ -1,0 +1,320 @@
+"""The rig configuration: a TOML file with the sections [rig], [supply], [sensor] and,
+for the simulated instruments, [emulator].
+
+Errors are :class:`ConfigError`, one line naming the file, the key and, where it can be
+found, the line: ``rig.toml:12: [supply] scale: must be a positive number, got -1``.
+"""
+
+import math
+import os
+import re
+import sys
+from dataclasses import dataclass, field, fields
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+class ConfigError(ValueError):
+    """A rig configuration could not be used; the message is one line."""
+
+
+def char_bits(port_config):
+    """Bits on the wire per byte: start, 8 data, parity (unless N), stop bits."""
+    return 1 + 8 + (port_config.parity != "N") + port_config.stopbits
+
+
+SUPPLY_PROTOCOLS = ("modbus-rtu", "ascii")
+SENSOR_PROTOCOLS = ("keyence-lk-g5000", "keyence-lk-g3000")
+REGISTER_FORMATS = ("uint16", "uint32", "float32")
+WORD_ORDERS = ("big", "little")
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """[rig]: the controller loop and its safety limits."""
+
+    rate_hz: float = 20.0
+    u_min: float = 0.0
+    u_max: float = 150.0
+    slew_V_per_s: float = None            # None: no slew limit
+    ramp_V_per_s: float = None            # start ramp; default: the slew limit, else 50 V/s
+    max_comm_errors: int = 3              # consecutive failed exchanges that stop a run
+    max_invalid_readings: int = 5         # consecutive invalid readings that stop a run
+    max_overruns: int = 10                # consecutive overruns that stop a run
+    watchdog_periods: float = 5.0         # loop stall (in periods) that zeroes the output
+    readback_every: int = 1               # ticks between readbacks (when configured)
+    readback_tolerance_V: float = 1.0
+    stuck_ticks: int = 20                 # a reading unchanged this long while the voltage
+    #                                       moves stuck_volts stops the run (0: off)
+    stuck_volts: float = 5.0
+
+    @property
+    def period_s(self):
+        return 1.0 / self.rate_hz
+
+    @property
+    def start_ramp_V_per_s(self):
+        if self.ramp_V_per_s is not None:
+            return self.ramp_V_per_s
+        return self.slew_V_per_s if self.slew_V_per_s is not None else 50.0
+
+
+@dataclass(frozen=True)
+class SupplyConfig:
+    """[supply]: the programmable high-voltage supply."""
+
+    port: str = "/dev/ttyUSB0"
+    baudrate: int = 19200
+    protocol: str = "modbus-rtu"
+    timeout_s: float = 0.1
+    parity: str = "N"                     # N, E or O (Modbus RTU's default is E)
+    stopbits: int = 1                     # 1 or 2
+    # Modbus RTU
+    address: int = 1
+    setpoint_register: int = 10
+    setpoint_format: str = "float32"
+    word_order: str = "big"
+    scale: float = 1.0                    # register units per volt
+    output_register: int = None           # 1 = on, 0 = off
+    readback_register: int = None         # same format and scale as the setpoint
+    # ASCII line protocol
+    terminator: str = "\r\n"
+    set_command: str = "VOLT {volts:.2f}"
+    query_command: str = None             # e.g. "MEAS:VOLT?"
+    output_on_command: str = None         # e.g. "OUTP ON"
+    output_off_command: str = None
+    echo: bool = False                    # the device echoes each command
+    prompt: str = ""                      # sent by the device when it is ready again
+    reply_pattern: str = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """[sensor]: the laser displacement sensor."""
+
+    port: str = "/dev/ttyUSB1"
+    baudrate: int = 115200
+    protocol: str = "keyence-lk-g5000"
+    parity: str = "N"
+    stopbits: int = 1
+    output: int = 1
+    scale_um: float = 1.0                 # micrometres per reported unit
+    sign: int = 1
+    timeout_s: float = 0.1
+
+
+@dataclass(frozen=True)
+class EmulatorConfig:
+    """[emulator]: the simulated instruments (ignored on a real rig)."""
+
+    plant: str = "paper-beam"
+    seed: int = 0
+    supply_delay_s: float = 0.005         # the supply's processing time per request
+    sensor_delay_s: float = 0.001
+    sensor_decimals: int = 4              # digits after the point in the sensor's reply
+    sensor_range_um: float = 300.0        # |reading| above this is over-range
+    supply_max_V: float = 1000.0
+    supply_step_V: float = 0.01
+    supply_watchdog_s: float = 0.0        # > 0: output off after this long without a request
+    supply_reply: str = "{volts:.3f}"     # ASCII supply: the reply to query_command
+
+
+@dataclass(frozen=True)
+class RigConfig:
+    """The whole configuration; ``source`` is the file it came from."""
+
+    rig: LoopSettings = field(default_factory=LoopSettings)
+    supply: SupplyConfig = field(default_factory=SupplyConfig)
+    sensor: SensorConfig = field(default_factory=SensorConfig)
+    emulator: EmulatorConfig = field(default_factory=EmulatorConfig)
+    source: str = "<defaults>"
+    text: str = ""
+
+    def describe(self):
+        """One line for log metadata."""
+        s, n, r = self.supply, self.sensor, self.rig
+        supply = (f"{s.protocol} @{s.baudrate} addr {s.address} setpoint reg "
+                  f"{s.setpoint_register} {s.setpoint_format}/{s.word_order} x{s.scale:g}"
+                  if s.protocol == "modbus-rtu" else
+                  f"ascii @{s.baudrate} set {s.set_command!r}")
+        return (f"{self.source}: supply {s.port} ({supply}); sensor {n.port} ({n.protocol} "
+                f"@{n.baudrate} output {n.output} x{n.scale_um:g} um sign {n.sign:+d}); "
+                f"rate {r.rate_hz:g} Hz")
+
+
+_SECTIONS = {"rig": LoopSettings, "supply": SupplyConfig, "sensor": SensorConfig,
+             "emulator": EmulatorConfig}
+
+
+def _key_line(text, section, key):
+    """1-based line of ``key = ...`` inside ``[section]`` (0 if not found)."""
+    current = None
+    for n, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        m = re.match(r"\[\s*([A-Za-z0-9_.-]+)\s*\]", stripped)
+        if m:
+            current = m.group(1)
+        elif current == section and re.match(rf"{re.escape(key)}\s*=", stripped):
+            return n
+    return 0
+
+
+class _Checker:
+    def __init__(self, path, text):
+        self.path, self.text = path, text
+
+    def fail(self, section, key, message):
+        line = _key_line(self.text, section, key) if key else 0
+        where = f"{self.path}:{line}" if line else self.path
+        name = f"[{section}] {key}" if key else f"[{section}]"
+        raise ConfigError(f"{where}: {name}: {message}")
+
+
+def _convert(check, section, name, value, default):
+    """Check one value against the type of its default."""
+    kind = type(default)
+    if name in ("slew_V_per_s", "ramp_V_per_s", "readback_tolerance_V", "scale", "scale_um",
+                "rate_hz", "timeout_s") or kind is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            check.fail(section, name, f"must be a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            check.fail(section, name, f"must be a finite number, got {value}")
+        return value
+    if name in ("output_register", "readback_register", "address", "baudrate") or kind is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            check.fail(section, name, f"must be a whole number, got {value!r}")
+        return value
+    if kind is bool:
+        if not isinstance(value, bool):
+            check.fail(section, name, f"must be true or false, got {value!r}")
+        return value
+    if not isinstance(value, str):
+        check.fail(section, name, f"must be a string, got {value!r}")
+    return value
+
+
+def _section(check, data, section, cls):
+    raw = data.get(section, {})
+    if not isinstance(raw, dict):
+        check.fail(section, None, "must be a table")
+    known = {f.name: f for f in fields(cls)}
+    values = {}
+    for key, value in raw.items():
+        if key not in known:
+            check.fail(section, key, f"unknown key; known keys: {', '.join(known)}")
+        values[key] = _convert(check, section, key, value, known[key].default)
+    return cls(**values)
+
+
+def _positive(check, section, name, value, allow_none=False):
+    if value is None and allow_none:
+        return
+    if value is None or not value > 0:
+        check.fail(section, name, f"must be a positive number, got {value!r}")
+
+
+def _validate(check, cfg):
+    r, s, n, e = cfg.rig, cfg.supply, cfg.sensor, cfg.emulator
+    _positive(check, "rig", "rate_hz", r.rate_hz)
+    if not r.u_min < r.u_max:
+        check.fail("rig", "u_max", f"must be above u_min ({r.u_min:g}), got {r.u_max:g}")
+    if r.u_min > 0 or r.u_max < 0:
+        check.fail("rig", "u_min", f"the limits [{r.u_min:g}, {r.u_max:g}] V must include "
+                   "0 V (runs start and end there)")
+    _positive(check, "rig", "slew_V_per_s", r.slew_V_per_s, allow_none=True)
+    _positive(check, "rig", "ramp_V_per_s", r.ramp_V_per_s, allow_none=True)
+    if r.ramp_V_per_s is not None and r.slew_V_per_s is not None and \
+            r.ramp_V_per_s > r.slew_V_per_s:
+        check.fail("rig", "ramp_V_per_s", f"the start ramp ({r.ramp_V_per_s:g} V/s) must not "
+                   f"be faster than the slew limit ({r.slew_V_per_s:g} V/s)")
+    for name in ("max_comm_errors", "max_invalid_readings", "max_overruns",
+                 "readback_every"):
+        if getattr(r, name) < 1:
+            check.fail("rig", name, f"must be at least 1, got {getattr(r, name)}")
+    if r.stuck_ticks < 0:
+        check.fail("rig", "stuck_ticks", f"must be 0 (off) or more, got {r.stuck_ticks}")
+    _positive(check, "rig", "watchdog_periods", r.watchdog_periods)
+    _positive(check, "rig", "readback_tolerance_V", r.readback_tolerance_V)
+    for sec, c, protocols in (("supply", s, SUPPLY_PROTOCOLS), ("sensor", n, SENSOR_PROTOCOLS)):
+        if c.protocol not in protocols:
+            check.fail(sec, "protocol", f"{c.protocol!r} is not one of {', '.join(protocols)}")
+        _positive(check, sec, "baudrate", c.baudrate)
+        _positive(check, sec, "timeout_s", c.timeout_s)
+        if not c.port:
+            check.fail(sec, "port", "must name a serial port or a pyserial URL")
+        if c.parity not in ("N", "E", "O"):
+            check.fail(sec, "parity", f"must be N, E or O, got {c.parity!r}")
+        if c.stopbits not in (1, 2):
+            check.fail(sec, "stopbits", f"must be 1 or 2, got {c.stopbits}")
+    if not 0 <= s.address <= 247:
+        check.fail("supply", "address", f"must be a Modbus slave address 1..247, got {s.address}")
+    if s.setpoint_format not in REGISTER_FORMATS:
+        check.fail("supply", "setpoint_format",
+                   f"{s.setpoint_format!r} is not one of {', '.join(REGISTER_FORMATS)}")
+    if s.word_order not in WORD_ORDERS:
+        check.fail("supply", "word_order", f"{s.word_order!r} is not big or little")
+    _positive(check, "supply", "scale", s.scale)
+    for name in ("setpoint_register", "output_register", "readback_register"):
+        v = getattr(s, name)
+        if v is not None and not 0 <= v <= 0xFFFF:
+            check.fail("supply", name, f"must be a register address 0..65535, got {v}")
+    for name in ("set_command",):
+        try:
+            getattr(s, name).format(volts=1.0)
+        except (KeyError, ValueError, IndexError) as err:
+            check.fail("supply", name, f"bad template ({err}); use {{volts}} or "
+                       "{volts:.2f} for the voltage")
+    try:
+        re.compile(s.reply_pattern)
+    except re.error as err:
+        check.fail("supply", "reply_pattern", f"not a regular expression: {err}")
+    if s.protocol == "ascii" and not s.terminator:
+        check.fail("supply", "terminator", "must not be empty")
+    if n.output < 1 or n.output > (2 if n.protocol == "keyence-lk-g3000" else 12):
+        check.fail("sensor", "output", f"no output {n.output} on a {n.protocol}")
+    _positive(check, "sensor", "scale_um", n.scale_um)
+    if n.sign not in (1, -1):
+        check.fail("sensor", "sign", f"must be 1 or -1, got {n.sign}")
+    for name in ("supply_delay_s", "sensor_delay_s", "supply_watchdog_s"):
+        if getattr(e, name) < 0:
+            check.fail("emulator", name, f"must be >= 0, got {getattr(e, name)}")
+    if not 0 <= e.sensor_decimals <= 6:
+        check.fail("emulator", "sensor_decimals", f"must be 0..6, got {e.sensor_decimals}")
+    _positive(check, "emulator", "sensor_range_um", e.sensor_range_um)
+
+
+def parse_config(text, source="<string>"):
+    """A :class:`RigConfig` from TOML text; ``source`` names it in error messages."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"{source}: {err}") from None
+    check = _Checker(source, text)
+    for section in data:
+        if section not in _SECTIONS:
+            check.fail(section, None, f"unknown section; known: {', '.join(_SECTIONS)}")
+    parts = {name: _section(check, data, name, cls) for name, cls in _SECTIONS.items()}
+    cfg = RigConfig(**parts, source=source, text=text)
+    _validate(check, cfg)
+    from pihyst.rig._plants import PLANT_NAMES
+    if cfg.emulator.plant not in PLANT_NAMES:
+        check.fail("emulator", "plant", f"{cfg.emulator.plant!r} is not one of "
+                   f"{', '.join(PLANT_NAMES)}")
+    return cfg
+
+
+def load_config(path):
+    """Read and check a rig configuration file."""
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8-sig") as f:
+            text = f.read()
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read file: {err.strerror}") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file (UTF-8 expected)") from None
+    return parse_config(text, source=path)

@@ -1,0 +1,337 @@
+"""The fixed-rate loop: read the sensor -> compute the command -> limits and slew -> send ->
+log, at absolute deadlines t_k = t_0 + k / rate on a monotonic clock.
+
+A tick that ends after the next deadline is an overrun: it is counted and flagged, and
+the schedule restarts from that moment (no burst of catch-up ticks, no tick skipped).
+
+Safety on every exit path: the normal end, an exception, ``max_comm_errors`` consecutive
+failed exchanges, ``max_invalid_readings`` consecutive invalid readings,
+``max_overruns`` consecutive overruns, a readback that differs from the command, a
+stuck sensor, the watchdog, Ctrl-C (SIGINT) and SIGTERM all end in :meth:`_shutdown`:
+0 V (ramped at the slew limit when one is set), output off, and a log line saying why.
+The run starts at 0 V with the output on and ramps to the program's first voltage.
+"""
+
+import math
+import threading
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pihyst.rig._clock import WallClock
+from pihyst.rig._log import TickRecord
+from pihyst.rig._safety import SetpointGuard, SignalGuard, StopRun, Terminated, Watchdog
+
+NAN = math.nan
+
+
+@dataclass
+class RunResult:
+    """What a run did: why it stopped, its ticks, its timing."""
+
+    reason: str                  # why the run stopped
+    completed: bool              # the program ran to its end
+    records: list = field(repr=False)
+    period_s: float = 0.0
+    overruns: int = 0
+    final_voltage_V: float = NAN
+    zeroed: bool = False         # 0 V was sent and the output switched off at the end
+
+    def column(self, name, phase=None):
+        rows = [r for r in self.records if phase is None or r.phase == phase]
+        return np.array([getattr(r, name) for r in rows], dtype=float)
+
+    def timing(self):
+        """Loop timing: lateness of tick starts (jitter), busy time per tick, overruns."""
+        late = self.column("late_s")
+        busy = self.column("busy_s")
+        if late.size == 0:
+            return {"ticks": 0, "overruns": 0}
+        return {"ticks": int(late.size), "overruns": self.overruns,
+                "period_ms": 1000 * self.period_s,
+                "jitter_mean_ms": 1000 * float(np.mean(late)),
+                "jitter_p99_ms": 1000 * float(np.percentile(late, 99)),
+                "jitter_max_ms": 1000 * float(np.max(late)),
+                "busy_mean_ms": 1000 * float(np.mean(busy)),
+                "busy_max_ms": 1000 * float(np.max(busy)),
+                "utilisation_pct": 100 * float(np.mean(busy)) / self.period_s}
+
+
+class Controller:
+    """Runs programs on a supply and a sensor.
+
+    Parameters
+    ----------
+    supply, sensor
+        Drivers (see :mod:`pihyst.rig._supply`, :mod:`pihyst.rig._sensor`).
+    settings : LoopSettings
+        Rate, limits, slew and the stop criteria ([rig] of the configuration).
+    log : CsvRunLog, optional
+        Receives every tick and the notes.
+    clock : object with ``now()`` and ``sleep(s)``
+        Default: the monotonic wall clock. A VirtualClock runs in virtual time.
+    watchdog : bool, optional
+        Run the stall watchdog thread (default: with a wall clock only; in virtual time
+        a stall has no meaning).
+    handle_signals : bool
+        Turn SIGINT and SIGTERM into a safe stop (main thread only).
+    """
+
+    def __init__(self, supply, sensor, settings, *, log=None, clock=WallClock, watchdog=None,
+                 handle_signals=True):
+        self.supply, self.sensor, self.settings = supply, sensor, settings
+        self.log = log
+        self.clock = clock
+        self.use_watchdog = (not getattr(clock, "virtual", False)) if watchdog is None \
+            else watchdog
+        self.handle_signals = handle_signals
+        self._supply_lock = threading.RLock()
+
+    # ------------------------------------------------------------------ helpers
+    def _note(self, text):
+        if self.log is not None:
+            self.log.note(text)
+
+    def _send(self, u):
+        with self._supply_lock:
+            if self._watchdog is not None and self._watchdog.tripped is not None:
+                raise StopRun(f"watchdog: the loop stalled for {self._watchdog.tripped:.3f} s "
+                              f"(limit {self._watchdog.limit_s:.3f} s); output zeroed")
+            self.supply.set_voltage(u)
+
+    def _zero_from_watchdog(self):
+        if self._supply_lock.acquire(timeout=max(0.05, self.settings.period_s)):
+            try:
+                self.supply.set_voltage(0.0)
+                self.supply.output_off()
+            except Exception:  # noqa: BLE001 - the loop reports the stall itself
+                pass
+            finally:
+                self._supply_lock.release()
+
+    def _read(self):
+        """(displacement or NaN, status, error or None): errors are returned, not raised."""
+        try:
+            reading = self.sensor.read()
+        except OSError as err:
+            return NAN, f"error: {err}", f"sensor: {err}"
+        if not reading.valid:
+            self._invalid += 1
+            return NAN, reading.status, None
+        self._invalid = 0
+        return reading.value, "ok", None
+
+    def _wait(self, deadline):
+        if self._watchdog is not None:
+            self._watchdog.idle()
+        now = self.clock.now()
+        if deadline > now:
+            self.clock.sleep(deadline - now)
+        if self._watchdog is not None:
+            self._watchdog.busy()
+        start = self.clock.now()
+        return start, start - deadline
+
+    def _advance(self, deadline, busy_end):
+        """Next deadline; an overrun restarts the schedule at the end of the tick."""
+        nxt = deadline + self.settings.period_s
+        if busy_end > nxt:
+            self.overruns += 1
+            self._consecutive_overruns += 1
+            return busy_end, 1
+        self._consecutive_overruns = 0
+        return nxt, 0
+
+    # ------------------------------------------------------------------ one tick
+    def _tick(self, phase, deadline, command_of):
+        s = self.settings
+        start, late = self._wait(deadline)
+        y, status, error = self._read()
+        reference, command = command_of(y)
+        u = self.guard.check(command)
+        supply_status = "ok"
+        sent = NAN
+        try:
+            self._send(u)
+            sent = u
+            self.guard.sent(u)
+        except OSError as err:
+            self.guard.failed(u)
+            error = error or f"supply: {err}"
+            supply_status = f"error: {err}"
+        readback = NAN
+        if (self.supply.has_readback and phase == "run" and supply_status == "ok"
+                and self.tick % s.readback_every == 0):
+            try:
+                with self._supply_lock:
+                    readback = self.supply.read_voltage()
+            except OSError as err:
+                error = error or f"supply readback: {err}"
+                supply_status = f"error: {err}"
+        # consecutive ticks with a failed exchange
+        if error is None:
+            self._comm_errors = 0
+        else:
+            self._comm_errors += 1
+            self._last_error = error
+        end = self.clock.now()
+        nxt, overrun = self._advance(deadline, end)
+        record = TickRecord(self.tick, start - self.t0, phase, reference, command, sent,
+                            readback, y, status, supply_status, overrun, late, end - start)
+        self._record(record)
+        self._check(record)
+        return nxt
+
+    def _record(self, record):
+        self.records.append(record)
+        if self.log is not None:
+            self.log.write(record)
+        self.tick += 1
+
+    def _check(self, r):
+        s = self.settings
+        if self._comm_errors >= s.max_comm_errors:
+            raise StopRun(f"{self._comm_errors} consecutive communication errors (last: "
+                          f"{self._last_error})")
+        if self._invalid >= s.max_invalid_readings:
+            raise StopRun(f"{self._invalid} consecutive invalid sensor readings "
+                          f"({r.sensor_status})")
+        if self._consecutive_overruns >= s.max_overruns:
+            raise StopRun(f"{self._consecutive_overruns} consecutive overruns: the ticks take "
+                          f"longer than the period {1000 * s.period_s:.1f} ms (last "
+                          f"{1000 * r.busy_s:.1f} ms)")
+        if not math.isnan(r.readback_V) and not math.isnan(r.voltage_V) and \
+                abs(r.readback_V - r.voltage_V) > s.readback_tolerance_V:
+            raise StopRun(f"readback {r.readback_V:.3f} V differs from the command "
+                          f"{r.voltage_V:.3f} V by more than {s.readback_tolerance_V:g} V")
+        if s.stuck_ticks and r.sensor_status == "ok":
+            self._recent.append((r.displacement_um, r.voltage_V))
+            del self._recent[:-s.stuck_ticks]
+            if len(self._recent) == s.stuck_ticks:
+                ys = {y for y, _ in self._recent}
+                us = [u for _, u in self._recent if not math.isnan(u)]
+                if len(ys) == 1 and us and max(us) - min(us) > s.stuck_volts:
+                    raise StopRun(f"sensor value stuck at {r.displacement_um:g} um for "
+                                  f"{s.stuck_ticks} ticks while the voltage moved "
+                                  f"{max(us) - min(us):.3g} V")
+
+    # ------------------------------------------------------------------ run
+    def run(self, program):
+        """Run ``program`` to its end or to a stop; always ends at 0 V, output off."""
+        s = self.settings
+        self.records, self.tick, self.overruns = [], 0, 0
+        self._comm_errors = self._invalid = self._consecutive_overruns = 0
+        self._last_error = ""
+        self._recent = []
+        self._watchdog = None
+        max_step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
+        self.guard = SetpointGuard(s.u_min, s.u_max, max_step)
+        ramp = s.start_ramp_V_per_s * s.period_s
+        completed, reason, error = False, None, None
+        self.t0 = deadline = self.clock.now()
+        signals = SignalGuard() if self.handle_signals else None
+        if signals is not None:
+            signals.__enter__()
+        try:
+            if self.use_watchdog:
+                limit = s.watchdog_periods * s.period_s
+                self._watchdog = Watchdog(limit, self._zero_from_watchdog).start()
+                self._watchdog.busy()
+            for attempt in range(s.max_comm_errors):
+                try:
+                    with self._supply_lock:
+                        self.supply.set_voltage(0.0)
+                        self.supply.output_on()
+                    break
+                except OSError as err:
+                    if attempt == s.max_comm_errors - 1:
+                        raise StopRun(f"could not start: supply: {err}") from None
+            self.t0 = deadline = self.clock.now()
+            self._note(f"start: 0 V, output on; {program.describe()}")
+            target = program.initial_voltage()
+            if not math.isfinite(target):
+                raise StopRun(f"refused a non-finite first setpoint ({target})")
+            target = min(max(target, s.u_min), s.u_max)
+            u = 0.0
+            while u != target:
+                u = min(target, u + ramp) if target > u else max(target, u - ramp)
+                deadline = self._tick("ramp-up", deadline, lambda y, u=u: (NAN, u))
+            program.start()
+            for k in range(program.n_ticks):
+                deadline = self._tick("run", deadline,
+                                      lambda y, k=k: program.command(k, None if math.isnan(y)
+                                                                     else y))
+            completed, reason = True, "end of the program"
+        except StopRun as err:
+            reason = str(err)
+        except KeyboardInterrupt:
+            reason = "interrupted (SIGINT, Ctrl-C)"
+        except Terminated as err:
+            reason = f"terminated ({err})"
+        except Exception as err:
+            reason = f"error: {type(err).__name__}: {err}"
+            error = err
+        finally:
+            if signals is not None:
+                signals.hold()
+            try:
+                zeroed, final = self._shutdown(reason or "interrupted", deadline)
+            finally:
+                if self._watchdog is not None:
+                    self._watchdog.stop()
+                if signals is not None:
+                    signals.__exit__(None, None, None)
+        result = RunResult(reason, completed, self.records, s.period_s, self.overruns, final,
+                           zeroed)
+        if error is not None:
+            raise error
+        return result
+
+    def _shutdown(self, reason, deadline):
+        """Ramp to 0 V at the slew limit (one step per tick, reading the sensor unless it
+        is the sensor that failed), switch the output off, and say why in the log."""
+        s = self.settings
+        self._note(f"stopping: {reason}")
+        # a failing sensor would cost its timeout on every step of the ramp
+        read_sensor = "sensor" not in reason and not reason.startswith("watchdog")
+        step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
+        failures = 0
+        while self.guard.hi > 0 and step is not None and failures < 2:
+            u = self.guard.check(max(0.0, self.guard.hi - step))
+            start, late = self._wait(deadline)
+            y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
+            try:
+                with self._supply_lock:
+                    self.supply.set_voltage(u)
+                sent, supply_status = u, "ok"
+                self.guard.sent(u)
+            except OSError as err:
+                failures += 1
+                self.guard.failed(u)
+                sent, supply_status = NAN, f"error: {err}"
+            end = self.clock.now()
+            deadline, overrun = self._advance(deadline, end)
+            self._record(TickRecord(self.tick, start - self.t0, "shutdown", NAN, u, sent, NAN,
+                                    y, status, supply_status, overrun, late, end - start))
+        if self.guard.hi > 0:
+            self._note("the supply did not follow the ramp: 0 V at once" if step is not None
+                       else "no slew limit: 0 V at once")
+        problems = []
+        for what, call in (("0 V", lambda: self.supply.set_voltage(0.0)),
+                           ("output off", self.supply.output_off)):
+            for attempt in range(3):
+                try:
+                    with self._supply_lock:
+                        call()
+                    break
+                except OSError as err:
+                    if attempt == 2:
+                        problems.append(f"could not send {what}: {err}")
+        zeroed = not problems
+        if zeroed:
+            self.guard.sent(0.0)
+            self._note(f"stopped: {reason}; 0 V sent and output off")
+        else:
+            self._note(f"stopped: {reason}; WARNING: {'; '.join(problems)} - the beam may "
+                       "still be charged")
+        return zeroed, self.guard.last if zeroed else NAN

@@ -1,0 +1,139 @@
+"""The log of a run: a CSV that ``pihyst fit`` reads as it is.
+
+``#`` metadata lines (pihyst version, configuration, model, limits, rate, start time),
+one header row, then one row per tick, written and flushed as the loop goes (a crash or
+a kill loses at most the tick being written), and ``#`` lines saying why the run
+stopped. A tick without a valid displacement (over-range, invalid, no reply) is written
+as a row that starts with ``#``: every tick is in the file, and readers of
+``voltage_V``/``displacement_um`` (``pihyst fit``) see only measured values.
+:func:`read_run_log` reads every tick back, those included.
+"""
+
+import csv
+import io
+import math
+import os
+from dataclasses import astuple, dataclass
+
+import numpy as np
+
+COLUMNS = ("tick", "time_s", "phase", "reference", "command_V", "voltage_V", "readback_V",
+           "displacement_um", "sensor_status", "supply_status", "overrun", "late_s",
+           "busy_s")
+
+
+@dataclass
+class TickRecord:
+    """One tick of the loop (the columns of the log)."""
+
+    tick: int
+    time_s: float            # tick start, s since the run started
+    phase: str               # ramp-up, run, shutdown
+    reference: float         # the signal's voltage (record) or desired displacement (track)
+    command_V: float         # the voltage asked for, before limits and slew
+    voltage_V: float         # the voltage sent (NaN if nothing was sent)
+    readback_V: float        # the supply's readback (NaN if not read)
+    displacement_um: float   # measured (NaN if no valid reading)
+    sensor_status: str       # ok, over-range+, over-range-, invalid, error: ...
+    supply_status: str       # ok, error: ...
+    overrun: int             # 1 if the tick ended after the next tick's deadline
+    late_s: float            # tick start minus its deadline
+    busy_s: float            # time the tick's work took
+
+    @property
+    def valid(self):
+        return math.isfinite(self.displacement_um) and math.isfinite(self.voltage_V)
+
+
+def _text(value):
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else f"{value:.10g}"
+    return str(value)
+
+
+class CsvRunLog:
+    """Writes a run log as the loop goes (see the module notes).
+
+    Parameters
+    ----------
+    path : str
+        The CSV file (created or replaced).
+    metadata : list of str
+        Lines written as ``# line`` before the header.
+    fsync : bool
+        Also force every row to the disk (survives a power cut, costs a disk write per
+        tick); by default rows are flushed to the operating system, which survives a crash
+        or kill of the process.
+    """
+
+    def __init__(self, path, metadata=(), fsync=False):
+        self.path = os.fspath(path)
+        self.fsync = fsync
+        self._file = open(self.path, "w", encoding="utf-8", newline="")
+        for line in metadata:
+            for part in str(line).splitlines() or [""]:
+                self._file.write(f"# {part}\n")
+        self._file.write(",".join(COLUMNS) + "\n")
+        self._flush()
+
+    def _flush(self):
+        self._file.flush()
+        if self.fsync:
+            os.fsync(self._file.fileno())
+
+    def write(self, record):
+        fields = []
+        for value in astuple(record):
+            text = _text(value)
+            # a status may hold commas or quotes: quote it as CSV does
+            if any(c in text for c in ',"\n\r'):
+                text = '"' + text.replace('"', '""').replace("\n", " ").replace("\r", " ") + '"'
+            fields.append(text)
+        line = ",".join(fields)
+        self._file.write(("#" if not record.valid else "") + line + "\n")
+        self._flush()
+
+    def note(self, text):
+        for part in str(text).splitlines():
+            self._file.write(f"# {part}\n")
+        self._flush()
+
+    def close(self):
+        if not self._file.closed:
+            self._file.close()
+
+
+def read_run_log(path):
+    """Every tick of a run log (also the ``#`` rows of ticks without a valid reading) as a
+    dict column -> array (numbers as float, statuses and phase as str), and the ``#``
+    notes as a list of lines."""
+    with open(path, encoding="utf-8-sig", newline="") as f:
+        text = f.read()
+    notes, rows, header = [], [], None
+    for row in csv.reader(io.StringIO(text)):
+        if not row:
+            continue
+        first = row[0].lstrip()
+        if header is None:
+            if first.startswith("#"):
+                notes.append(",".join(row).lstrip("# ").rstrip())
+                continue
+            header = [h.strip() for h in row]
+            continue
+        if first.startswith("#"):
+            if len(row) == len(header) and first[1:].strip().lstrip("-").isdigit():
+                row = [first[1:]] + row[1:]
+            else:
+                notes.append(",".join(row).lstrip("# ").rstrip())
+                continue
+        rows.append(row)
+    if header is None:
+        raise ValueError(f"{path}: no header row")
+    out = {}
+    for j, name in enumerate(header):
+        values = [r[j] if j < len(r) else "" for r in rows]
+        if name in ("phase", "sensor_status", "supply_status"):
+            out[name] = np.array(values, dtype=object)
+        else:
+            out[name] = np.array([float(v) if v else math.nan for v in values])
+    return out, notes

@@ -1,0 +1,150 @@
+"""What the loop drives, tick by tick: a voltage signal (record), a desired trajectory
+through pihyst's compensator (track), or that plus PID feedback (track --feedback).
+
+A program has ``n_ticks``, ``reference_unit``, ``initial_voltage()`` (where the start
+ramp goes), ``start()`` (called when the ramp has arrived), ``command(k, measured_um)``
+-> ``(reference, volts)`` and ``describe()``.
+"""
+
+import math
+
+import numpy as np
+
+from pihyst.inverse import Compensator
+
+
+class VoltageProgram:
+    """Drive the voltages ``voltages``, one per tick (record a loop)."""
+
+    reference_unit = "V"
+
+    def __init__(self, voltages, description="voltage signal"):
+        self.voltages = np.asarray(voltages, dtype=float)
+        if self.voltages.ndim != 1 or self.voltages.size == 0:
+            raise ValueError("the voltage signal must be a non-empty sequence")
+        if not np.all(np.isfinite(self.voltages)):
+            raise ValueError("the voltage signal has values that are not finite numbers")
+        self.n_ticks = self.voltages.size
+        self.description = description
+
+    def initial_voltage(self):
+        return float(self.voltages[0])
+
+    def start(self):
+        pass
+
+    def command(self, k, measured_um):
+        v = float(self.voltages[k])
+        return v, v
+
+    def describe(self):
+        return f"record: {self.description} ({self.n_ticks} ticks)"
+
+
+class FeedforwardProgram:
+    """Track ``desired`` (um, one per tick) open loop: u = H^-1(y_desired), the exact
+    inverse of ``model`` (:class:`pihyst.Compensator`) within the voltage limits and the
+    slew limit per tick."""
+
+    reference_unit = "um"
+
+    def __init__(self, model, desired, u_min, u_max, max_step=None, description="desired"):
+        self.model = model
+        self.desired = np.asarray(desired, dtype=float)
+        if self.desired.ndim != 1 or self.desired.size == 0:
+            raise ValueError("the desired trajectory must be a non-empty sequence")
+        lo, hi = model.input_range
+        self.limits = (max(lo, u_min), min(hi, u_max))
+        if not self.limits[0] < self.limits[1]:
+            raise ValueError(f"the model's input range [{lo:g}, {hi:g}] V and the rig's "
+                             f"limits [{u_min:g}, {u_max:g}] V do not overlap")
+        self.max_step = max_step
+        self.compensator = Compensator(model, u_min=self.limits[0], u_max=self.limits[1],
+                                       slew_rate=max_step)
+        self.n_ticks = self.desired.size
+        self.description = description
+        self._start = None
+
+    def initial_voltage(self):
+        # the voltage for the first desired value, reached by a monotone ramp from 0 V
+        probe = Compensator(self.model, u_min=self.limits[0], u_max=self.limits[1])
+        u0 = probe.step(self.desired[0])
+        self._start = (probe.state, u0)
+        return u0
+
+    def start(self):
+        if self._start is not None:
+            self.compensator.reset(*self._start)
+
+    def _feedforward(self, target):
+        return self.compensator.step(target)
+
+    def command(self, k, measured_um):
+        y_d = float(self.desired[k])
+        return y_d, self._feedforward(y_d)
+
+    def describe(self):
+        return (f"track open loop: {self.description} ({self.n_ticks} ticks) through the "
+                f"inverse of a {self.model.family} model")
+
+
+class FeedbackProgram(FeedforwardProgram):
+    """Feedforward plus PID feedback on the measured error: the compensator cancels the
+    hysteresis, the PID corrects what the model misses (creep, drift, model error) with a
+    small voltage on top:
+
+        e_k = y_d[k] - y_k,
+        u_k = H^-1(y_d[k]) + Kp e_k + Ki sum_j e_j dt + Kd (e_k - e_{k-1}) / dt
+
+    (gains in V/um, V/(um s) and V s/um), then clipped to the limits and the slew limit.
+    The feedforward path runs on its own (the compensator's state follows H^-1(y_d), not
+    the corrected voltage): the correction is a small voltage added in parallel. Feeding
+    the correction through the inverse instead (a corrected desired value, or an
+    operator state that follows every correction) makes small reversals at which the
+    model is flat, and the voltage jumps across them.
+
+    Anti-windup by conditional integration: the integral does not change on a tick whose
+    voltage was clipped (limit or slew) in the direction of the error. Ticks without a
+    valid reading leave the integral unchanged."""
+
+    def __init__(self, model, desired, u_min, u_max, dt, kp, ki, kd=0.0, max_step=None,
+                 description="desired"):
+        super().__init__(model, desired, u_min, u_max, max_step, description)
+        for name, v in (("KP", kp), ("KI", ki), ("KD", kd), ("dt", dt)):
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {v}")
+        self.dt, self.kp, self.ki, self.kd = dt, kp, ki, kd
+        self.integral = 0.0
+        self._e_prev = None
+        self._last = None
+
+    def start(self):
+        super().start()
+        self._last = self.compensator.voltage
+
+    def command(self, k, measured_um):
+        y_d = float(self.desired[k])
+        u_ff = self.compensator.step(y_d)
+        integral = self.integral
+        correction = integral
+        e = None
+        if measured_um is not None and math.isfinite(measured_um):
+            e = y_d - measured_um
+            integral = self.integral + self.ki * e * self.dt
+            derivative = 0.0 if self._e_prev is None else (e - self._e_prev) / self.dt
+            self._e_prev = e
+            correction = self.kp * e + integral + self.kd * derivative
+        u = u_ff + correction
+        lo, hi = self.limits
+        if self.max_step is not None and self._last is not None:
+            lo, hi = max(lo, self._last - self.max_step), min(hi, self._last + self.max_step)
+        u_sent = min(max(u, lo), hi)
+        pushing = e is not None and ((u_sent < u and e > 0) or (u_sent > u and e < 0))
+        if not pushing:
+            self.integral = integral
+        self._last = u_sent
+        return y_d, u_sent
+
+    def describe(self):
+        return (super().describe().replace("open loop", "with feedback") +
+                f"; PID Kp {self.kp:g} V/um, Ki {self.ki:g} V/(um s), Kd {self.kd:g} V s/um")

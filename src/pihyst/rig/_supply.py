@@ -1,0 +1,205 @@
+"""Supply drivers: one small interface (``set_voltage``, ``read_voltage``, ``output_on``,
+``output_off``, ``close``) over Modbus RTU (minimalmodbus) or an ASCII line protocol.
+
+Errors are ``OSError`` subclasses: :class:`~pihyst.rig._ports.RigError`, minimalmodbus's
+``ModbusException`` (no answer, bad CRC, exception reply) and pyserial's
+``SerialException``. The controller counts them as communication errors.
+"""
+
+import math
+import re
+
+import minimalmodbus
+
+from pihyst.rig._clock import WallClock
+from pihyst.rig._codecs import register_count
+from pihyst.rig._ports import RigError, close_port, open_port, port_errors, read_line
+
+_BYTEORDER = {"big": minimalmodbus.BYTEORDER_BIG,             # ABCD: high word first
+              "little": minimalmodbus.BYTEORDER_LITTLE_SWAP}  # CDAB: low word first
+
+
+class _Instrument(minimalmodbus.Instrument):
+    """minimalmodbus builds and checks the frames (CRC, function codes, exception replies,
+    number formats); this transport writes and reads them with an injectable clock, so the
+    3.5-character silence between frames also holds in virtual time."""
+
+    def __init__(self, port, address, clock):
+        super().__init__(port, address)
+        self._clock = clock
+        self._last_read = -math.inf
+
+    @port_errors("supply")
+    def _communicate(self, request, number_of_bytes_to_read):
+        # t_silence = 3.5 characters of 11 bits, at least 1.75 ms (Modbus over serial line)
+        silence = max(3.5 * 11 / self.serial.baudrate, 0.00175)
+        wait = self._last_read + silence - self._clock.now()
+        if wait > 0:
+            self._clock.sleep(wait)
+        self.serial.reset_input_buffer()
+        self.serial.write(request)
+        answer = self.serial.read(number_of_bytes_to_read)
+        self._last_read = self._clock.now()
+        if not answer:
+            raise minimalmodbus.NoResponseError("no answer from the supply within "
+                                                f"{self.serial.timeout:g} s")
+        return answer
+
+
+def _check_volts(volts):
+    volts = float(volts)
+    if not math.isfinite(volts):
+        raise ValueError(f"refusing to send a non-finite setpoint ({volts})")
+    if volts < 0:
+        raise ValueError(f"refusing to send a negative setpoint ({volts:g} V) to a "
+                         "unipolar supply")
+    return volts
+
+
+class ModbusRtuSupply:
+    """A supply on Modbus RTU with the register map of ``cfg`` (a
+    :class:`~pihyst.rig.SupplyConfig`): the setpoint in volts x ``scale`` as uint16,
+    uint32 or float32 (two registers in ``word_order``), optional output-enable register
+    (1 on, 0 off) and readback register (same format and scale)."""
+
+    def __init__(self, port, cfg, clock=WallClock):
+        self.cfg = cfg
+        self.port = port
+        self.instrument = _Instrument(port, cfg.address, clock)
+        self._byteorder = _BYTEORDER[cfg.word_order]
+
+    def _write(self, register, value):
+        c = self.cfg
+        if c.setpoint_format == "float32":
+            self.instrument.write_float(register, value, 2, self._byteorder)
+        elif c.setpoint_format == "uint32":
+            self.instrument.write_long(register, int(round(value)), False, self._byteorder)
+        else:
+            self.instrument.write_register(register, int(round(value)), 0, 6)
+
+    def set_voltage(self, volts):
+        volts = _check_volts(volts)
+        counts = volts * self.cfg.scale
+        limit = {"uint16": 0xFFFF, "uint32": 0xFFFFFFFF}.get(self.cfg.setpoint_format)
+        if limit is not None and round(counts) > limit:
+            raise ValueError(f"{volts:g} V is {counts:g} register units: more than a "
+                             f"{self.cfg.setpoint_format} holds")
+        self._write(self.cfg.setpoint_register, counts)
+
+    @property
+    def has_readback(self):
+        return self.cfg.readback_register is not None
+
+    def read_voltage(self):
+        """The supply's readback in volts, None if no readback register is configured."""
+        c = self.cfg
+        if c.readback_register is None:
+            return None
+        if c.setpoint_format == "float32":
+            counts = self.instrument.read_float(c.readback_register, 3, 2, self._byteorder)
+        elif c.setpoint_format == "uint32":
+            counts = self.instrument.read_long(c.readback_register, 3, False, self._byteorder)
+        else:
+            counts = self.instrument.read_register(c.readback_register, 0, 3)
+        return counts / c.scale
+
+    def _output(self, on):
+        if self.cfg.output_register is not None:
+            self.instrument.write_register(self.cfg.output_register, int(on), 0, 6)
+
+    def output_on(self):
+        self._output(True)
+
+    def output_off(self):
+        self._output(False)
+
+    def close(self):
+        close_port(self.port)
+
+    def describe(self):
+        c = self.cfg
+        return (f"Modbus RTU supply at {c.port} (slave {c.address}, setpoint register "
+                f"{c.setpoint_register} as {c.setpoint_format}, {register_count(c.setpoint_format)}"
+                f" register(s), word order {c.word_order}, {c.scale:g} units per volt)")
+
+
+class AsciiSupply:
+    """A supply with an ASCII line protocol: ``set_command`` ('VOLT {volts:.2f}'),
+    ``query_command`` ('MEAS:VOLT?'), ``output_on_command``/``output_off_command``, each
+    followed by ``terminator``. With ``echo`` the device repeats each command; with a
+    ``prompt`` (e.g. '*') it acknowledges a set command (and may put it before a query's
+    reply). The number in a query's reply line is the first match of
+    ``reply_pattern``."""
+
+    def __init__(self, port, cfg, clock=WallClock):
+        self.cfg = cfg
+        self.port = port
+        self._term = cfg.terminator.encode("ascii")
+        self._prompt = cfg.prompt.encode("ascii")
+        self._number = re.compile(cfg.reply_pattern)
+
+    @port_errors("supply")
+    def _command(self, text, query=False):
+        """Send one command; returns the reply line of a query (prompt and blanks
+        stripped). A set command with a prompt is acknowledged by the prompt alone:
+        anything before it is an error message."""
+        c, port = self.cfg, self.port
+        port.reset_input_buffer()
+        sent = text.encode("ascii") + self._term
+        port.write(sent)
+        if c.echo:
+            echo = read_line(port, self._term, "supply")
+            if echo != sent:
+                raise RigError(f"supply: expected the echo {sent!r}, got {echo!r}")
+        reply = b""
+        if query:
+            reply = read_line(port, self._term, "supply")[:-len(self._term)]
+        elif self._prompt:
+            reply = read_line(port, self._prompt, "supply")[:-len(self._prompt)]
+        reply = reply.decode("ascii", "replace").strip()
+        if self._prompt:
+            reply = reply.lstrip(c.prompt).strip()
+        if reply and (not query or "ERR" in reply.upper()):
+            raise RigError(f"supply: {text!r} answered {reply!r}")
+        return reply
+
+    def set_voltage(self, volts):
+        volts = _check_volts(volts)
+        self._command(self.cfg.set_command.format(volts=volts))
+
+    @property
+    def has_readback(self):
+        return self.cfg.query_command is not None
+
+    def read_voltage(self):
+        if self.cfg.query_command is None:
+            return None
+        reply = self._command(self.cfg.query_command, query=True)
+        m = self._number.search(reply)
+        if not m:
+            raise RigError(f"supply: no number in the reply {reply!r} to "
+                           f"{self.cfg.query_command!r}")
+        return float(m.group(0))
+
+    def output_on(self):
+        if self.cfg.output_on_command:
+            self._command(self.cfg.output_on_command)
+
+    def output_off(self):
+        if self.cfg.output_off_command:
+            self._command(self.cfg.output_off_command)
+
+    def close(self):
+        close_port(self.port)
+
+    def describe(self):
+        return f"ASCII supply at {self.cfg.port} ({self.cfg.set_command!r})"
+
+
+def open_supply(cfg, clock=WallClock, port=None):
+    """The driver for ``cfg``; opens ``cfg.port`` unless a pyserial-like ``port`` is given."""
+    if port is None:
+        port = open_port(cfg.port, cfg.baudrate, cfg.timeout_s, "supply", cfg.parity,
+                         cfg.stopbits)
+    cls = ModbusRtuSupply if cfg.protocol == "modbus-rtu" else AsciiSupply
+    return cls(port, cfg, clock)

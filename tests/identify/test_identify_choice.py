@@ -1,0 +1,242 @@
+"""Judging families on each kind of held-back data, what the data cannot determine, the
+input-output delay, compensator latency, and the rule that picks the returned family."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pihyst import ClassicalPI, FitError, fit
+from pihyst.identify._assess import ValidationRecord, interior_reversals
+from pihyst.identify._choice import TOLERANCE, Candidate, choose
+from pihyst.identify._latency import Latency, measure_latency
+
+
+def ramps(levels, n=40):
+    levels = np.asarray(levels, dtype=float)
+    return np.concatenate([np.linspace(a, b, n, endpoint=False) for a, b in
+                           zip(levels[:-1], levels[1:])] + [levels[-1:]])
+
+
+def at_rest(model):
+    lo, hi = model.input_range
+    return model.replace(initial_state=model.simulate(np.array([lo, hi, lo])).final_state)
+
+
+def major_loops(n_cycles=6):
+    return ramps([0, 150] * n_cycles + [0])
+
+
+def with_minor_loops(seed=0, n_cycles=5):
+    rng = np.random.default_rng(seed)
+    levels = [0.0]
+    for _ in range(n_cycles):
+        inner = np.sort(rng.uniform(10, 140, 4))
+        levels += [150.0, 0.0, inner[3], inner[0], inner[2], 0.0]
+    return ramps(levels)
+
+
+TRUE = at_rest(ClassicalPI([0, 20, 45], [0.3, 0.2, 0.1], offset=1.0))
+
+
+# ---------------------------------------------------------------- the choice rule
+def _cand(name, n_ops, rms, worst=1e-7, fixed=True):
+    fam = SimpleNamespace(name=name, minor_loops_fixed=fixed)
+    fitted = SimpleNamespace(name=name, family=fam, n_operators=n_ops, n_params=n_ops + 1)
+    return Candidate(fitted, {}, rms, Latency(typical=worst / 2, worst=worst))
+
+
+def _choose(cands, known=True, **bounds):
+    return choose(cands, minor_loops_known=known, unknown_reason="only major loops",
+                  judged_on_held_back=True, n_fitted=1000, **bounds)
+
+
+def test_smallest_then_fastest_within_tolerance():
+    near = 0.2 * (1 + 0.5 * TOLERANCE), 0.2 * (1 + 0.9 * TOLERANCE)
+    cands = [_cand("a", 9, 0.200), _cand("b", 4, near[0], worst=3e-7),
+             _cand("c", 4, near[1], worst=1e-7), _cand("d", 2, 0.300)]
+    chosen, criterion = _choose(cands)
+    assert chosen.name == "c" and f"{100 * TOLERANCE:g} %" in criterion
+    # a tighter field: only the most accurate is within tolerance
+    chosen, _ = _choose([_cand("a", 9, 0.200), _cand("b", 4, 0.2 * (1 + 1.1 * TOLERANCE))])
+    assert chosen.name == "a"
+
+
+def test_bounds_exclude_and_say_why():
+    cands = [_cand("big", 130, 0.15, worst=2e-5), _cand("small", 5, 0.30, worst=2e-7)]
+    chosen, criterion = _choose(cands, max_operators=10)
+    assert chosen.name == "small" and "max_operators = 10" in criterion
+    assert "130 operators" in cands[0].excluded
+    cands = [_cand("big", 130, 0.15, worst=2e-5), _cand("small", 5, 0.30, worst=2e-7)]
+    chosen, _ = _choose(cands, max_latency=1e-6)
+    assert chosen.name == "small" and "latency" in cands[0].excluded
+    with pytest.raises(FitError, match="no fitted family meets the bounds"):
+        _choose([_cand("big", 130, 0.15)], max_operators=3)
+
+
+def test_unknown_minor_loops_prefer_structures_that_fix_them():
+    cands = [_cand("kp", 130, 0.10, fixed=False), _cand("classical", 5, 0.30)]
+    chosen, _ = _choose(cands, known=False)
+    assert chosen.name == "classical" and "only major loops" in cands[0].excluded
+    chosen, _ = _choose([_cand("kp", 130, 0.10, fixed=False)], known=False)
+    assert chosen.name == "kp"           # nothing else was fitted
+    chosen, _ = _choose([_cand("kp", 130, 0.10, fixed=False), _cand("c", 5, 0.30)])
+    assert chosen.name == "kp"           # the data determine the minor loops
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(1, 200), st.floats(0.01, 1.0), st.floats(1e-8, 1e-4),
+                          st.booleans()), min_size=1, max_size=6),
+       st.booleans(), st.one_of(st.none(), st.integers(1, 200)))
+def test_choice_property(specs, known, max_ops):
+    cands = [_cand(f"f{i}", n, r, w, fixed) for i, (n, r, w, fixed) in enumerate(specs)]
+    try:
+        chosen, _ = _choose(cands, known=known, max_operators=max_ops)
+    except FitError:
+        assert all(c.excluded for c in cands)
+        return
+    eligible = [c for c in cands if c.excluded is None]
+    assert chosen in eligible
+    best = min(c.judged_rms for c in eligible)
+    assert chosen.judged_rms <= best * (1 + TOLERANCE)
+    for c in eligible:
+        if c.judged_rms <= best * (1 + TOLERANCE):
+            assert (c.fitted.n_operators, c.worst_latency) >= (chosen.fitted.n_operators,
+                                                               chosen.worst_latency)
+    if max_ops is not None:
+        assert chosen.fitted.n_operators <= max_ops
+
+
+# ---------------------------------------------------------------- kinds of held-back data
+def test_interior_reversals_count_minor_loops_only():
+    assert interior_reversals(major_loops(), 150.0) == 0
+    assert interior_reversals(ramps([0, 150, 0, 100, 40, 150, 0]), 150.0) == 2
+
+
+def test_report_gives_errors_per_kind_latency_and_what_is_undetermined():
+    u = major_loops()
+    y = TRUE.predict(u) + np.random.default_rng(0).normal(0, 0.01, u.size)
+    res = fit(u, y)
+    rep = res.report.to_dict()
+    assert any("minor loops" in t and "never reverses inside" in t
+               for t in rep["undetermined"])
+    kp = res.report.family("kp")
+    assert kp["excluded"] and not kp["chosen"]
+    for f in rep["families"]:
+        assert f["latency"]["typical_us"] > 0 and f["latency"]["worst_us"] > 0
+        assert "held-back major cycles" in f["held_back_by_kind"]
+        assert f["judged_rms"] == f["errors"]["held_back"]["rms"]
+    text = str(res.report)
+    assert "latency us" in text and "what the data could not determine" in text
+    assert "x kp: not chosen" in text
+    meta = res.model.metadata["fit"]
+    assert meta["latency"]["worst_us"] > 0 and meta["undetermined"] == rep["undetermined"]
+
+
+def test_minor_loops_in_both_parts_are_judged_separately():
+    u = with_minor_loops()
+    res = fit(u, TRUE.predict(u), family="classical")
+    kinds = res.report.family("classical")["held_back_by_kind"]
+    assert set(kinds) == {"held-back major cycles", "held-back minor cycles"}
+    assert not any("minor loops" in t for t in res.report.to_dict()["undetermined"])
+
+
+def test_validation_record_is_judged_with_its_mean_removed():
+    u = with_minor_loops(seed=1)
+    res = fit(u, TRUE.predict(u), family="classical", thresholds=[0, 20, 45])
+    u2 = ramps([60, 150, 0, 120, 30, 140, 10, 90, 50, 150, 0])
+    y2 = TRUE.predict(u2) + 5.0
+    res2 = fit(u, TRUE.predict(u), family="classical", thresholds=[0, 20, 45],
+               validate=(u2, y2))
+    val = res2.report.family("classical")["held_back_by_kind"]["validation record"]
+    assert val["rms"] < 1e-8
+    d = res2.report.to_dict()["data"]["validation"]
+    assert d["judged_from"] > 0 and d["interior_reversals"] >= 2
+    assert res2.report.to_dict()["final"]["errors"]["validation"]["rms"] < 1e-8
+    np.testing.assert_allclose(res2.model.weights, res.model.weights)
+
+
+def test_validation_record_errors():
+    u = with_minor_loops(seed=2)
+    y = TRUE.predict(u)
+    with pytest.raises(FitError, match="validate: input sample 3 = 200 is outside"):
+        fit(u, y, family="classical", validate=(np.r_[0, 50, 100, 200, 0.0], np.zeros(5)))
+    bad = np.zeros(50)
+    bad[7] = np.nan
+    with pytest.raises(FitError, match="validate: output sample 7") as err:
+        fit(u, y, family="classical", validate=(np.linspace(0, 150, 50), bad))
+    assert err.value.index == 7 and err.value.column == "output"
+    with pytest.raises(FitError, match="pair"):
+        fit(u, y, validate=u)
+    with pytest.raises(FitError, match="equal"):
+        fit(u, y, validate=(u, y[:-1]))
+    with pytest.raises(FitError, match="hardly moves"):
+        ValidationRecord.build((np.full(50, 3.0), np.zeros(50)), 0.0, 150.0, 0)
+
+
+# ---------------------------------------------------------------- delay
+def test_delay_is_found_and_removed():
+    u = with_minor_loops(seed=3)
+    d = 3
+    y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]   # y[k + d] = H[u](k)
+    plain = fit(u, y, family="classical", thresholds=[0, 20, 45])
+    assert any("lagging by 3 samples" in t for t in plain.report.to_dict()["undetermined"])
+    assert plain.report.family("classical")["judged_rms"] > 0.1
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45], delay="auto")
+    assert res.report.to_dict()["data"]["delay"]["samples"] == d
+    np.testing.assert_allclose(res.model.weights, TRUE.weights, atol=1e-9)
+    np.testing.assert_allclose(res.model.predict(u)[:-d], y[d:], atol=1e-9)
+    given = fit(u, y, family="classical", thresholds=[0, 20, 45], delay=3)
+    np.testing.assert_allclose(given.model.weights, TRUE.weights, atol=1e-9)
+    assert "y[k + 3]" in str(given.report)
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"delay": -1}, "delay must be"), ({"delay": 1.5}, "delay must be"),
+    ({"max_operators": 0}, "max_operators"), ({"max_latency": -1.0}, "max_latency"),
+    ({"delay": "auto", "thresholds": [0, 20, 45], "initial_state": [0.0, 0.0, 0.0]},
+     "no delay could be judged"),
+])
+def test_bad_options(kw, match):
+    u = with_minor_loops(seed=4)
+    with pytest.raises(FitError, match=match):
+        fit(u, TRUE.predict(u), family="classical", **kw)
+
+
+def test_max_operators_bounds_the_default_choice():
+    u = with_minor_loops(seed=5)
+    y = TRUE.predict(u) + 0.02 * np.sin(u / 7)
+    res = fit(u, y, max_operators=3)
+    assert res.model.n_operators <= 3
+    assert "max_operators = 3" in res.report.to_dict()["criterion"]
+
+
+def test_latency_is_measured_on_both_trajectories():
+    lat = measure_latency(TRUE)
+    assert 0 < lat.typical < 1e-2 and 0 < lat.worst < 1e-2
+    assert set(lat.to_dict()) == {"typical_us", "worst_us", "measured"}
+
+
+def test_long_record_paths_subsample_and_still_find_the_delay(monkeypatch):
+    # the long-record paths (delay probe window and subsampling, a coarse-then-fine scan,
+    # kernels on a subsampled record) exercised on a short record by shrinking their limits
+    from pihyst.identify import _delay, _family_fit
+    monkeypatch.setattr(_delay, "WINDOW", 1500)
+    monkeypatch.setattr(_delay, "PROBE_SAMPLES", 800)
+    monkeypatch.setattr(_delay, "FULL_SCAN", 3)
+    monkeypatch.setattr(_family_fit, "KERNEL_SAMPLES", 1000)
+    u = ramps([0, 150, 0, 110, 40, 150, 0, 90, 20, 150, 0, 130, 60, 150, 0] * 2, n=120)
+    d = 3
+    y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]
+    res = fit(u, y, family=["classical", "kp"], delay="auto")
+    rep = res.report.to_dict()
+    assert rep["data"]["delay"]["samples"] == d
+    probed = [t["samples"] for t in rep["data"]["delay"]["tried"]]
+    assert probed != list(range(max(probed) + 1))          # coarse, then fine
+    kp = res.report.family("kp")
+    assert any("every input extremum" in n for n in kp["notes"])
+    assert rep["data"]["n_samples"] == u.size - d          # errors on the full record
+    e = res.models["kp"].predict(u)[:-d] - y[d:]
+    assert np.sqrt(np.mean(e ** 2)) < 0.01 * np.ptp(y)

@@ -1,0 +1,108 @@
+"""pihyst rig: one-line errors with exit status 2 and no output file; the newcomer's
+three commands."""
+
+import pytest
+from rig_helpers import config_text
+
+from pihyst.cli import main
+
+
+@pytest.fixture
+def cfg(tmp_path):
+    path = tmp_path / "rig.toml"
+    path.write_text(config_text())
+    return path
+
+
+def error_line(capsys):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    return err[0]
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("[rig]\nrate_hz = \n", "rig.toml: Invalid value (at line 2, column 11)"),
+    ("[rig]\nrate = 20.0\n", "rig.toml:2: [rig] rate: unknown key"),
+    ("[supply]\nprotocol = 'can-bus'\n", "rig.toml:2: [supply] protocol: 'can-bus' is not one"),
+    ("[supply]\nscale = -1\n", "rig.toml:2: [supply] scale: must be a positive number"),
+    ("[rig]\nu_max = 'high'\n", "rig.toml:2: [rig] u_max: must be a number"),
+    ("[sensor]\nsign = 2\n", "rig.toml:2: [sensor] sign: must be 1 or -1"),
+    ("[supply]\nset_command = 'VOLT {v}'\n", "rig.toml:2: [supply] set_command: bad template"),
+    ("[pump]\n", "rig.toml: [pump]: unknown section"),
+])
+def test_bad_configuration(tmp_path, capsys, text, expected):
+    path = tmp_path / "rig.toml"
+    path.write_text(text)
+    out = tmp_path / "loop.csv"
+    assert main(["rig", "record", "--config", str(path), "-o", str(out)]) == 2
+    line = error_line(capsys)
+    assert line.startswith("pihyst: error: ") and expected in line, line
+    assert not out.exists()
+
+
+def test_bad_options_and_ports(tmp_path, capsys, cfg):
+    out = tmp_path / "run.csv"
+    assert main(["rig", "record", "--config", str(cfg), "--max", "500", "-o", str(out)]) == 2
+    assert "--min/--max" in error_line(capsys)
+    assert main(["rig", "record", "--config", str(cfg), "--fault", "pump:stuck",
+                 "-o", str(out)]) == 2
+    assert "--fault pump:stuck" in error_line(capsys)
+    real = tmp_path / "real.toml"
+    real.write_text(config_text(supply={"port": str(tmp_path / "ttyNONE")}))
+    assert main(["rig", "check", "--config", str(real)]) == 2
+    assert "supply: cannot open port" in error_line(capsys)
+    desired = tmp_path / "desired.csv"
+    desired.write_text("time_s,displacement_um\n0,0\n1,oops\n")
+    model = tmp_path / "m.json"
+    model.write_text('{"family": "classical", "thresholds": [0, 10], "weights": [0.1, 0.2]}')
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "-o", str(out)]) == 2
+    assert "desired.csv:3:2" in error_line(capsys)
+    assert not out.exists()
+
+
+def test_record_fit_track(tmp_path, capsys, cfg):
+    loop, model, run = (tmp_path / n for n in ("loop.csv", "model.json", "run.csv"))
+    assert main(["rig", "record", "--config", str(cfg), "--period", "30",
+                 "-o", str(loop)]) == 0
+    assert "stopped: end of the program; 0 V, output off" in capsys.readouterr().out
+    assert main(["fit", str(loop), "--model", "multislope", "--thresholds", "0,20,30,40",
+                 "-o", str(model)]) == 0
+    desired = tmp_path / "desired.csv"
+    desired.write_text("time_s,displacement_um\n0,0\n15,35\n30,0\n")
+    capsys.readouterr()
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "--feedback", "0.3,2", "-o", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert "tracking error with feedback" in out and "% of the range 35 um" in out
+    assert main(["rig", "check", "--config", str(cfg)]) == 0
+    assert "0 V sent, output off, readback 0.000 V" in capsys.readouterr().out
+
+
+def test_a_fault_stops_the_run_with_status_1(tmp_path, capsys, cfg):
+    out = tmp_path / "loop.csv"
+    with pytest.raises(SystemExit) as info:
+        main(["rig", "record", "--config", str(cfg), "--period", "20",
+              "--fault", "sensor:over-range:3", "-o", str(out)])
+    assert info.value.code == 1
+    assert "the run stopped early: 5 consecutive invalid sensor readings" in \
+        error_line(capsys)
+    assert "# stopped: 5 consecutive invalid sensor readings" in out.read_text()
+
+
+def test_record_a_csv_of_voltages(tmp_path, capsys, cfg):
+    volts = tmp_path / "volts.csv"
+    volts.write_text("# a ramp\ntime_s,voltage_V\n0,0\n2,40\n4,0\n")
+    out = tmp_path / "loop.csv"
+    assert main(["rig", "record", "--config", str(cfg), "--voltages", str(volts),
+                 "-o", str(out)]) == 0
+    from pihyst.rig import read_run_log
+    columns, _ = read_run_log(out)
+    run = columns["phase"] == "run"
+    assert run.sum() == 81                      # 4 s at 20 Hz, both ends included
+    assert columns["voltage_V"][run].max() == pytest.approx(40.0)
+    volts.write_text("time_s,voltage_V\n0,0\n1,400\n")
+    assert main(["rig", "record", "--config", str(cfg), "--voltages", str(volts),
+                 "-o", str(tmp_path / "no.csv")]) == 2
+    assert "outside the rig's limits" in error_line(capsys)
+    assert not (tmp_path / "no.csv").exists()
