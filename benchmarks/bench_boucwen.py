@@ -94,9 +94,10 @@ def main(n_valid=5):
             measured = plant(9).run(comp.voltage, t_d)
             track = 100 * mean_abs_error(y_d, measured) / span
             print(f"{name:<26} {label:<24} {np.mean(valid):9.3f} {track:8.3f} {elapsed:6.1f}")
-        s = bw.report.search
-        print(f"{'':<26} bouc-wen shape: beta {s['beta']:.3g}, gamma {s['gamma']:.3g}, "
-              f"n {s['n']:.3g}; held-back RMS {bw.report.errors['held_back']['rms']:.4f} um")
+        m = bw.model
+        held = bw.report.family("bouc-wen")["errors"]["held_back"]["rms"]
+        print(f"{'':<26} bouc-wen shape: beta {m.beta:.3g}, gamma {m.gamma:.3g}, "
+              f"n {m.n:.3g}; held-back RMS {held:.4f} um")
 
 
 if __name__ == "__main__":
