@@ -27,9 +27,10 @@ from pihyst.exceptions import (
 )
 from pihyst.fleet import FleetResult, RecordOutcome, fit_many
 from pihyst.identify import FitReport, FitResult, fit
-from pihyst.inverse import CompensationResult, Compensator, compensate
+from pihyst.inverse import BoucWenCompensator, CompensationResult, Compensator, compensate
 from pihyst.io import load_model, save_model
 from pihyst.model import (
+    BoucWenModel,
     ClassicalPI,
     MultislopePI,
     PiecewiseLinearPI,
@@ -39,6 +40,8 @@ from pihyst.model import (
 )
 
 __all__ = [
+    "BoucWenCompensator",
+    "BoucWenModel",
     "CSVError",
     "ClassicalPI",
     "CompensationResult",

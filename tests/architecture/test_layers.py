@@ -7,7 +7,7 @@ import hides a cycle from Python, not from this test). Layers, lowest first
 0. ``_version``, ``_atomic``, ``_core``, ``_reference``, ``exceptions``, ``paper``, ``metrics``
 1. ``model``
 2. ``io``, ``inverse``
-3. ``identify``, ``sim``, ``control``
+3. ``identify``, ``sim``, ``control``, ``dynamics``
 4. ``rig``, ``fleet``
 5. ``study`` (the paper's experiment runs through everything below, the rig included)
 6. ``cli``
@@ -28,7 +28,7 @@ LAYERS = [
     {"_version", "_atomic", "_core", "_reference", "exceptions", "paper", "metrics"},
     {"model"},
     {"io", "inverse"},
-    {"identify", "sim", "control"},
+    {"identify", "sim", "control", "dynamics"},
     {"rig", "fleet"},
     {"study"},
     {"cli"},

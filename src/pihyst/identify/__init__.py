@@ -7,7 +7,8 @@ chooses thresholds, shape and family on held-back cycles, and returns a
 docs/theory/identification.md.
 
 A *fitting family* is a recipe for one model: :class:`Classical`, :class:`Multislope`,
-:class:`MultislopeIdentified`, :class:`ModifiedPI`, :class:`KrasnoselskiiPokrovskii`
+:class:`MultislopeIdentified`, :class:`ModifiedPI`, :class:`KrasnoselskiiPokrovskii`,
+and :class:`BoucWen` (not a PI model: remanence and drifting minor loops)
 (``fit(u, y, family=ModifiedPI(segments=8))``; a name such as ``"modified-pi"`` stands
 for the family with its default options). It is not the model's operator kind
 (``model.family``: classical, multislope or pwl); ``model.metadata["fit"]["family"]``
@@ -26,6 +27,7 @@ returned), ``_fit`` (all of it), ``_report`` (the result).
 from pihyst.exceptions import FitError, IllConditionedWarning, InfeasibleConstraintsError
 from pihyst.identify._families import (
     FAMILY_NAMES,
+    BoucWen,
     Classical,
     Family,
     KrasnoselskiiPokrovskii,
@@ -38,7 +40,7 @@ from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._fit import fit
 from pihyst.identify._report import FitReport, FitResult
 
-__all__ = ["FAMILY_NAMES", "INITIAL_STATES", "Classical", "Family", "FamilyFit", "FitError",
-           "FitReport", "FitResult", "IllConditionedWarning", "InfeasibleConstraintsError",
-           "KrasnoselskiiPokrovskii", "ModifiedPI", "Multislope", "MultislopeIdentified",
-           "cycled_state", "fit"]
+__all__ = ["FAMILY_NAMES", "INITIAL_STATES", "BoucWen", "Classical", "Family", "FamilyFit",
+           "FitError", "FitReport", "FitResult", "IllConditionedWarning",
+           "InfeasibleConstraintsError", "KrasnoselskiiPokrovskii", "ModifiedPI", "Multislope",
+           "MultislopeIdentified", "cycled_state", "fit"]

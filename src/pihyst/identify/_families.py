@@ -409,9 +409,42 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
         return {"grid": self.grid}
 
 
+class BoucWen(Family):
+    """Not a PI family: a :class:`pihyst.model.BoucWenModel` (remanence, minor loops that
+    drift), its linear part by bounded least squares and its shape (beta, gamma, n) by an
+    outer search (:mod:`pihyst.identify._boucwen`, docs/theory/bouc-wen.md). ``n``: a
+    fixed exponent, or None to search it."""
+
+    name = "bouc-wen"
+    title = "Bouc-Wen"
+    minor_loops_fixed = False
+
+    def __init__(self, n=None):
+        self.n = None if n is None else float(n)
+
+    def fit(self, fitter):
+        from pihyst.identify._boucwen import family_fit
+        return family_fit(self, fitter)
+
+    def template(self, thresholds, S):
+        raise FitError("bouc-wen has no PI operators (it is fitted by its own search)")
+
+    def final_model(self, thresholds, weights, offset, state_v, lo, S):
+        raise FitError("bouc-wen has no PI operators (it is fitted by its own search)")
+
+    def options(self, S):
+        return {"n": self.n}
+
+    def _args(self):
+        return {} if self.n is None else {"n": self.n}
+
+
 FAMILIES = {cls.name: cls for cls in (Classical, Multislope, MultislopeIdentified,
-                                        ModifiedPI, KrasnoselskiiPokrovskii)}
-FAMILY_NAMES = tuple(FAMILIES)
+                                        ModifiedPI, KrasnoselskiiPokrovskii, BoucWen)}
+# the default comparison: the PI families. Bouc-Wen takes part when asked for
+# (family=[..., "bouc-wen"] or BoucWen()): its model is not a PI model, and the C export,
+# the firmware compensator and the rig's controller take PI models only
+FAMILY_NAMES = tuple(name for name in FAMILIES if name != BoucWen.name)
 
 
 def as_family(spec):
@@ -420,5 +453,5 @@ def as_family(spec):
         return spec
     if isinstance(spec, str) and spec in FAMILIES:
         return FAMILIES[spec]()
-    raise FitError(f"unknown model family {spec!r}; expected one of {', '.join(FAMILY_NAMES)} "
+    raise FitError(f"unknown model family {spec!r}; expected one of {', '.join(FAMILIES)} "
                    f"or a family object such as pihyst.identify.Classical()")

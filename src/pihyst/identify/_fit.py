@@ -72,7 +72,11 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         fitted to the data), ``"modified-pi"`` (:class:`~pihyst.identify.ModifiedPI`:
         classical + monotone input function of ``segments`` pieces), ``"kp"``
         (:class:`~pihyst.identify.KrasnoselskiiPokrovskii`: a ``grid`` of kernels). A
-        name stands for the family with its default options. Default: all of them,
+        name stands for the family with its default options. ``"bouc-wen"``
+        (:class:`~pihyst.identify.BoucWen`) is not a PI family: a
+        :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md), compared with the
+        others when listed (``family=[*pihyst.identify.FAMILY_NAMES, "bouc-wen"]``).
+        Default: all of the PI families (``FAMILY_NAMES``),
         judged on held-back data (and ``validate``); of those within 2 % of the lowest
         judged RMS, the fewest operators, then the lowest judged error, is returned.
         When the data do not determine the minor loops (no reversals inside the range),

@@ -6,6 +6,7 @@ input.
 """
 
 from pihyst.inverse._bank import CompensatorBank
+from pihyst.inverse._boucwen import BoucWenCompensator
 from pihyst.inverse._compensator import (
     FLAG_NAN,
     FLAG_SATURATED_HIGH,
@@ -17,6 +18,6 @@ from pihyst.inverse._compensator import (
 )
 from pihyst.model import classical_inverse, reachable_output_range
 
-__all__ = ["FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW", "FLAG_SLEW",
-           "CompensationResult", "Compensator", "CompensatorBank", "classical_inverse",
-           "compensate", "reachable_output_range"]
+__all__ = ["BoucWenCompensator", "FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW",
+           "FLAG_SLEW", "CompensationResult", "Compensator", "CompensatorBank",
+           "classical_inverse", "compensate", "reachable_output_range"]

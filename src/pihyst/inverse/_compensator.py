@@ -34,6 +34,10 @@ from pihyst.model._models import _finite_vector
 __all__ = ["CompensationResult", "Compensator", "compensate", "FLAG_SATURATED_LOW",
            "FLAG_SATURATED_HIGH", "FLAG_NAN", "FLAG_SLEW"]
 
+#: Compensators of the models that are not PI models (family -> class), registered by
+#: their modules (inverse/_boucwen.py); compensate() dispatches to them
+OTHER_COMPENSATORS = {}
+
 #: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
 FLAG_SATURATED_LOW = _core.FLAG_SATURATED_LOW    # out of reach below: voltage at u_min
 FLAG_SATURATED_HIGH = _core.FLAG_SATURATED_HIGH  # out of reach above: voltage at u_max
@@ -303,8 +307,9 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
 
     Parameters
     ----------
-    model : PIModel
-        A model with non-negative weights.
+    model : PIModel or BoucWenModel
+        A model with non-negative weights, or a monotone Bouc-Wen model
+        (:class:`pihyst.inverse.BoucWenCompensator`).
     y_desired : array_like
         Desired displacements, one per sample.
     u_min, u_max, slew_rate, initial_voltage, initial_state, creep_state
@@ -330,6 +335,13 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     >>> result.n_saturated, float(result.voltage[-1])   # 50 um is out of reach
     (1, 150.0)
     """
+    cls = OTHER_COMPENSATORS.get(getattr(model, "family", None))
+    if cls is not None:
+        if t is not None or creep_state is not None:
+            raise InvalidArgumentError(f"a {model.family} model has no creep: t and "
+                                       f"creep_state do not apply")
+        return cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                   initial_voltage=initial_voltage, initial_state=initial_state).run(y_desired)
     return Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
                        initial_voltage=initial_voltage, initial_state=initial_state,
                        creep_state=creep_state).run(y_desired, t=t)

@@ -7,6 +7,7 @@ imports nothing else of the package. Theory: docs/theory/operators.md.
 
 from pihyst.exceptions import InputRangeError, InvalidModelError
 from pihyst.model._bank import ModelBank
+from pihyst.model._boucwen import BoucWenModel, BoucWenStepper
 from pihyst.model._classical_inverse import classical_inverse, reachable_output_range
 from pihyst.model._creep import Creep
 from pihyst.model._models import (
@@ -21,6 +22,8 @@ from pihyst.model._models import (
 )
 
 __all__ = [
+    "BoucWenModel",
+    "BoucWenStepper",
     "DEFAULT_INPUT_RANGE",
     "SCHEMA_VERSION",
     "ClassicalPI",

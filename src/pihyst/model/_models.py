@@ -34,6 +34,9 @@ DEFAULT_INPUT_RANGE = (0.0, 150.0)
 DEFAULT_UNITS = MappingProxyType({"input": "V", "output": "um"})
 SCHEMA_VERSION = 1
 _SHORT_VECTOR = 6   # repr shows at most this many values of a vector
+#: Model classes that are not PI models (family -> class with from_dict), registered by
+#: their modules; PIModel.from_dict dispatches to them
+OTHER_FAMILIES = {}
 
 
 @dataclass(frozen=True)
@@ -376,10 +379,13 @@ class PIModel(ABC):
             raise InvalidModelError(f"{source}: a model must be a JSON object, got "
                                     f"{type(d).__name__}")
         family = d.get("family")
+        if cls is PIModel and isinstance(family, str) and family in OTHER_FAMILIES:
+            # not PI models: their own schema
+            return OTHER_FAMILIES[family].from_dict(d, source)
         if not isinstance(family, str) or family not in PIModel._registry:
+            known = sorted([*PIModel._registry, *OTHER_FAMILIES])
             raise InvalidModelError(f"{source}: key 'family' must be one of "
-                                    f"{', '.join(sorted(PIModel._registry))}; got "
-                                    f"{family!r:.40}")
+                                    f"{', '.join(known)}; got {family!r:.40}")
         target = PIModel._registry[family]
         if cls is not PIModel and target is not cls:
             raise InvalidModelError(f"{source}: family {family!r} is not {cls.family!r}")

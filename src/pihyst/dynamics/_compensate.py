@@ -1,0 +1,60 @@
+"""Compensation of a single-input single-output Hammerstein model: a stable inverse of
+the dynamics, then the exact inverse of the hysteresis (docs/theory/hammerstein.md).
+
+With y = G(q) h, G = q^-d B_s(q^-1) B_u(q^-1) / A(q^-1) (the zeros of B split into
+those inside the unit circle, B_s with B's leading coefficient, and the others, B_u
+monic of degree n_u), the zero-phase error tracking prefilter
+
+    h_d[t] = A(q^-1) B_u*(q^-1) / (B_s(q^-1) B_u(1)^2) r[t + d + n_u],
+
+with B_u*(q^-1) = q^-n_u B_u(q) (B_u's coefficients reversed), makes
+G h_d = B_u(q^-1) B_u(q) / B_u(1)^2 r: zero phase, unit static gain, exact where B has
+no zeros outside the unit circle. It looks d + n_u samples ahead, so it needs the
+trajectory in advance (offline, or with that much preview); the trajectory is held at
+its ends. The hysteresis output h_d is then inverted by :func:`pihyst.compensate`, whose
+voltage and slew limits hold for every output whatever h_d is.
+"""
+
+import numpy as np
+
+from pihyst.inverse import compensate
+
+ZERO_TOLERANCE = 1e-12   # leading coefficients of B below this (relative): pure delay
+
+
+def _lfilter():
+    from scipy.signal import lfilter
+    return lfilter
+
+
+def zpetc(a, b, r, settle=None):
+    """h_d of the module notes for the reference r (SISO: b a 1-D array)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float).ravel()
+    r = np.asarray(r, dtype=float)
+    big = np.flatnonzero(np.abs(b) > ZERO_TOLERANCE * np.abs(b).max())
+    d, c = int(big[0]), b[big[0]:big[-1] + 1]
+    zeros = np.roots(c) if c.size > 1 else np.zeros(0)
+    unstable = np.abs(zeros) >= 1.0
+    bs = c[0] * np.atleast_1d(np.real(np.poly(zeros[~unstable])))
+    bu = np.atleast_1d(np.real(np.poly(zeros[unstable])))
+    nu = bu.size - 1
+    lead = d + nu
+    # the trajectory held at its ends: before the start (rest) and past the end
+    pre = r.size if settle is None else int(settle)
+    ext = np.r_[np.full(pre, r[0]), r, np.full(lead, r[-1])]
+    h = _lfilter()(np.convolve(a, bu[::-1]), bs, ext) / bu.sum() ** 2
+    return h[pre + lead:pre + lead + r.size]
+
+
+def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None):
+    """Voltages that make a SISO :class:`HammersteinModel` follow ``desired``: the
+    ZPETC prefilter, then the hysteresis inverse from the model's zero operator state.
+    Returns (voltage, h_desired, result of :func:`pihyst.compensate`)."""
+    if model.n_inputs != 1 or model.n_outputs != 1:
+        raise ValueError("compensate_hammerstein needs a single-input single-output model")
+    H = model.hysteresis[0]
+    h_d = zpetc(model.a[0], model.b[0][0], desired)
+    res = compensate(H, h_d, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                     initial_state=np.zeros(H.n_operators))
+    return res.voltage, h_d, res

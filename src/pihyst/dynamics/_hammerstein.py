@@ -1,0 +1,216 @@
+"""Hammerstein models: pihyst's static hysteresis followed by discrete linear dynamics
+(docs/theory/hammerstein.md).
+
+For inputs u_i (i = 1..m) and outputs y_j (j = 1..p),
+
+    h_i = H_i(u_i) = sum_k w_ik f_ik(u_i)        (a classical PI model per input)
+    A_j(q) y_j[t] = sum_i B_ji(q) h_i[t]          (one common denominator per output)
+
+Identification (:func:`fit_hammerstein`), for fixed play thresholds r_ik:
+
+1. start from the linear model: w_i = (1, 0, ..., 0), the threshold-0 operator being
+   u_i itself, and A_j, B_ji fitted on h_i = u_i by least squares (ARX, then
+   Steiglitz-McBride iterations towards the output-error fit, :mod:`._linear`);
+2. alternate: with A and B fixed, the simulated output y_j = sum_ik w_ik (B_ji / A_j)
+   f_ik is linear in w, fitted by bounded least squares (w >= 0, so each H_i is
+   monotone and has pihyst's exact inverse; sum_k w_ik = 1, the gain sits in B); with w
+   fixed, A_j and B_ji are refitted on the new hysteresis outputs h_i. A step is kept
+   only while the simulation error on the records decreases, so the Hammerstein model
+   never fits the records worse than the linear model it starts from.
+
+The linear-only reference (:func:`fit_linear`) is the same linear fit on u itself.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pihyst.dynamics._linear import fit_oe, fit_oe_periodic, response, simulate
+from pihyst.model import ClassicalPI
+
+
+def _lfilter():
+    from scipy.signal import lfilter
+    return lfilter
+
+
+def _operators(model, u):
+    # operator outputs from the zero state (a record's first period settles them)
+    return model.operators(u, initial_state=np.zeros(model.n_operators))
+
+
+@dataclass(frozen=True)
+class HammersteinModel:
+    """Static hysteresis per input (``hysteresis``, ClassicalPI models) followed by
+    ``a[j]`` / ``b[j][i]`` linear dynamics per output (q^-1 polynomials)."""
+
+    hysteresis: tuple
+    a: tuple
+    b: tuple
+
+    @property
+    def n_inputs(self):
+        return len(self.hysteresis)
+
+    @property
+    def n_outputs(self):
+        return len(self.a)
+
+    def hysteresis_output(self, u):
+        """h_i = H_i(u_i) from the zero operator state; u of shape (N, m)."""
+        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        return np.column_stack([H.predict(u[:, i], initial_state=np.zeros(H.n_operators))
+                                for i, H in enumerate(self.hysteresis)])
+
+    def predict(self, u):
+        """Outputs (N, p) for inputs u (N, m), simulated from rest."""
+        h = self.hysteresis_output(u)
+        return np.column_stack([simulate(self.a[j], np.asarray(self.b[j]), h)
+                                for j in range(self.n_outputs)])
+
+    def to_dict(self):
+        return {"family": "hammerstein",
+                "hysteresis": [H.to_dict() for H in self.hysteresis],
+                "a": [np.asarray(a).tolist() for a in self.a],
+                "b": [np.asarray(b).tolist() for b in self.b]}
+
+    @classmethod
+    def from_dict(cls, d):
+        from pihyst.model import PIModel
+        return cls(hysteresis=tuple(PIModel.from_dict(h) for h in d["hysteresis"]),
+                   a=tuple(np.asarray(a, dtype=float) for a in d["a"]),
+                   b=tuple(np.asarray(b, dtype=float) for b in d["b"]))
+
+
+def _as_records(records):
+    out = []
+    for u, y in records:
+        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        y = np.atleast_2d(np.asarray(y, dtype=float).T).T
+        if u.shape[0] != y.shape[0]:
+            raise ValueError("each record needs as many input as output samples")
+        out.append((u, y))
+    return out
+
+
+def default_thresholds(u, n_operators=4):
+    """Thresholds 0, ..., about the input's half span: equally spaced on [0, S/2)."""
+    span = float(np.ptp(u))
+    return np.arange(n_operators) * (span / 2) / n_operators
+
+
+def fit_linear(records, na, nb, iterations=5, period=None):
+    """Linear-only MIMO model of the same structure: A_j y_j = sum_i B_ji u_i.
+
+    ``period``: the records are periodic with this many samples per period and in
+    steady state over their last period; the fit is then the frequency-domain
+    output-error fit of that period (:func:`pihyst.dynamics._linear.fit_oe_periodic`)."""
+    recs = _as_records(records)
+    a, b = [], []
+    for j in range(recs[0][1].shape[1]):
+        if period:
+            spectra = [(np.fft.rfft(u[-period:], axis=0), np.fft.rfft(y[-period:, j]))
+                       for u, y in recs]
+            aj, bj = fit_oe_periodic(spectra, na, nb, period, iterations=2 * iterations)
+        else:
+            aj, bj = fit_oe([(u, y[:, j]) for u, y in recs], na, nb, iterations)
+        a.append(aj)
+        b.append(bj)
+    return tuple(a), tuple(b)
+
+
+def predict_linear(a, b, u):
+    u = np.atleast_2d(np.asarray(u, dtype=float).T).T
+    return np.column_stack([simulate(a[j], b[j], u) for j in range(len(a))])
+
+
+def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_range=None,
+                    iterations=5, refinements=10, period=None):
+    """A :class:`HammersteinModel` fitted to ``records`` (list of (u, y), u (N, m), y (N,
+    p)); module notes. ``thresholds``: one array per input (default
+    :func:`default_thresholds` of all records' input). ``input_range``: per input
+    (default: 1.5 times the data's span about its centre). ``period``: as for
+    :func:`fit_linear` (the fit then runs on the last period's spectrum; the operators
+    are run over the whole record, so the first period settles them)."""
+    from scipy.optimize import lsq_linear
+
+    recs = _as_records(records)
+    m, p = recs[0][0].shape[1], recs[0][1].shape[1]
+    allu = np.vstack([u for u, _ in recs])
+    if thresholds is None:
+        thresholds = [default_thresholds(allu[:, i], n_operators) for i in range(m)]
+    if input_range is None:
+        c, s = (allu.max(0) + allu.min(0)) / 2, np.ptp(allu, axis=0)
+        input_range = [(c[i] - 0.75 * s[i], c[i] + 0.75 * s[i]) for i in range(m)]
+    bases = [ClassicalPI(thresholds[i], np.ones(len(thresholds[i])),
+                         input_range=input_range[i]) for i in range(m)]
+    K = [b.n_operators for b in bases]
+    phis = [[_operators(bases[i], u[:, i]) for i in range(m)] for u, _ in recs]
+
+    # 1. start from the linear model: w_i = (1, 0, ..., 0) (threshold 0: h_i = u_i)
+    w = [np.r_[1.0, np.zeros(K[i] - 1)] for i in range(m)]
+    offs = np.cumsum([0] + K)
+    skip = max(na, nb)
+
+    if period:
+        # spectra of the last period: operator outputs (L x K per input) and outputs
+        spec_phi = [[np.fft.rfft(ph[i][-period:], axis=0) for i in range(m)] for ph in phis]
+        spec_y = [np.fft.rfft(y[-period:], axis=0) for _, y in recs]
+
+    def dynamics(w):
+        if period:
+            hs = [np.column_stack([sp[i] @ w[i] for i in range(m)]) for sp in spec_phi]
+            return [fit_oe_periodic([(h, Y[:, j]) for h, Y in zip(hs, spec_y)], na, nb,
+                                    period, iterations=2 * iterations) for j in range(p)]
+        hs = [np.column_stack([ph[i] @ w[i] for i in range(m)]) for ph in phis]
+        return [fit_oe([(h, y[:, j]) for h, (_, y) in zip(hs, recs)], na, nb, iterations)
+                for j in range(p)]
+
+    def filtered(dyn):
+        # y_j = sum_ik w_ik (B_ji / A_j) f_ik: the simulated output is linear in w
+        cols, target = [], []
+        if period:
+            resp = [response(a_j, b_j, period) for a_j, b_j in dyn]
+            for sp, Y in zip(spec_phi, spec_y):
+                for j in range(p):
+                    M = np.hstack([resp[j][:, i:i + 1] * sp[i] for i in range(m)])
+                    cols += [M.real, M.imag]
+                    target += [Y[:, j].real, Y[:, j].imag]
+            return np.vstack(cols), np.concatenate(target)
+        for ph, (_, y) in zip(phis, recs):
+            for j in range(p):
+                a_j, b_j = dyn[j]
+                cols.append(np.hstack([_lfilter()(b_j[i], a_j, ph[i], axis=0)
+                                       for i in range(m)])[skip:])
+                target.append(y[skip:, j])
+        return np.vstack(cols), np.concatenate(target)
+
+    def sim_rss(dyn, w):
+        X, t = filtered(dyn)
+        r = t - X @ np.concatenate(w)
+        return float(r @ r)
+
+    dyn = dynamics(w)
+    best = (sim_rss(dyn, w), dyn, w)
+    # 2. alternate: w by bounded least squares on the simulated output (w >= 0), then
+    # the dynamics on the new hysteresis output; a step is kept only if the simulation
+    # error on the records goes down
+    for _ in range(refinements):
+        X, t = filtered(best[1])
+        sol = lsq_linear(X, t, bounds=(0.0, np.inf), method="bvls").x
+        w_new = [sol[offs[i]:offs[i + 1]] for i in range(m)]
+        gains = [max(wi.sum(), 1e-300) for wi in w_new]
+        w_new = [wi / g for wi, g in zip(w_new, gains)]      # sum_k w_ik = 1
+        # the w step with the gains moved into B, then the dynamics refitted on it
+        moved = [(a_j, b_j * np.array(gains)[:, None]) for a_j, b_j in best[1]]
+        candidates = [(sim_rss(moved, w_new), moved, w_new)]
+        dyn_new = dynamics(w_new)
+        candidates.append((sim_rss(dyn_new, w_new), dyn_new, w_new))
+        step = min(candidates, key=lambda c: c[0])
+        if not step[0] < best[0] * (1 - 1e-6):
+            break
+        best = step
+    _, dyn, w = best
+    hyst = tuple(bases[i].replace(weights=w[i]) for i in range(m))
+    return HammersteinModel(hysteresis=hyst, a=tuple(d[0] for d in dyn),
+                            b=tuple(d[1] for d in dyn))

@@ -1,0 +1,340 @@
+"""Identification of the Bouc-Wen model (docs/theory/bouc-wen.md).
+
+For a fixed shape (beta, gamma, n) the Bouc-Wen variable z[t] is a known function of the
+input, and the output
+
+    y = offset + c_1 x + c_2 x^2 + a z
+
+is linear in (offset, c_1, c_2, a). Monotonicity on every reachable state,
+min(c_1, c_1 + 2 c_2) + min(a, 0) D >= 0 with D = 2 beta / (beta + gamma), becomes plain
+bounds in two cases, each a non-negative least-squares problem with a free offset:
+
+- a >= 0:  c_1 = q_0, c_1 + 2 c_2 = q_1, a = p,                  q_0, q_1, p >= 0;
+- a <= 0:  c_1 = q_0 + p D, c_1 + 2 c_2 = q_1 + p D, a = -p,      q_0, q_1, p >= 0.
+
+The offset is eliminated by centring (the exact minimizer over it), and each 3-variable
+problem is solved exactly on its 3 x 3 Gram matrix by trying every active set (the best
+feasible stationary point of a convex QP is its minimum). The shape is the outer search:
+a grid of shapes run all at once (NumPy over the shapes, one pass over the record,
+decimated but keeping every reversal), then a Nelder-Mead refinement of (log beta,
+atanh(gamma / beta), n) from the best grid point on the fitted samples. The record is
+cut into settle/fit/held-back cycles as for the PI families (:mod:`._cycles`); the
+held-back RMS is what the choice between families compares.
+"""
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pihyst.exceptions import FitError
+from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
+from pihyst.model._boucwen import MAX_EXPONENT, BoucWenModel, cycled_z, substep, trajectory
+
+#: The shape grid of the outer search (normalized input): beta, gamma / beta, n.
+GRID_BETA = tuple(np.geomspace(0.5, 60.0, 12).tolist())
+GRID_RATIO = (-0.8, -0.5, -0.25, 0.0, 0.25, 0.5, 0.8)
+GRID_N = (1.0, 1.5, 2.0, 3.0)
+SEARCH_SAMPLES = 2000   # the shape search runs on about this many samples (+ reversals)
+
+
+def _small_nnls(G, b):
+    """min v'Gv - 2 b'v over v >= 0 (G 3 x 3 positive semi-definite): every active set."""
+    best, best_v = math.inf, np.zeros(b.size)
+    for r in range(b.size + 1):
+        for free in itertools.combinations(range(b.size), r):
+            v = np.zeros(b.size)
+            if free:
+                idx = list(free)
+                sol = np.linalg.lstsq(G[np.ix_(idx, idx)], b[idx], rcond=1e-12)[0]
+                if np.any(sol < 0):
+                    continue
+                v[idx] = sol
+            obj = float(v @ G @ v - 2 * b @ v)
+            if obj < best:
+                best, best_v = obj, v
+    return best_v
+
+
+def _columns(x, z, d, negative):
+    """Regressors of (q_0, q_1, p) for one case (module notes): y - offset = X @ v."""
+    # c_1 x + c_2 x^2 = q_0 (x - x^2 / 2) + q_1 x^2 / 2 (+ p D x for the a <= 0 case)
+    base0, base1 = x - 0.5 * x * x, 0.5 * x * x
+    hyst = d * x - z if negative else z
+    return np.stack([base0, base1, hyst], axis=-1)
+
+
+def _solve_linear(x, z, y, d):
+    """(offset, c_1, c_2, a) of the best monotone fit to y for a fixed z."""
+    best = None
+    for negative in (False, True):
+        X = _columns(x, z, d, negative)
+        Xc, yc = X - X.mean(axis=0), y - y.mean()
+        v = _small_nnls(Xc.T @ Xc, Xc.T @ yc)
+        rss = float(np.sum((yc - Xc @ v) ** 2))
+        if best is None or rss < best[0]:
+            q0, q1, p = v
+            c1 = q0 + p * d if negative else q0
+            c2 = 0.5 * (q1 - q0)
+            a = -p if negative else p
+            off = float(y.mean() - X.mean(axis=0) @ v)
+            best = (rss, (off, c1, c2, a))
+    return best[1]
+
+
+@dataclass(frozen=True)
+class BoucWenReport:
+    """What :func:`fit_boucwen` did: errors on the fitted and held-back samples, the shape
+    search and the data layout. ``str(report)`` is a readable summary."""
+
+    chosen: str
+    errors: dict
+    final_errors: dict
+    search: dict
+    data: dict
+    families: list = field(default_factory=list)
+
+    def family(self, name):
+        for f in self.families:
+            if f["family"] == name:
+                return f
+        raise KeyError(name)
+
+    def to_dict(self):
+        return {"chosen": self.chosen, "errors": self.errors,
+                "final_errors": self.final_errors, "search": self.search,
+                "data": self.data, "families": self.families}
+
+    def __str__(self):
+        e = self.errors
+        lines = [f"Bouc-Wen fit: {self.search['summary']}",
+                 f"  fitted samples {self.data['fit_samples']}, held back "
+                 f"{self.data['held_back_samples']}, settle {self.data['settle_samples']}",
+                 f"  RMS error: fitted {e['fit']['rms']:.4g}, held back "
+                 + (f"{e['held_back']['rms']:.4g}" if e.get("held_back") else "-")]
+        return "\n".join(lines)
+
+
+def _errors(r):
+    return {"rms": float(np.sqrt(np.mean(r * r))), "mean_abs": float(np.mean(np.abs(r))),
+            "max_abs": float(np.max(np.abs(r)))} if r.size else None
+
+
+def _keep(u, target):
+    """Sample indices to search on: every k-th sample plus every reversal (a skipped
+    reversal would change the hysteresis memory), and the last."""
+    n = u.size
+    k = max(1, n // target)
+    du = np.sign(np.diff(u))
+    nz = np.flatnonzero(du)
+    rev = nz[1:][du[nz[1:]] != du[nz[:-1]]]       # index of the sample before a reversal
+    keep = np.zeros(n, dtype=bool)
+    keep[::k] = True
+    keep[rev] = True
+    keep[-1] = True
+    return np.flatnonzero(keep)
+
+
+def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="alternate",
+                refit=True, n=None, shape=None, layout_=None):
+    """Fit a :class:`pihyst.model.BoucWenModel` to a record (module notes).
+
+    Parameters
+    ----------
+    u, y : array_like
+        Input and measured output.
+    input_range : (min, max), optional
+        The model's input range; default the data's span.
+    initial_state : "auto", "cycled" or "settle"
+        "cycled": the record starts at rest at the bottom after a full cycle; "settle":
+        unknown, the first full sweep settles z and is not fitted; "auto": "cycled" if the
+        record starts at the bottom of its range.
+    holdout : "alternate", float or None
+        Held-back cycles, as for :func:`pihyst.fit`.
+    refit : bool
+        Refit (offset, c_1, c_2, a) on fitted and held-back samples once the shape is
+        chosen.
+    n : float, optional
+        Fix the exponent (default: searched over 1 ... 3 and refined).
+    shape : dict, optional
+        {"beta", "gamma", "n"}: skip the search and use this shape.
+    layout_ : Layout, optional
+        The settle/fit/held-back cut of the record, when the caller has made it (the
+        comparison of families in :func:`pihyst.fit`).
+
+    Returns
+    -------
+    (BoucWenModel, BoucWenReport)
+    """
+    from scipy.optimize import minimize
+
+    u, y = checked_signals(u, y)
+    lo, hi = (float(u.min()), float(u.max())) if input_range is None else map(float,
+                                                                               input_range)
+    if not (lo < hi and u.min() >= lo and u.max() <= hi):
+        raise FitError(f"input_range {[lo, hi]} must contain the input's span "
+                       f"[{u.min():g}, {u.max():g}]")
+    span = hi - lo
+    v = u - lo
+    if initial_state == "auto":
+        initial_state = "cycled" if starts_at_rest(v, span) else "settle"
+    if initial_state not in ("cycled", "settle"):
+        raise FitError(f"initial_state must be 'auto', 'cycled' or 'settle', got "
+                       f"{initial_state!r:.40}")
+    settle = initial_state == "settle"
+    lay = layout(v, span, settle=settle, holdout=holdout) if layout_ is None else layout_
+    fit_i, held_i = lay.indices("fit"), lay.indices("held_back")
+    if fit_i.size < 5:
+        raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
+    x = v / span
+
+    def start(beta, gamma, nn):
+        # (x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
+        # settled by the first sweep); arrays of shapes share the substep of the largest
+        if settle:
+            return x[0], 0.0 * beta
+        h = _h(beta, gamma) if np.ndim(beta) else None
+        return 0.0, cycled_z(beta, gamma, nn, h=h)
+
+    def _h(beta, gamma):
+        return substep(np.max(beta), np.max(np.abs(gamma)))
+
+    # 1. grid: every shape at once on a decimated record
+    keep = _keep(x, SEARCH_SAMPLES)
+    where = np.zeros(x.size, dtype=bool)
+    where[fit_i] = True
+    kfit = np.flatnonzero(where[keep])
+    ns = GRID_N if n is None else (float(n),)
+    if shape is None:
+        grid = np.array([(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in ns])
+        gb, gg, gn = grid.T
+        x0, z0 = start(gb, gg, gn)
+        Z = trajectory(x[keep], x0, z0, gb, gg, gn, h=_h(gb, gg))
+        xs, ys = x[keep][kfit], y[keep][kfit]
+        rss = np.empty(len(grid))
+        for j in range(len(grid)):
+            d = 2 * gb[j] / (gb[j] + gg[j])
+            off, c1, c2, a = _solve_linear(xs, Z[kfit, j], ys, d)
+            r = ys - (off + c1 * xs + c2 * xs * xs + a * Z[kfit, j])
+            rss[j] = r @ r
+        b0, g0, n0 = grid[int(np.argmin(rss))]
+    else:
+        b0, g0, n0 = float(shape["beta"]), float(shape["gamma"]), float(shape.get("n", 1))
+
+    def unpack(p):
+        beta = float(np.exp(p[0]))
+        gamma = beta * float(np.tanh(p[1]))
+        nn = float(np.clip(p[2], 1.0, MAX_EXPONENT)) if n is None else float(n)
+        return beta, gamma, nn
+
+    def linear_fit(beta, gamma, nn, rows):
+        z = _z(beta, gamma, nn)
+        d = 2 * beta / (beta + gamma)
+        return z, _solve_linear(x[rows], z[rows], y[rows], d)
+
+    def _z(beta, gamma, nn):
+        x0, z0 = start(beta, gamma, nn)
+        return trajectory(x, x0, z0, beta, gamma, nn)
+
+    evaluations = 0
+
+    xk, yk = x[keep], y[keep]
+
+    def objective(p):
+        # fitted RMS on the decimated record (reversals kept: z is that of the full one)
+        nonlocal evaluations
+        evaluations += 1
+        beta, gamma, nn = unpack(p)
+        if not beta + abs(gamma) <= 1000.0:
+            return math.inf
+        x0, z0 = start(beta, gamma, nn)
+        zk = trajectory(xk, x0, z0, beta, gamma, nn)
+        xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]
+        off, c1, c2, a = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma))
+        r = yf - (off + c1 * xf + c2 * xf * xf + a * zf)
+        return float(np.sqrt(np.mean(r * r)))
+
+    # 2. refinement on the fitted samples
+    p0 = np.array([math.log(b0), math.atanh(np.clip(g0 / b0, -0.95, 0.95)), n0])
+    if shape is None:
+        res = minimize(objective, p0, method="Nelder-Mead",
+                       options={"xatol": 1e-4, "fatol": 1e-7 * np.ptp(y), "maxfev": 200,
+                                "initial_simplex": p0 + np.vstack(
+                                    [np.zeros(3), np.diag([0.3, 0.3, 0.25])])})
+        p_best = res.x if res.fun <= objective(p0) else p0
+    else:
+        p_best = p0
+    beta, gamma, nn = unpack(p_best)
+    z, coef = linear_fit(beta, gamma, nn, fit_i)
+
+    def model_of(coef):
+        off, c1, c2, a = coef
+        return BoucWenModel(beta=beta, gamma=gamma, n=nn, hysteretic=a, linear=c1,
+                            quadratic=c2, offset=off, input_range=(lo, hi))
+
+    def residual(coef, rows):
+        off, c1, c2, a = coef
+        xr = x[rows]
+        return y[rows] - (off + c1 * xr + c2 * xr * xr + a * z[rows])
+
+    errors = {"fit": _errors(residual(coef, fit_i)),
+              "held_back": _errors(residual(coef, held_i))}
+    final = errors
+    if refit and held_i.size:
+        both = np.sort(np.r_[fit_i, held_i])
+        coef = _solve_linear(x[both], z[both], y[both], 2 * beta / (beta + gamma))
+        final = {"all": _errors(residual(coef, both))}
+    model = model_of(coef)
+    how = (f"grid of {len(GRID_BETA) * len(GRID_RATIO) * len(ns)} shapes + {evaluations} "
+           f"Nelder-Mead evaluations" if shape is None else "shape given")
+    summary = f"beta {beta:.4g}, gamma {gamma:.4g}, n {nn:.3g} on the normalized input ({how})"
+    data = {"samples": int(x.size), "fit_samples": int(fit_i.size),
+            "held_back_samples": int(held_i.size), "settle_samples": int(lay.settle_end),
+            "holdout": lay.holdout, "initial_state": initial_state}
+    report = BoucWenReport(
+        chosen="bouc-wen", errors=errors, final_errors=final,
+        search={"summary": summary, "beta": beta, "gamma": gamma, "n": nn,
+                "evaluations": evaluations},
+        data=data,
+        families=[{"family": "bouc-wen", "chosen": True, "n_params": 7, "errors": errors}])
+    fit_meta = {"family": "bouc-wen", "errors": errors, "search": report.search,
+                "data": data}
+    if settle:
+        fit_meta["settled"] = {"sample": int(lay.settle_end),
+                               "state": [float(u[lay.settle_end - 1]),
+                                         float(z[lay.settle_end - 1])]}
+    return model.replace(metadata={"fit": fit_meta}), report
+
+
+def family_fit(family, fitter):
+    """The Bouc-Wen family fitted on ``fitter``'s record, cut as for every family: a
+    :class:`~pihyst.identify._family_result.FamilyFit` for the comparison in
+    :func:`pihyst.fit` (docs/theory/bouc-wen.md)."""
+    from pihyst.identify._family_result import FamilyFit
+    rec = fitter.rec
+    unsupported = [name for name, given in (
+        ("thresholds", fitter.thresholds is not None),
+        ("candidates", fitter.candidates is not None),
+        ("n_operators", fitter.n_operators is not None),
+        ("bounds", fitter.bounds is not None), ("nonnegative=False", not fitter.nonnegative),
+        ("a fixed offset", not rec.fit_offset), ("through", len(rec.through) > 0),
+        ("an explicit or zero initial_state", rec.state_mode not in ("cycled", "settle")))
+        if given]
+    if unsupported:
+        raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
+                       f"state: drop {', '.join(unsupported)}")
+    kwargs = dict(input_range=(rec.lo, rec.lo + rec.S), initial_state=rec.state_mode,
+                  n=family.n, layout_=rec.layout)
+    model, report = fit_boucwen(rec.u, rec.y, refit=False, **kwargs)
+
+    def refit():
+        shape = {k: report.search[k] for k in ("beta", "gamma", "n")}
+        return fit_boucwen(rec.u, rec.y, refit=True, shape=shape, **kwargs)[0]
+
+    errors = fitter.errors(model)
+    judged = errors["held_back"]["rms"] if rec.has_held_back else errors["fit"]["rms"]
+    return FamilyFit(family=family, model=model, operators=(),
+                     weights=np.array([model.linear, model.quadratic, model.hysteretic]),
+                     offset=model.offset, errors=errors, judged_rms=judged, n_params=7,
+                     notes=(report.search["summary"],), refit=refit)

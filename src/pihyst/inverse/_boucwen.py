@@ -1,0 +1,231 @@
+"""Compensation of a Bouc-Wen model: the voltage that makes it produce a desired output.
+
+From the state (u_p, z_p) the output for the next voltage u is
+
+    Y(u) = offset + c_1 x + c_2 x^2 + a Z(u),   Z(u) = z after the monotone step u_p -> u
+
+(the model's own Runge-Kutta arithmetic, docs/theory/bouc-wen.md). A monotone model
+(``model.is_monotone``) has Y non-decreasing on both sides of u_p, with Y(u_p) the current
+output. The compensator brackets the desired value y_d between u_p and the reachable end
+[max(u_min, u_p - slew), min(u_max, u_p + slew)] and solves Y(u) = y_d by Newton steps
+kept inside the bracket (bisection when a step leaves it or does not halve it), until
+the bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + |c_1| +
+|c_2| + |a| z_max): the inverse is exact to that tolerance. Where Y is flat at y_d the
+bracket keeps the voltage nearest u_p. Out of reach: the voltage saturates at the
+bracket's end and is flagged (limit or slew); NaN holds the last voltage. The flags are
+those of :mod:`pihyst.inverse._compensator`, and so is the result.
+"""
+
+import math
+
+import numpy as np
+
+from pihyst.inverse._compensator import (
+    FLAG_NAN,
+    FLAG_SATURATED_HIGH,
+    FLAG_SATURATED_LOW,
+    FLAG_SLEW,
+    OTHER_COMPENSATORS,
+    CompensationResult,
+    _desired,
+    _number,
+)
+from pihyst.model import InvalidModelError
+from pihyst.model._boucwen import BoucWenModel, advance, slope
+
+_EPS = np.finfo(float).eps
+
+
+class BoucWenCompensator:
+    """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
+    limits and a slew limit; the same interface as :class:`pihyst.Compensator`.
+
+    Examples
+    --------
+    >>> from pihyst.model import BoucWenModel
+    >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    >>> comp = BoucWenCompensator(m, slew_rate=10.0)
+    >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
+    >>> u, comp.last_flags == comp.FLAG_SLEW
+    (10.0, True)
+    >>> u = comp.step(5.0)             # within reach: exact
+    >>> round(u, 6), abs(comp.displacement - 5.0) < 1e-12
+    (18.667945, True)
+    """
+
+    FLAG_SATURATED_LOW = FLAG_SATURATED_LOW
+    FLAG_SATURATED_HIGH = FLAG_SATURATED_HIGH
+    FLAG_NAN = FLAG_NAN
+    FLAG_SLEW = FLAG_SLEW
+
+    def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
+                 initial_state=None):
+        if not isinstance(model, BoucWenModel):
+            raise TypeError(f"model must be a BoucWenModel, not {type(model).__name__}")
+        if not model.is_monotone:
+            raise InvalidModelError(f"compensation needs a monotone model: the slope bound "
+                                    f"min(c_1, c_1 + 2 c_2) + min(a, 0) D is "
+                                    f"{model.min_slope:g} < 0")
+        self.model = model
+        lo, hi = model.input_range
+        u_min = lo if u_min is None else _number(u_min, "u_min")
+        u_max = hi if u_max is None else _number(u_max, "u_max")
+        if not lo <= u_min < u_max <= hi:
+            raise ValueError(f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min < "
+                             f"u_max inside the model's input range [{lo:g}, {hi:g}]")
+        self.limits = (u_min, u_max)
+        if slew_rate is not None:
+            slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
+            if not slew_rate > 0:
+                raise ValueError(f"slew_rate must be > 0 volts per sample, got {slew_rate:g}")
+        self.slew_rate = slew_rate
+        u0, z0 = model._state(initial_state)
+        if initial_voltage is None:
+            initial_voltage = min(max(0.0, u_min), u_max)
+        initial_voltage = _number(initial_voltage, "initial_voltage")
+        if not u_min <= initial_voltage <= u_max:
+            raise ValueError(f"initial_voltage {initial_voltage:g} is outside the voltage "
+                             f"limits [{u_min:g}, {u_max:g}]")
+        # the initial voltage is applied to the initial state
+        z0 = advance(z0, model._x(initial_voltage) - model._x(u0), model.beta, model.gamma,
+                     model.n)
+        self._start = (initial_voltage, z0)
+        scale = (abs(model.offset) + abs(model.linear) + abs(model.quadratic)
+                 + abs(model.hysteretic) * model.z_max)
+        self._scale = scale
+        self.reset()
+
+    @property
+    def state(self):
+        """(u, z) after the last voltage."""
+        return np.array([self._u, self._z])
+
+    @property
+    def voltage(self):
+        return self._u
+
+    @property
+    def displacement(self):
+        """The model's output at the last voltage."""
+        return self.model.output(self._u, self._z)
+
+    @property
+    def last_flags(self):
+        return self._flags
+
+    def reset(self, state=None, voltage=None):
+        """Back to the initial state and voltage, or to ``state`` = (u, z)."""
+        if state is None:
+            self._u, self._z = self._start
+        else:
+            self._u, self._z = self.model._state(state)
+        if voltage is not None:
+            voltage = _number(voltage, "voltage")
+            lo, hi = self.limits
+            if not lo <= voltage <= hi:
+                raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+            m = self.model
+            self._z = advance(self._z, m._x(voltage) - m._x(self._u), m.beta, m.gamma, m.n)
+            self._u = voltage
+        self._flags = 0
+
+    def _y(self, u):
+        m = self.model
+        z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
+        return m.output(u, z), z
+
+    def step(self, y_desired):
+        """The voltage for one desired output (applied to the state)."""
+        yd = float(y_desired)
+        m = self.model
+        if math.isnan(yd):
+            self._flags = FLAG_NAN
+            return self._u
+        up = self._u
+        yp = m.output(up, self._z)
+        lo, hi = self.limits
+        slew = math.inf if self.slew_rate is None else self.slew_rate
+        if yd == yp:
+            self._flags = 0
+            return up
+        s = 1.0 if yd > yp else -1.0
+        end = min(hi, up + slew) if s > 0 else max(lo, up - slew)
+        while abs(end - up) > slew:        # rounding of u_p +- slew: stay within the limit
+            end = math.nextafter(end, up)
+        y_end, z_end = self._y(end)
+        if (y_end - yd) * s <= 0:          # out of reach (or just reached) at the end
+            reached = y_end == yd
+            self._flags = 0 if reached else (
+                (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
+                if end == (hi if s > 0 else lo) else FLAG_SLEW)
+            self._u, self._z = end, z_end
+            return end
+        u, z = self._solve(up, end, yd, s)
+        self._u, self._z, self._flags = u, z, 0
+        return u
+
+    def _solve(self, a, b, yd, s):
+        # a = u_p (Y(a) before yd), b = the reachable end (Y(b) past yd); the bracket
+        # [a, b] keeps that property while Newton or bisection steps shrink it
+        m = self.model
+        span = m.input_range[1] - m.input_range[0]
+        tol = 4 * _EPS * (abs(yd) + self._scale)
+
+        def newton(u, z, err):
+            x = m._x(u)
+            dy = (m.linear + 2 * m.quadratic * x
+                  + m.hysteretic * slope(z, s, m.beta, m.gamma, m.n)) / span
+            return u - err / dy if dy > 0 else math.nan
+
+        u = newton(a, self._z, m.output(a, self._z) - yd)
+        old = abs(b - a)
+        z_b = None
+        for _ in range(200):
+            if not min(a, b) < u < max(a, b):
+                u = 0.5 * (a + b)
+            y, z = self._y(u)
+            err = y - yd
+            if abs(err) <= tol:
+                return u, z
+            if err * s < 0:
+                a = u
+            else:
+                b, z_b = u, z
+            width = abs(b - a)
+            if width <= 2 * _EPS * max(abs(a), abs(b), 1e-300):
+                break
+            # Newton unless the bracket stopped halving (then bisect)
+            u = newton(u, z, err) if width <= 0.5 * old else 0.5 * (a + b)
+            old = width
+        if z_b is None:      # the bracket collapsed onto its far end, which reaches yd
+            _, z_b = self._y(b)
+        return b, z_b
+
+    def run(self, y_desired):
+        """Compensate a block of desired outputs; returns a
+        :class:`pihyst.inverse.CompensationResult`."""
+        yd = _desired(y_desired)
+        initial_state, initial_voltage = self.state, self.voltage
+        u = np.empty(yd.size)
+        y = np.empty(yd.size)
+        flags = np.zeros(yd.size, dtype=np.uint8)
+        for i, v in enumerate(yd.tolist()):
+            u[i] = self.step(v)
+            y[i] = self.displacement
+            flags[i] = self._flags
+        low = (flags & FLAG_SATURATED_LOW) != 0
+        high = (flags & FLAG_SATURATED_HIGH) != 0
+        return CompensationResult(
+            desired=yd, voltage=u, displacement=y, flags=flags, saturated=low | high,
+            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
+            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
+            initial_voltage=initial_voltage, final_state=self.state,
+            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
+
+    def __repr__(self):
+        slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
+        return (f"BoucWenCompensator(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
+                f"{slew}, voltage={self.voltage:g})")
+
+
+OTHER_COMPENSATORS[BoucWenModel.family] = BoucWenCompensator

@@ -1,0 +1,420 @@
+"""The Bouc-Wen hysteresis model as a value (docs/theory/bouc-wen.md).
+
+On the normalized input x = (u - u_lo) / (u_hi - u_lo) in [0, 1], with s = sign(dx),
+
+    y = offset + c_1 x + c_2 x^2 + a z,
+    dz/dx = g_s(z) = 1 - |z|^n (s beta sign(z) + gamma)       (beta > |gamma|, n >= 1),
+
+the rate-independent Bouc-Wen law dz = dx - beta |dx| |z|^(n-1) z - gamma dx |z|^n. Its
+loops need not close, a unipolar cycle can leave a remanent displacement, and minor loops
+drift: none of that is Preisach-like. The state |z| <= z_max = (beta + gamma)^(-1/n) is
+invariant and g_s(z) lies in [0, D], D = 2 beta / (beta + gamma), on it, so
+
+    dy/dx = c_1 + 2 c_2 x + a g_s(z) >= min(c_1, c_1 + 2 c_2) + min(a, 0) D
+
+and the model is monotone (hence invertible) on every branch when that bound is >= 0.
+
+Between two input samples the model integrates dz/dx = g_s(z) by the classical
+Runge-Kutta method with m = ceil(|dx| / H) equal substeps, H = min(1/256, 1/(32 (beta +
+|gamma|))); this *is* the model's definition (sample by sample, batch or inverse run the
+same arithmetic); a substep across z = 0, where g_s has a kink, is split at the crossing.
+Its distance to the exact ODE solution is below 1e-8 of z_max (tests/model/test_boucwen.py
+checks it against the closed form for n = 1).
+
+The model's state is (u, z): the last input and the Bouc-Wen variable.
+"""
+
+import json
+import math
+from types import MappingProxyType
+
+import numpy as np
+
+from pihyst._atomic import write_atomically
+from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.model._models import OTHER_FAMILIES, Response
+
+FAMILY = "bouc-wen"
+SCHEMA_VERSION = 1
+DEFAULT_UNITS = MappingProxyType({"input": "V", "output": "um"})
+MAX_SHAPE = 1000.0   # beta + |gamma| above this: the loop is a step, not a model
+MAX_EXPONENT = 10.0
+
+
+def _number(value, name):
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidModelError(f"{name} must be a number, got {value!r:.40}") from None
+    if not math.isfinite(x):
+        raise InvalidModelError(f"{name} is {x}, not a finite number")
+    return x
+
+
+def substep(beta, gamma):
+    """H = min(1/256, 1/(32 (beta + |gamma|))): the largest Runge-Kutta substep in x."""
+    return min(1.0 / 256.0, 1.0 / (32.0 * (beta + abs(gamma))))
+
+
+def slope(z, s, beta, gamma, n):
+    """g_s(z) = 1 - |z|^n (s beta sign(z) + gamma): dz/dx in direction s (floats or
+    NumPy arrays, elementwise)."""
+    p = abs(z) ** n
+    # sign(z) matters only where |z|^n > 0, so copysign's sign of 0 is harmless
+    sg = np.sign(z) if isinstance(z, np.ndarray) else math.copysign(1.0, z)
+    return 1.0 - p * (s * beta * sg + gamma)
+
+
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
+_GL_NODES, _GL_WEIGHTS = _GL_NODES.tolist(), _GL_WEIGHTS.tolist()
+
+
+def _rk4(z, k, s, beta, gamma, n):
+    # z + k (g1 + 2 g2 + 2 g3 + g4) / 6
+    g1 = slope(z, s, beta, gamma, n)
+    g2 = slope(z + 0.5 * k * g1, s, beta, gamma, n)
+    g3 = slope(z + 0.5 * k * g2, s, beta, gamma, n)
+    g4 = slope(z + k * g3, s, beta, gamma, n)
+    return z + k * (g1 + 2.0 * g2 + 2.0 * g3 + g4) / 6.0
+
+
+def _to_zero(z, s, beta, gamma, n):
+    """The input change that brings z to 0: dx_c = integral from z to 0 of dzeta / g_s,
+    by 8-point Gauss-Legendre (g_s is smooth on one side of 0)."""
+    half = -0.5 * z
+    return half * sum(w / slope(z + half * (1.0 + t), s, beta, gamma, n)
+                      for t, w in zip(_GL_NODES, _GL_WEIGHTS))
+
+
+def advance(z, dx, beta, gamma, n, h=None):
+    """z after an input change dx (one monotone step), by m = ceil(|dx| / H) classical
+    Runge-Kutta substeps of dx / m.
+
+    For a float z a substep that takes z across 0 (where g_s has a kink) is split there:
+    the input change to reach 0 is integrated in z (:func:`_to_zero`), the rest continues
+    from z = 0, so the kink costs no accuracy. ``z`` and the shape may also be NumPy arrays
+    (one entry per model, all with the same substeps ``h``, kinks not split: for searches).
+    """
+    if dx == 0.0:
+        return z
+    if h is None:
+        h = substep(beta, gamma)
+    m = max(1, math.ceil(abs(dx) / h - 1e-9))
+    s = 1.0 if dx > 0 else -1.0
+    k = dx / m
+    if isinstance(z, np.ndarray):
+        for _ in range(m):
+            z = _rk4(z, k, s, beta, gamma, n)
+        return z
+    for _ in range(m):
+        z_new = _rk4(z, k, s, beta, gamma, n)
+        if z * s < 0 < z_new * s:
+            dx_c = _to_zero(z, s, beta, gamma, n)
+            if abs(dx_c) < abs(k):
+                z_new = _rk4(0.0, k - dx_c, s, beta, gamma, n)
+        z = z_new
+    return z
+
+
+def trajectory(x, x0, z0, beta, gamma, n, h=None):
+    """z at every normalized input x[t], starting from (x0, z0); the shape may be arrays
+    (then the result is len(x) x len(shape))."""
+    out = np.empty((x.size,) + np.shape(z0))
+    xp, z = float(x0), z0
+    for t, xt in enumerate(x.tolist()):
+        z = advance(z, xt - xp, beta, gamma, n, h)
+        out[t] = z
+        xp = xt
+    return out
+
+
+def cycled_z(beta, gamma, n, h=None):
+    """z at rest at x = 0 after a full 0 -> 1 -> 0 cycle from the virgin state z = 0."""
+    z0 = np.zeros(np.shape(beta)) if np.ndim(beta) else 0.0
+    return advance(advance(z0, 1.0, beta, gamma, n, h), -1.0, beta, gamma, n, h)
+
+
+class BoucWenModel:
+    """Bouc-Wen hysteresis y(u) (module notes); immutable, compared by parameters.
+
+    Parameters
+    ----------
+    beta, gamma : float
+        Shape on the normalized input (beta > |gamma|).
+    n : float
+        Exponent, 1 <= n <= 10.
+    hysteretic : float
+        a, weight of the Bouc-Wen variable z (output units).
+    linear, quadratic : float
+        c_1, c_2 of the reversible part (output units at the top of the range).
+    offset : float
+        Output at u_lo with z = 0.
+    input_range : (float, float)
+        (u_lo, u_hi), default (0, 150).
+    initial_state : (u, z), optional
+        Default: at rest at u_lo after a full u_lo -> u_hi -> u_lo cycle.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    >>> y = m.predict(np.r_[np.linspace(0, 150, 151), np.linspace(149, 0, 150)])
+    >>> print(f"{y[0]:.3f} {y[150]:.3f} {y[-1]:.3f}")   # remanent: y(0) after the cycle
+    1.326 38.674 1.326
+    """
+
+    family = FAMILY
+    _KEYS = ("beta", "gamma", "n", "hysteretic", "linear", "quadratic", "offset",
+             "input_range", "initial_state", "units", "metadata")
+
+    def __init__(self, *, beta, gamma, hysteretic, linear, n=1.0, quadratic=0.0, offset=0.0,
+                 input_range=None, initial_state=None, units=None, metadata=None):
+        set_ = object.__setattr__
+        for name, value in (("beta", beta), ("gamma", gamma), ("n", n),
+                            ("hysteretic", hysteretic), ("linear", linear),
+                            ("quadratic", quadratic), ("offset", offset)):
+            set_(self, name, _number(value, name))
+        if not self.beta > abs(self.gamma):
+            raise InvalidModelError(f"Bouc-Wen needs beta > |gamma| (bounded loops); got "
+                                    f"beta={self.beta:g}, gamma={self.gamma:g}")
+        if not self.beta + abs(self.gamma) <= MAX_SHAPE:
+            raise InvalidModelError(f"Bouc-Wen needs beta + |gamma| <= {MAX_SHAPE:g}")
+        if not 1.0 <= self.n <= MAX_EXPONENT:
+            raise InvalidModelError(f"Bouc-Wen exponent n must be in [1, {MAX_EXPONENT:g}], "
+                                    f"got {self.n:g}")
+        try:
+            lo, hi = (0.0, 150.0) if input_range is None else input_range
+        except (TypeError, ValueError):
+            raise InvalidModelError(f"input_range must be [min, max], got "
+                                    f"{input_range!r:.60}") from None
+        lo, hi = _number(lo, "input_range[0]"), _number(hi, "input_range[1]")
+        if not lo < hi:
+            raise InvalidModelError(f"input_range must be [min, max] with min < max, got "
+                                    f"{[lo, hi]}")
+        set_(self, "input_range", (lo, hi))
+        if initial_state is None:
+            state = (lo, cycled_z(self.beta, self.gamma, self.n))
+        else:
+            try:
+                u0, z0 = initial_state
+            except (TypeError, ValueError):
+                raise InvalidModelError("initial_state must be [u, z]") from None
+            state = (_number(u0, "initial_state[0]"), _number(z0, "initial_state[1]"))
+            if not lo <= state[0] <= hi:
+                raise InvalidModelError(f"initial_state u = {state[0]:g} is outside the input "
+                                        f"range [{lo:g}, {hi:g}]")
+            if abs(state[1]) > self.z_max * (1 + 1e-9):
+                raise InvalidModelError(f"initial_state z = {state[1]:g} is beyond z_max = "
+                                        f"{self.z_max:g}")
+        set_(self, "initial_state", state)
+        units = DEFAULT_UNITS if units is None else units
+        if not (isinstance(units, (dict, MappingProxyType))
+                and all(isinstance(k, str) and isinstance(v, str) for k, v in units.items())):
+            raise InvalidModelError(f"units must map names to strings, got {units!r:.60}")
+        set_(self, "units", MappingProxyType(dict(units)))
+        if metadata is not None and not isinstance(metadata, (dict, MappingProxyType)):
+            raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
+        set_(self, "metadata", MappingProxyType(dict(metadata or {})))
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable: use "
+                             f"model.replace({name}=...) for a changed copy")
+
+    def __delattr__(self, name):
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    # ---------------------------------------------------------------- properties
+    @property
+    def z_max(self):
+        """(beta + gamma)^(-1/n): the bound of |z| on the reachable states."""
+        return (self.beta + self.gamma) ** (-1.0 / self.n)
+
+    @property
+    def n_operators(self):
+        """1: one hysteresis state, z (what a comparison with the PI models' operator
+        counts uses)."""
+        return 1
+
+    @property
+    def min_slope(self):
+        """Lower bound of dy/dx over every reachable state (module notes): the model is
+        monotone, hence invertible, when it is >= 0."""
+        d = 2.0 * self.beta / (self.beta + self.gamma)
+        return (min(self.linear, self.linear + 2.0 * self.quadratic)
+                + min(self.hysteretic, 0.0) * d)
+
+    @property
+    def is_monotone(self):
+        return self.min_slope >= 0.0
+
+    def _x(self, u):
+        lo, hi = self.input_range
+        return (u - lo) / (hi - lo)
+
+    def output(self, u, z):
+        """y = offset + c_1 x + c_2 x^2 + a z at input u (floats or arrays)."""
+        x = self._x(u)
+        return self.offset + self.linear * x + self.quadratic * x * x + self.hysteretic * z
+
+    # ---------------------------------------------------------------- runs
+    def _checked_input(self, u):
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        if u.ndim != 1:
+            raise ValueError(f"input must be one-dimensional, got shape {u.shape}")
+        lo, hi = self.input_range
+        if u.size and not (u.min() >= lo and u.max() <= hi):
+            bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
+            raise InputRangeError(int(bad[0]), float(u[bad[0]]), self.input_range)
+        return u
+
+    def _state(self, state):
+        if state is None:
+            return self.initial_state
+        return self.replace(initial_state=state).initial_state
+
+    def simulate(self, u, *, initial_state=None):
+        """Run over the input ``u`` from ``initial_state`` (default: the model's own);
+        returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z)."""
+        u = self._checked_input(u)
+        u0, z0 = self._state(initial_state)
+        z = trajectory(self._x(u), self._x(u0), z0, self.beta, self.gamma, self.n)
+        final = (float(u[-1]), float(z[-1])) if u.size else (u0, z0)
+        return Response(input=u, output=self.output(u, z), final_state=np.array(final))
+
+    def predict(self, u, *, initial_state=None):
+        """Displacements for the inputs ``u``."""
+        return self.simulate(u, initial_state=initial_state).output
+
+    def stepper(self, initial_state=None):
+        """A :class:`BoucWenStepper`: the model sample by sample."""
+        return BoucWenStepper(self, initial_state)
+
+    # ---------------------------------------------------------------- values
+    def _params(self):
+        return {"beta": self.beta, "gamma": self.gamma, "n": self.n,
+                "hysteretic": self.hysteretic, "linear": self.linear,
+                "quadratic": self.quadratic, "offset": self.offset,
+                "input_range": self.input_range, "initial_state": self.initial_state,
+                "units": dict(self.units), "metadata": dict(self.metadata)}
+
+    def replace(self, **changes):
+        """A copy with some constructor arguments changed."""
+        params = self._params()
+        unknown = sorted(set(changes) - set(params))
+        if unknown:
+            raise InvalidModelError(f"BoucWenModel has no parameter {unknown[0]!r}")
+        shape = {"beta", "gamma", "n", "input_range"}
+        if shape & set(changes) and "initial_state" not in changes and \
+                self.initial_state == (self.input_range[0],
+                                       cycled_z(self.beta, self.gamma, self.n)):
+            params["initial_state"] = None     # the rest state follows the new shape
+        params.update(changes)
+        return type(self)(**params)
+
+    def _key(self):
+        p = self._params()
+        p.pop("metadata")
+        p["units"] = tuple(sorted(p["units"].items()))
+        return (self.family,) + tuple(p.items())
+
+    def __eq__(self, other):
+        if not isinstance(other, BoucWenModel):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
+    def __repr__(self):
+        parts = [f"{k}={self._params()[k]:.6g}" for k in
+                 ("beta", "gamma", "n", "hysteretic", "linear", "quadratic", "offset")]
+        if self.input_range != (0.0, 150.0):
+            parts.append(f"input_range={self.input_range!r}")
+        return f"BoucWenModel({', '.join(parts)})"
+
+    def to_dict(self):
+        """The model as a JSON-ready dict (docs/interfaces.md, family "bouc-wen")."""
+        d = {"schema_version": SCHEMA_VERSION, "family": FAMILY,
+             **{k: getattr(self, k) for k in ("beta", "gamma", "n", "hysteretic", "linear",
+                                                "quadratic", "offset")},
+             "input_range": list(self.input_range),
+             "initial_state": list(self.initial_state), "units": dict(self.units)}
+        if self.metadata:
+            d["metadata"] = dict(self.metadata)
+        return d
+
+    @classmethod
+    def from_dict(cls, d, source="model"):
+        """A model from its JSON dict; errors name ``source`` and the key."""
+        if not isinstance(d, dict):
+            raise InvalidModelError(f"{source}: a model must be a JSON object")
+        if d.get("family") != FAMILY:
+            raise InvalidModelError(f"{source}: family {d.get('family')!r:.40} is not "
+                                    f"{FAMILY!r}")
+        version = d.get("schema_version", SCHEMA_VERSION)
+        if version != SCHEMA_VERSION:
+            raise InvalidModelError(f"{source}: schema_version {version!r:.20} is not "
+                                    f"{SCHEMA_VERSION} (written by another pihyst version)")
+        for key in ("beta", "gamma", "hysteretic", "linear"):
+            if key not in d:
+                raise InvalidModelError(f"{source}: missing required key {key!r}")
+        unknown = sorted(set(d) - set(cls._KEYS) - {"family", "schema_version"})
+        if unknown:
+            raise InvalidModelError(f"{source}: unknown key {unknown[0]!r} for family "
+                                    f"{FAMILY!r} (allowed: {', '.join(sorted(cls._KEYS))})")
+        try:
+            return cls(**{k: d[k] for k in cls._KEYS if k in d})
+        except InvalidModelError as err:
+            raise InvalidModelError(f"{source}: {err}") from None
+        except (TypeError, ValueError, OverflowError) as err:
+            raise InvalidModelError(f"{source}: {err}") from None
+
+    def save(self, path):
+        """Write the model as JSON to ``path`` (the file appears only once complete)."""
+        write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
+
+
+OTHER_FAMILIES[FAMILY] = BoucWenModel
+
+
+class BoucWenStepper:
+    """A :class:`BoucWenModel` run sample by sample; owns the running state (u, z).
+
+    Examples
+    --------
+    >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    >>> s = m.stepper()
+    >>> round(s.step(150.0), 3) == round(float(m.predict([150.0])[0]), 3)
+    True
+    """
+
+    def __init__(self, model, initial_state=None):
+        self.model = model
+        self._initial = model._state(initial_state)
+        self._u, self._z = self._initial
+
+    @property
+    def state(self):
+        """(u, z) after the last sample."""
+        return np.array([self._u, self._z])
+
+    def reset(self, state=None):
+        """Back to ``state`` (default: the initial state)."""
+        self._u, self._z = self._initial if state is None else self.model._state(state)
+
+    def output_at(self, u):
+        """The output if the next sample were ``u`` (the state is not changed)."""
+        m = self.model
+        z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
+        return m.output(u, z)
+
+    def step(self, u):
+        """One sample: advance the state by the input ``u``, return y."""
+        u = float(u)
+        lo, hi = self.model.input_range
+        if not lo <= u <= hi:
+            raise InputRangeError(0, u, self.model.input_range)
+        m = self.model
+        self._z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
+        self._u = u
+        return m.output(u, self._z)

@@ -1,0 +1,56 @@
+"""The Bouc-Wen family: fitted alone or compared with the PI families on the same cycles."""
+
+import numpy as np
+import pytest
+
+from pihyst import FitError, compensate, fit
+from pihyst.identify import FAMILY_NAMES, BoucWen
+from pihyst.model import BoucWenModel
+from pihyst.sim import make_plant
+from pihyst.sim.signals import decaying_triangles
+
+
+def record(model, n_triangles=3):
+    t, u = decaying_triangles(n_triangles=n_triangles, dt=1.0)
+    return u, model.predict(u)
+
+
+TRUE = BoucWenModel(beta=6.0, gamma=1.5, n=1.0, hysteretic=-12.0, linear=40.0,
+                    quadratic=3.0, offset=0.2)
+
+
+def test_recovers_a_bouc_wen_model_from_its_own_output():
+    u, y = record(TRUE)
+    res = fit(u, y, family="bouc-wen")
+    m = res.model
+    assert isinstance(m, BoucWenModel) and res.report.chosen == "bouc-wen"
+    assert np.sqrt(np.mean((m.predict(u) - y) ** 2)) < 1e-3 * np.ptp(y)
+    assert m.is_monotone
+    # the fitted model predicts a new input with minor loops as well
+    rng = np.random.default_rng(4)
+    v = np.clip(np.cumsum(rng.normal(0, 6, 400)) % 300, 0, 300)
+    v = np.where(v > 150, 300 - v, v)
+    assert np.max(np.abs(m.predict(v) - TRUE.predict(v))) < 5e-3 * np.ptp(y)
+
+
+@pytest.mark.slow
+def test_compared_with_the_pi_families_on_request_and_wins_on_a_remanent_beam():
+    t, u = decaying_triangles(dt=1.0)
+    y = make_plant("remanent", seed=1, creep=False).run(u, t)
+    assert "bouc-wen" not in FAMILY_NAMES          # the default stays the PI families
+    res = fit(u, y, family=[*FAMILY_NAMES, BoucWen()])
+    rep = res.report.to_dict()
+    assert {f["family"] for f in rep["families"]} == {*FAMILY_NAMES, "bouc-wen"}
+    assert res.report.chosen == "bouc-wen"
+    assert isinstance(res.model, BoucWenModel)
+    assert res.model.metadata["fit"]["family"] == "bouc-wen"
+    out = compensate(res.model, np.linspace(5, 40, 50))
+    assert np.all(out.reached)
+
+
+def test_options_it_cannot_honour_are_errors():
+    u, y = record(TRUE, n_triangles=2)
+    with pytest.raises(FitError, match="drop thresholds"):
+        fit(u, y, family="bouc-wen", thresholds=[0, 10])
+    with pytest.raises(FitError, match="fixed offset"):
+        fit(u, y, family="bouc-wen", offset=0.0)
