@@ -191,12 +191,13 @@ def fit_many(records, client=None, *, progress=None, **options):
     --------
     >>> import numpy as np, pihyst
     >>> u = np.r_[np.linspace(0, 150, 151), np.linspace(150, 0, 151)[1:]]
-    >>> fleet = {"a1": (u, 0.30 * u), "a2": (u, 0.31 * u), "bad": (u[:3], u[:3])}
+    >>> beam = pihyst.ClassicalPI([0, 20, 40], [0.2, 0.1, 0.05])   # an actuator's loop
+    >>> y1, y2 = beam.predict(u), 1.05 * beam.predict(u)
+    >>> fleet = {"a1": (u, y1), "a2": (u, y2), "bad": (u[:3], u[:3])}
     >>> result = pihyst.fit_many(fleet, family="classical", holdout=None)
     >>> [(o.record, o.status) for o in result]
     [('a1', 'fitted'), ('a2', 'fitted'), ('bad', 'failed')]
-    >>> result["a1"].model == pihyst.fit(u, 0.30 * u, family="classical",
-    ...                                  holdout=None).model
+    >>> result["a1"].model == pihyst.fit(u, y1, family="classical", holdout=None).model
     True
     """
     unknown = [] if _FIT_OPTIONS is None else sorted(set(options) - _FIT_OPTIONS)
