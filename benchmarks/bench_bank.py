@@ -26,6 +26,7 @@ Run: python benchmarks/bench_bank.py
 import time
 
 import numpy as np
+from timing import best_cpu_time
 
 import pihyst
 from pihyst import _reference
@@ -38,17 +39,6 @@ T = 2000
 T_STEP = 20
 U = 150.0
 
-
-def best_time(fn, repeats):
-    """Best CPU time of this thread over ``repeats`` calls of ``fn``, in seconds: on a
-    machine shared with other jobs the wall time counts their share of the cores too
-    (the C loops run in this thread with the GIL released)."""
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.thread_time()
-        fn()
-        best = min(best, time.thread_time() - t0)
-    return best
 
 
 def channel_models(n, k, seed=0):
@@ -89,7 +79,7 @@ def main():
             bank.reset()
             return bank.run(desired)
 
-        t_bank = best_time(run_bank, 5) / (T * N_CH)
+        t_bank = best_cpu_time(run_bank, 5) / (T * N_CH)
         u_bank, y_bank, flags = run_bank()
         err = np.max(np.abs(y_bank - desired))
 
@@ -102,14 +92,14 @@ def main():
                 for c, yd in zip(chans, row, strict=True):
                     c.step(yd)
 
-        t_tick = best_time(per_tick, 3) / (T_STEP * N_CH)
+        t_tick = best_cpu_time(per_tick, 3) / (T_STEP * N_CH)
 
         def per_channel(chans=chans, desired=desired):
             for i, c in enumerate(chans):
                 c.reset()
                 c.run(desired[:, i])
 
-        t_chan = best_time(per_channel, 5) / (T * N_CH)
+        t_chan = best_cpu_time(per_channel, 5) / (T * N_CH)
 
         n_ref, t_ref_ticks = 4, 50
         t0 = time.thread_time()
@@ -136,9 +126,9 @@ def main():
             mbank.reset()
             return mbank.run(u)
 
-        t_mbank = best_time(run_mbank, 5) / (T * N_CH)
+        t_mbank = best_cpu_time(run_mbank, 5) / (T * N_CH)
         cols = [np.ascontiguousarray(u[:, i]) for i in range(N_CH)]
-        t_pred = best_time(lambda cols=cols: [m.predict(c) for m, c in
+        t_pred = best_cpu_time(lambda cols=cols: [m.predict(c) for m, c in
                                               zip(models, cols, strict=True)], 5) / (T * N_CH)
         y = run_mbank()
         assert all(np.array_equal(y[:, i], models[i].predict(cols[i])) for i in range(20))

@@ -15,27 +15,16 @@ Run: python benchmarks/bench_gram.py
 """
 
 import os
-import time
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one core, as the C loops
 
 import numpy as np  # noqa: E402
+from timing import best_cpu_time  # noqa: E402
 
 from pihyst import _core  # noqa: E402
 
 U = 150.0
 
-
-def best_time(fn, repeats):
-    """Best CPU time of this thread over ``repeats`` calls (the C loops and BLAS run in
-    this thread; on a shared machine the wall time counts other jobs too). Single-threaded
-    BLAS is assumed (OPENBLAS_NUM_THREADS=1 is set below)."""
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.thread_time()
-        fn()
-        best = min(best, time.thread_time() - t0)
-    return best
 
 
 def bank(family, k, rng):
@@ -83,7 +72,7 @@ def main():
             phi = b.operators(u)
             return phi.T @ phi, phi.T @ d, phi.sum(axis=0)
 
-        t_old, t_new, t_ref = (best_time(f, 5) for f in (old, new, ref))
+        t_old, t_new, t_ref = (best_cpu_time(f, 5) for f in (old, new, ref))
         g_old, g_new = old()[0], new()[0]
         diff = np.max(np.abs(g_new - g_old)) / np.max(np.abs(g_old))
         print(f"   {family:<11} {k:>4} {n:>8} {1e3 * t_old:>8.1f}ms {1e3 * t_new:>8.1f}ms "

@@ -16,23 +16,15 @@ tracking and <= 2 us worst case at K ~ 130.
 Run: python benchmarks/bench_kp.py
 """
 
-import time
 
 import numpy as np
+from timing import best_cpu_time
 
 import pihyst
 
 U = 150.0
 N = 20_000
 
-
-def best_time(fn, repeats):
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.thread_time()
-        fn()
-        best = min(best, time.thread_time() - t0)
-    return best
 
 
 def kp_models(grid=16, k=132, seed=0):
@@ -82,16 +74,16 @@ def main():
     print(f"KP model, K = {k} saturated ramps, {N} samples, best CPU time of 5 "
           "(ns per sample)")
     print(f"   {'':<22} {'ramp kernel':>12} {'generic':>12}   ratio")
-    t_f = best_time(lambda: fast.predict(walk), 5) / N
-    t_g = best_time(lambda: generic.predict(walk), 5) / N
+    t_f = best_cpu_time(lambda: fast.predict(walk), 5) / N
+    t_g = best_cpu_time(lambda: generic.predict(walk), 5) / N
     same = np.array_equal(fast.predict(walk), generic.predict(walk))
     print(f"   {'predict':<22} {1e9 * t_f:>12.0f} {1e9 * t_g:>12.0f}   {t_g / t_f:.1f}x"
           f"   (outputs equal: {same})")
     for name, u in (("compensate, tracking", tracking), ("compensate, walk", walk),
                     ("compensate, noise", noise)):
         yd = fast.predict(u)
-        t_f = best_time(lambda yd=yd: pihyst.compensate(fast, yd), 5) / N
-        t_g = best_time(lambda yd=yd: pihyst.compensate(generic, yd), 5) / N
+        t_f = best_cpu_time(lambda yd=yd: pihyst.compensate(fast, yd), 5) / N
+        t_g = best_cpu_time(lambda yd=yd: pihyst.compensate(generic, yd), 5) / N
         r = pihyst.compensate(fast, yd)
         err = np.max(np.abs(r.displacement - yd))
         target = "<= 200 ns" if "tracking" in name else "<= 2000 ns (worst case)"

@@ -32,7 +32,7 @@ import numpy as np
 
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidModelError
-from pihyst.model._models import OTHER_FAMILIES, Response
+from pihyst.model._models import OTHER_FAMILIES, Response, checked_input
 
 FAMILY = "bouc-wen"
 SCHEMA_VERSION = 1
@@ -258,14 +258,7 @@ class BoucWenModel:
 
     # ---------------------------------------------------------------- runs
     def _checked_input(self, u):
-        u = np.ascontiguousarray(u, dtype=np.float64)
-        if u.ndim != 1:
-            raise ValueError(f"input must be one-dimensional, got shape {u.shape}")
-        lo, hi = self.input_range
-        if u.size and not (u.min() >= lo and u.max() <= hi):
-            bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
-            raise InputRangeError(int(bad[0]), float(u[bad[0]]), self.input_range)
-        return u
+        return checked_input(u, self.input_range)
 
     def _state(self, state):
         if state is None:

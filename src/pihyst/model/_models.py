@@ -82,6 +82,23 @@ def _finite_vector(values, name, length=None):
     return a
 
 
+def checked_input(u, input_range):
+    """``u`` as a contiguous float array, every sample finite and inside ``input_range``
+    (InvalidArgumentError, InputRangeError naming the first sample that is not)."""
+    try:
+        u = np.ascontiguousarray(u, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidArgumentError("input must be a sequence of numbers") from None
+    if u.ndim != 1:
+        raise InvalidArgumentError(f"input must be one-dimensional, got shape {u.shape}")
+    lo, hi = input_range
+    # min/max first: two fast passes; NaN makes the comparison fail too
+    if u.size and not (u.min() >= lo and u.max() <= hi):
+        bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
+        raise InputRangeError(int(bad[0]), float(u[bad[0]]), input_range)
+    return u
+
+
 def _finite_number(value, name):
     """``value`` as a float; InvalidModelError unless it is a finite real number (a
     string or a boolean is not a number)."""
@@ -198,18 +215,7 @@ class PIModel(ABC):
 
     # ---------------------------------------------------------------- batch
     def _checked_input(self, u):
-        try:
-            u = np.ascontiguousarray(u, dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):
-            raise InvalidArgumentError("input must be a sequence of numbers") from None
-        if u.ndim != 1:
-            raise InvalidArgumentError(f"input must be one-dimensional, got shape {u.shape}")
-        lo, hi = self.input_range
-        # min/max first: two fast passes; NaN makes the comparison fail too
-        if u.size and not (u.min() >= lo and u.max() <= hi):
-            bad = np.flatnonzero(~((u >= lo) & (u <= hi)))
-            raise InputRangeError(int(bad[0]), float(u[bad[0]]), self.input_range)
-        return u
+        return checked_input(u, self.input_range)
 
     def _state_or_initial(self, initial_state):
         if initial_state is None:
