@@ -20,7 +20,9 @@ def monotone_models(draw):
     d = 2 * beta / (beta + gamma)
     c2 = draw(st.floats(-5, 5))
     # c_1 large enough for min(c_1, c_1 + 2 c_2) + min(a, 0) D >= 0, plus some margin
-    c1 = max(0.0, -2 * c2) - min(a, 0.0) * d + draw(st.floats(0, 30))
+    # (a relative one too: with no margin at all, rounding can make the bound -1e-115)
+    need = max(0.0, -2 * c2) - min(a, 0.0) * d
+    c1 = need * (1 + 1e-9) + 1e-9 + draw(st.floats(0, 30))
     lo = draw(st.floats(-50, 50))
     return BoucWenModel(beta=beta, gamma=gamma, n=n, hysteretic=a, linear=c1, quadratic=c2,
                         offset=draw(st.floats(-5, 5)), input_range=(lo, lo + draw(
