@@ -10,6 +10,7 @@ bytes take on the wire. Times are seconds of the emulators' clock.
 
 import re
 import struct
+from abc import ABC, abstractmethod
 
 import numpy as np
 
@@ -71,7 +72,7 @@ class SimulatedBeam:
         return self._run(t)
 
 
-class Device:
+class Device(ABC):
     """Base of the emulated instruments: framing by terminator, faults, timing."""
 
     name = "device"
@@ -88,10 +89,10 @@ class Device:
     def vanished(self, t):
         return self.faults.vanished(t - self.t0)
 
+    @abstractmethod
     def receive(self, data, t):
         """Bytes ``data`` arrived complete at time ``t``: the replies, as a list of
         ``(ready_time, bytes)``."""
-        raise NotImplementedError
 
     def _answer(self, reply, t, kinds):
         """Apply the reply faults of ``kinds`` to ``reply`` sent at ``t``."""
