@@ -162,6 +162,8 @@ def _open_mat(path):
     from scipy.io import loadmat
     try:
         data = loadmat(path)
+    # loadmat raises NotImplementedError for MATLAB formats it cannot read (v4 variants,
+    # some v7 compressed types): the user's file, not a gap in pihyst
     except (ValueError, TypeError, NotImplementedError) as err:
         raise RecordError(path, f"cannot read MATLAB file: {err}") from None
     variables = {k: v for k, v in data.items() if not k.startswith("__")

@@ -32,7 +32,14 @@ import numpy as np
 
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidModelError
-from pihyst.model._models import OTHER_FAMILIES, Response, checked_input
+from pihyst.model._models import (
+    OTHER_FAMILIES,
+    Immutable,
+    Response,
+    checked_input,
+    checked_metadata,
+    checked_units,
+)
 
 FAMILY = "bouc-wen"
 SCHEMA_VERSION = 1
@@ -134,7 +141,7 @@ def cycled_z(beta, gamma, n, h=None):
     return advance(advance(z0, 1.0, beta, gamma, n, h), -1.0, beta, gamma, n, h)
 
 
-class BoucWenModel:
+class BoucWenModel(Immutable):
     """Bouc-Wen hysteresis y(u) (module notes); immutable, compared by parameters.
 
     Parameters
@@ -207,21 +214,8 @@ class BoucWenModel:
                 raise InvalidModelError(f"initial_state z = {state[1]:g} is beyond z_max = "
                                         f"{self.z_max:g}")
         set_(self, "initial_state", state)
-        units = DEFAULT_UNITS if units is None else units
-        if not (isinstance(units, (dict, MappingProxyType))
-                and all(isinstance(k, str) and isinstance(v, str) for k, v in units.items())):
-            raise InvalidModelError(f"units must map names to strings, got {units!r:.60}")
-        set_(self, "units", MappingProxyType(dict(units)))
-        if metadata is not None and not isinstance(metadata, (dict, MappingProxyType)):
-            raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
-        set_(self, "metadata", MappingProxyType(dict(metadata or {})))
-
-    def __setattr__(self, name, value):
-        raise AttributeError(f"{type(self).__name__} is immutable: use "
-                             f"model.replace({name}=...) for a changed copy")
-
-    def __delattr__(self, name):
-        raise AttributeError(f"{type(self).__name__} is immutable")
+        set_(self, "units", checked_units(units))
+        set_(self, "metadata", checked_metadata(metadata))
 
     # ---------------------------------------------------------------- properties
     @property

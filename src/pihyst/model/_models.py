@@ -99,6 +99,35 @@ def checked_input(u, input_range):
     return u
 
 
+class Immutable:
+    """A value: attributes are set once, in ``__init__`` (through object.__setattr__),
+    and never after; ``replace(...)`` makes a changed copy."""
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable: use "
+                             f"model.replace({name}=...) for a changed copy")
+
+    def __delattr__(self, name):
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+
+def checked_units(units):
+    """Read-only units of a model (default: V in, um out); InvalidModelError if not names
+    mapped to strings."""
+    units = DEFAULT_UNITS if units is None else units
+    if not (isinstance(units, (dict, MappingProxyType))
+            and all(isinstance(k, str) and isinstance(v, str) for k, v in units.items())):
+        raise InvalidModelError(f"units must map names to strings, got {units!r:.60}")
+    return MappingProxyType(dict(units))
+
+
+def checked_metadata(metadata):
+    """Read-only metadata of a model; InvalidModelError if not a dict."""
+    if metadata is not None and not isinstance(metadata, (dict, MappingProxyType)):
+        raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
+    return MappingProxyType(dict(metadata or {}))
+
+
 def _finite_number(value, name):
     """``value`` as a float; InvalidModelError unless it is a finite real number (a
     string or a boolean is not a number)."""
@@ -123,7 +152,7 @@ def _short(values):
     return f"[{ends}] ({len(v)} values)"
 
 
-class PIModel(ABC):
+class PIModel(Immutable, ABC):
     """Base of every family: weights, offset, input range, initial state, units, metadata.
 
     Subclasses describe their operators through ``_bank_args``, their own parameters
@@ -163,14 +192,8 @@ class PIModel(ABC):
              np.zeros(self.weights.size) if initial_state is None else
              _finite_vector(initial_state, "initial_state", self.weights.size))
         self.initial_state.setflags(write=False)
-        units = DEFAULT_UNITS if units is None else units
-        if not (isinstance(units, (dict, MappingProxyType))
-                and all(isinstance(k, str) and isinstance(v, str) for k, v in units.items())):
-            raise InvalidModelError(f"units must map names to strings, got {units!r:.60}")
-        set_(self, "units", MappingProxyType(dict(units)))
-        if metadata is not None and not isinstance(metadata, (dict, MappingProxyType)):
-            raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
-        set_(self, "metadata", MappingProxyType(dict(metadata or {})))
+        set_(self, "units", checked_units(units))
+        set_(self, "metadata", checked_metadata(metadata))
         set_(self, "_bank", self._new_bank(self.initial_state))
         # creep lags (docs/theory/creep.md): None for a rate-independent model
         set_(self, "creep", None if creep is None else Creep.from_dict(creep))
@@ -189,13 +212,6 @@ class PIModel(ABC):
             raise InvalidModelError("the model's output would overflow on its input range "
                                     "(weights, thresholds, shape or input range too large "
                                     "for floating point)")
-
-    def __setattr__(self, name, value):
-        raise AttributeError(f"{type(self).__name__} is immutable: use "
-                             f"model.replace({name}=...) for a changed copy")
-
-    def __delattr__(self, name):
-        raise AttributeError(f"{type(self).__name__} is immutable")
 
     @property
     def n_operators(self):
