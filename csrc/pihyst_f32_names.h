@@ -24,6 +24,13 @@
 #define pihyst_compensator_run pihyst_compensator_run_f32
 #define pihyst_bank_step pihyst_bank_step_f32
 #define pihyst_bank_compensate pihyst_bank_compensate_f32
+#define pihyst_compbank pihyst_compbank_f32
+#define pihyst_compbank_work_len pihyst_compbank_work_len_f32
+#define pihyst_compbank_init pihyst_compbank_init_f32
+#define pihyst_compbank_compensate pihyst_compbank_compensate_f32
+#define pihyst_compbank_sync pihyst_compbank_sync_f32
+#undef PIHYST_COMPBANK_WORK_LEN
+#define PIHYST_COMPBANK_WORK_LEN PIHYST_COMPBANK_WORK_LEN_F32
 #undef PIHYST_COMPENSATOR_SCRATCH_LEN
 #define PIHYST_COMPENSATOR_SCRATCH_LEN PIHYST_COMPENSATOR_SCRATCH_LEN_F32
 
