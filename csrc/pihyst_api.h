@@ -254,7 +254,7 @@ size_t PIHYST_NAME(pihyst_bank_compensate)(PIHYST_NAME(pihyst_compensator) *cons
  *
  * The same channels as pihyst_bank_compensate (N initialised compensators, any
  * families), run from a work array laid out channel-interleaved, L = 32 bytes of reals
- * per group. Classical channels with r_0 = 0 and w_0 > 0 (and w_0 >= 2^-20 sum w) step
+ * per group. Classical channels with r_0 = 0 and w_0 > 0 (and w_0 >= sum w / 1024) step
  * the model's exact inverse, itself a classical PI model, vectorized across channels:
  * K branch-free clamps and a dot product per channel. Where that voltage would leave the
  * limits or the slew limit, or y_d is NaN or within tol of the last output, the channel

@@ -45,7 +45,7 @@
  *     compensator state at u_last (pihyst_compensator_reset), the compensator steps y_d
  *     (clamp to the window, flags), and z = T f of its new state goes into the buffer
  *     of this tick.
- * Channels without the fast path (other families, r_0 > 0, w_0 = 0 or below 2^-20 of
+ * Channels without the fast path (other families, r_0 > 0, w_0 = 0 or below 1/1024 of
  * sum w, where the inverse's weights would amplify rounding) run their compensator every
  * tick. A classical channel whose state is not 1-Lipschitz (set by a reset) also does,
  * and joins the fast path as soon as its state is (checked after each of its ticks).
@@ -92,8 +92,9 @@ static int has_fast_path(const pihyst_compensator *c)
     size_t k;
     if (m->family != PIHYST_CLASSICAL || m->thresholds[0] != RC(0.0)) return 0;
     for (k = 0; k < K; ++k) W += m->weights[k];
-    /* w'_0 = 1 / w_0 multiplies the rounding of z: bound it by 2^20 / W */
-    return m->weights[0] > RC(0.0) && m->weights[0] >= W * RC(9.5367431640625e-07);
+    /* w'_0 = 1 / w_0 multiplies the rounding of z (of the order eps (|y| + r'_K)): with
+     * w_0 >= W / 1024 the voltage stays within about 1e-11 of the range in double */
+    return m->weights[0] > RC(0.0) && m->weights[0] >= W * RC(0.0009765625);
 }
 
 /* 1 if the state is 1-Lipschitz in r to a few ulps (as pihyst_inverse.c's lipschitz) */
