@@ -114,6 +114,13 @@ typedef uint8_t pihyst_flags;
      64 / sizeof(type))
 #define PIHYST_COMPBANK_WORK_LEN(n, n_ops) PIHYST_COMPBANK_WORK_LEN_OF(double, n, n_ops)
 #define PIHYST_COMPBANK_WORK_LEN_F32(n, n_ops) PIHYST_COMPBANK_WORK_LEN_OF(float, n, n_ops)
+/** Work length of a structure-of-arrays model bank (pihyst_modelbank) of n channels. */
+#define PIHYST_MODELBANK_WORK_LEN_OF(type, n)                                            \
+    (((n) + PIHYST_SOA_LANES_OF(type) - 1) / PIHYST_SOA_LANES_OF(type) * (2 + 3 * 16) *    \
+         PIHYST_SOA_LANES_OF(type) +                                                      \
+     64 / sizeof(type))
+#define PIHYST_MODELBANK_WORK_LEN(n) PIHYST_MODELBANK_WORK_LEN_OF(double, n)
+#define PIHYST_MODELBANK_WORK_LEN_F32(n) PIHYST_MODELBANK_WORK_LEN_OF(float, n)
 
 /** Human-readable text of a status code (static storage). */
 const char *pihyst_status_text(pihyst_status status);

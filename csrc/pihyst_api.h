@@ -305,3 +305,42 @@ size_t PIHYST_NAME(pihyst_compbank_compensate)(PIHYST_NAME(pihyst_compbank) *b,
 /** Write the fast channels' state back to their compensators (model state, u_last,
  *  y_last), by pihyst_compensator_reset at the last voltage. */
 void PIHYST_NAME(pihyst_compbank_sync)(PIHYST_NAME(pihyst_compbank) *b);
+
+/* ======================================================================
+ * Model banks, structure-of-arrays (csrc/pihyst_bank_soa_model.c)
+ * ======================================================================
+ *
+ * The same channels as pihyst_bank_step (N initialised models, any families), run from
+ * a work array laid out channel-interleaved: classical channels with K <= 16 are stepped
+ * 32 bytes of reals at a time with the operations of the single model's K <= 16 kernel,
+ * in the same order, so every output is bit for bit pihyst_model_step's; other channels
+ * (and all of them in a build without compiler vector extensions) are stepped by
+ * pihyst_model_step in the same call. Between pihyst_modelbank_init and
+ * pihyst_modelbank_sync the fast channels' states are in the work array (their models'
+ * state arrays are stale); a model stepped or reset outside the bank needs init again.
+ */
+
+/** A structure-of-arrays model bank. Fill it with pihyst_modelbank_init. */
+typedef struct {
+    PIHYST_NAME(pihyst_model) *const *models; /**< N channels (caller-owned) */
+    size_t n;              /**< N */
+    size_t n_fast;         /**< channels stepped in the groups */
+    PIHYST_REAL *groups;   /**< the groups, in the caller's work array (64-byte aligned) */
+} PIHYST_NAME(pihyst_modelbank);
+
+/** Work length (values) that pihyst_modelbank_init needs for n channels. */
+size_t PIHYST_NAME(pihyst_modelbank_work_len)(PIHYST_NAME(pihyst_model) *const *models,
+                                              size_t n);
+
+/** Lay out N initialised, distinct models (their current states) in the work array.
+ *  @return PIHYST_OK, PIHYST_ENULL, PIHYST_ESCRATCH (work too short) */
+pihyst_status PIHYST_NAME(pihyst_modelbank_init)(PIHYST_NAME(pihyst_modelbank) *b,
+                                                 PIHYST_NAME(pihyst_model) *const *models,
+                                                 size_t n, PIHYST_REAL *work, size_t work_len);
+
+/** One tick: y[i] = the output of channel i for u[i] (as pihyst_model_step). */
+void PIHYST_NAME(pihyst_modelbank_step)(PIHYST_NAME(pihyst_modelbank) *b,
+                                        const PIHYST_REAL *u, PIHYST_REAL *y);
+
+/** Copy the fast channels' states back to their models' state arrays. */
+void PIHYST_NAME(pihyst_modelbank_sync)(PIHYST_NAME(pihyst_modelbank) *b);

@@ -29,7 +29,14 @@
 #define pihyst_compbank_init pihyst_compbank_init_f32
 #define pihyst_compbank_compensate pihyst_compbank_compensate_f32
 #define pihyst_compbank_sync pihyst_compbank_sync_f32
+#define pihyst_modelbank pihyst_modelbank_f32
+#define pihyst_modelbank_work_len pihyst_modelbank_work_len_f32
+#define pihyst_modelbank_init pihyst_modelbank_init_f32
+#define pihyst_modelbank_step pihyst_modelbank_step_f32
+#define pihyst_modelbank_sync pihyst_modelbank_sync_f32
 #undef PIHYST_COMPBANK_WORK_LEN
+#undef PIHYST_MODELBANK_WORK_LEN
+#define PIHYST_MODELBANK_WORK_LEN PIHYST_MODELBANK_WORK_LEN_F32
 #define PIHYST_COMPBANK_WORK_LEN PIHYST_COMPBANK_WORK_LEN_F32
 #undef PIHYST_COMPENSATOR_SCRATCH_LEN
 #define PIHYST_COMPENSATOR_SCRATCH_LEN PIHYST_COMPENSATOR_SCRATCH_LEN_F32

@@ -204,9 +204,54 @@ static void test_compbank_checks(void)
     pihyst_compbank_sync(&bank);
 }
 
+/* the structure-of-arrays model bank: bit for bit pihyst_model_step on every channel
+ * (classical K <= 16 in the groups, the others by the single model), states after sync */
+static void test_modelbank_equals_models(void)
+{
+    static soa_channels a, b;
+    static real work[PIHYST_MODELBANK_WORK_LEN(SOA_N)];
+    pihyst_model *ma[SOA_N];
+    pihyst_modelbank bank;
+    real u[SOA_N], y_bank[SOA_N], y_one[SOA_N], y0 = (real)1.0;
+    size_t i, t, bad = 0, n_fast = 0;
+    soa_init(&a);
+    soa_init(&b);
+    for (i = 0; i < SOA_N; ++i) {
+        ma[i] = &a.m[i];
+        n_fast += a.m[i].family == PIHYST_CLASSICAL && a.m[i].n_ops <= 16;
+    }
+    CHECK(pihyst_modelbank_work_len(ma, SOA_N) <= sizeof work / sizeof(real));
+    CHECK(pihyst_modelbank_init(&bank, ma, SOA_N, work, sizeof work / sizeof(real)) ==
+          PIHYST_OK);
+#if defined(__GNUC__) && !defined(PIHYST_NO_VECTOR_EXT)
+    CHECK(bank.n_fast == n_fast && n_fast > 20);
+#else
+    CHECK(bank.n_fast == 0);
+#endif
+    for (t = 0; t < SOA_TICKS; ++t) {
+        for (i = 0; i < SOA_N; ++i)
+            u[i] = (real)(150.0 * (0.5 + 0.45 * sin(0.02 * (double)t + (double)i)) *
+                          (soa_uniform() < 0.3 ? (double)soa_uniform() : 1.0));
+        pihyst_modelbank_step(&bank, u, y_bank);
+        for (i = 0; i < SOA_N; ++i) y_one[i] = pihyst_model_step(&b.m[i], u[i]);
+        bad += memcmp(y_bank, y_one, sizeof y_bank) != 0;
+    }
+    CHECK(bad == 0);
+    pihyst_modelbank_sync(&bank);
+    for (i = 0; i < SOA_N; ++i)
+        CHECK(memcmp(a.state[i], b.state[i], a.m[i].n_ops * sizeof(real)) == 0);
+    CHECK(pihyst_modelbank_init(&bank, ma, SOA_N, work, pihyst_modelbank_work_len(ma, SOA_N) - 1)
+          == PIHYST_ESCRATCH);
+    CHECK(pihyst_modelbank_init(&bank, NULL, SOA_N, work, 100) == PIHYST_ENULL);
+    CHECK(pihyst_modelbank_init(&bank, ma, 0, NULL, 0) == PIHYST_OK);
+    pihyst_modelbank_step(&bank, &y0, NULL);
+    pihyst_modelbank_sync(&bank);
+}
+
 void run_bank_soa_tests(void)
 {
     soa_params();
+    test_modelbank_equals_models();
     test_compbank_equals_compensators(0);
     test_compbank_equals_compensators(1);
     test_compbank_checks();
