@@ -26,7 +26,8 @@ class ModelBank:
     fast : bool
         Step classical channels (K <= 16) several at a time from a structure-of-arrays
         copy of the states: the same outputs, bit for bit, in less time per channel.
-        ``channels`` (and ``states``) are brought up to date when read.
+        ``channels`` (and ``states``) are brought up to date when read; reset them
+        through :meth:`reset` (a fast bank does not see a channel reset on its own).
 
     Examples
     --------
