@@ -102,11 +102,11 @@ typedef uint8_t pihyst_flags;
     (10 * (n_ops) + 8 * (n_points) + 20)
 
 /** Compensator banks in structure-of-arrays layout (pihyst_compbank): channels are
- *  grouped PIHYST_SOA_LANES_OF(real) at a time (32 bytes of reals), each group a header of
+ *  grouped PIHYST_SOA_LANES_OF(real) at a time (64 bytes of reals), each group a header of
  *  PIHYST_SOA_HEADER vectors and four vectors per operator. Work length in values of the
  *  precision for n channels whose fast (classical) channels have at most n_ops operators;
  *  pihyst_compbank_work_len gives the exact figure for a set of channels. */
-#define PIHYST_SOA_LANES_OF(type) (32 / sizeof(type))
+#define PIHYST_SOA_LANES_OF(type) (64 / sizeof(type))
 #define PIHYST_SOA_HEADER 8
 #define PIHYST_COMPBANK_WORK_LEN_OF(type, n, n_ops)                                      \
     (((n) + PIHYST_SOA_LANES_OF(type) - 1) / PIHYST_SOA_LANES_OF(type) *                  \

@@ -253,7 +253,7 @@ size_t PIHYST_NAME(pihyst_bank_compensate)(PIHYST_NAME(pihyst_compensator) *cons
  * ======================================================================
  *
  * The same channels as pihyst_bank_compensate (N initialised compensators, any
- * families), run from a work array laid out channel-interleaved, L = 32 bytes of reals
+ * families), run from a work array laid out channel-interleaved, L = 64 bytes of reals
  * per group. Classical channels with r_0 = 0 and w_0 > 0 (and w_0 >= sum w / 1024) step
  * the model's exact inverse, itself a classical PI model, vectorized across channels:
  * K branch-free clamps and a dot product per channel. Where that voltage would leave the
@@ -312,7 +312,7 @@ void PIHYST_NAME(pihyst_compbank_sync)(PIHYST_NAME(pihyst_compbank) *b);
  *
  * The same channels as pihyst_bank_step (N initialised models, any families), run from
  * a work array laid out channel-interleaved: classical channels with K <= 16 are stepped
- * 32 bytes of reals at a time with the operations of the single model's K <= 16 kernel,
+ * 64 bytes of reals at a time with the operations of the single model's K <= 16 kernel,
  * in the same order, so every output is bit for bit pihyst_model_step's; other channels
  * (and all of them in a build without compiler vector extensions) are stepped by
  * pihyst_model_step in the same call. Between pihyst_modelbank_init and

@@ -24,8 +24,8 @@
  * the model's state after u, and y itself as the output: what the exact compensator
  * finds by its walk, to rounding. It is K clamps and a dot product, without a branch.
  *
- * Layout. Channels are grouped L at a time (L = 32 bytes of reals: 4 doubles, 8
- * floats); a group is a header of PIHYST_SOA_HEADER vectors of L lanes (one lane per
+ * Layout. Channels are grouped L at a time (L = 64 bytes of reals: 8 doubles, 16
+ * floats; one AVX-512 register, two AVX2 ones); a group is a header of PIHYST_SOA_HEADER vectors of L lanes (one lane per
  * channel: offset, u_last, y_last, tol, u_min, u_max, max_step, mode) and then, for each
  * operator k < n_ops, four vectors: r'_k, w'_k and the play states z_k in two buffers.
  * A tick reads one buffer and writes the other (the parity flips every tick), so the
@@ -258,12 +258,12 @@ typedef real vlane __attribute__((vector_size(L * sizeof(real))));
         }                                                    \
     } while (0)
 
-PIHYST_HOT
-static void inverse_lanes(size_t n_ops, real *restrict ops, int cur, const real *restrict yt_in,
+static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *restrict ops, int cur,
+                                        const real *restrict yt_in,
                           real *restrict u_out)
 {
     vlane yt, s0 = {RC(0.0)}, s1 = {RC(0.0)}, s2 = {RC(0.0)}, s3 = {RC(0.0)}, u;
-    vlane *v = (vlane *)__builtin_assume_aligned(ops, 32);
+    vlane *v = (vlane *)__builtin_assume_aligned(ops, 64);
     size_t k;
     memcpy(&yt, yt_in, sizeof yt);
 #define PIHYST_SOA_OP(q, s)                                                      \
@@ -285,8 +285,8 @@ static void inverse_lanes(size_t n_ops, real *restrict ops, int cur, const real 
     memcpy(u_out, &u, sizeof u);
 }
 #else
-PIHYST_HOT
-static void inverse_lanes(size_t n_ops, real *restrict ops, int cur, const real *restrict yt,
+static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *restrict ops, int cur,
+                                        const real *restrict yt,
                           real *restrict u_out)
 {
     real s[4][L];
@@ -333,6 +333,39 @@ static pihyst_flags exact_step(pihyst_compbank *b, real *grp, size_t i, size_t l
     return fl;
 }
 
+/* The fast lanes of a group for one tick, without a branch: y~ per lane (the last output
+ * for a hold), (I1)-(I2), then per lane the voltage and output (held, or the inverse's u
+ * and y_d) and whether the lane is done: a fast lane that holds or whose u is inside its
+ * limits and slew limit; its u_last and y_last are updated. exact[l] = 1 marks the lanes
+ * left for the exact path (exact-mode and padding lanes, and fast lanes out of bounds). */
+PIHYST_HOT
+static void group_tick(size_t n_ops, real *restrict grp, int cur, const real *restrict yd,
+                       real *restrict uo, real *restrict yo, real *restrict exact)
+{
+    real yt[L], ug[L];
+    size_t l;
+    for (l = 0; l < L; ++l) {
+        const real yp = grp[H_Y_LAST * L + l];
+        const int hold = !(R_FABS(yd[l] - yp) > grp[H_TOL * L + l]);
+        yt[l] = (hold ? yp : yd[l]) - grp[H_OFFSET * L + l];
+    }
+    inverse_lanes(n_ops, grp + PIHYST_SOA_HEADER * L, cur, yt, ug);
+    for (l = 0; l < L; ++l) {
+        const real up = grp[H_U_LAST * L + l], yp = grp[H_Y_LAST * L + l], ul = ug[l];
+        const int hold = !(R_FABS(yd[l] - yp) > grp[H_TOL * L + l]);
+        /* & and |, not && and ||: no branch, so that the loop vectorizes */
+        const int inside = (ul >= grp[H_U_MIN * L + l]) & (ul <= grp[H_U_MAX * L + l]) &
+                           (R_FABS(ul - up) <= grp[H_MAX_STEP * L + l]);
+        const int done = (grp[H_MODE * L + l] == MODE_FAST) & (hold | inside);
+        const real un = hold ? up : ul, yn = hold ? yp : yd[l];
+        uo[l] = un;
+        yo[l] = yn;
+        grp[H_U_LAST * L + l] = done ? un : up;
+        grp[H_Y_LAST * L + l] = done ? yn : yp;
+        exact[l] = done ? RC(0.0) : RC(1.0);
+    }
+}
+
 size_t pihyst_compbank_compensate(pihyst_compbank *b, const real *y_desired, real *u,
                                   real *y, pihyst_flags *flags)
 {
@@ -341,35 +374,20 @@ size_t pihyst_compbank_compensate(pihyst_compbank *b, const real *y_desired, rea
     size_t g, l, count = 0;
     for (g = 0; g < n_groups; ++g) {
         real *grp = group_at(b, g);
-        real yt[L], ug[L];
+        real yd_pad[L], uo[L], yo[L], exact[L];
         const size_t i0 = g * L, lanes = n - i0 < L ? n - i0 : L;
-        /* y~ per lane: the desired value, or the last output for a hold */
-        for (l = 0; l < L; ++l) {
-            const real yd = l < lanes ? y_desired[i0 + l] : RC(0.0);
-            const real yp = grp[H_Y_LAST * L + l];
-            const int hold = !(R_FABS(yd - yp) > grp[H_TOL * L + l]);
-            yt[l] = (hold ? yp : yd) - grp[H_OFFSET * L + l];
+        const real *yd = y_desired + i0;
+        if (lanes < L) { /* the last group: padding lanes desire 0 (they hold) */
+            for (l = 0; l < L; ++l) yd_pad[l] = l < lanes ? yd[l] : RC(0.0);
+            yd = yd_pad;
         }
-        inverse_lanes(b->n_ops, grp + PIHYST_SOA_HEADER * L, cur, yt, ug);
+        group_tick(b->n_ops, grp, cur, yd, uo, yo, exact);
         for (l = 0; l < lanes; ++l) {
             const size_t i = i0 + l;
-            const real yd = y_desired[i], up = grp[H_U_LAST * L + l];
-            real ui = ug[l], yi;
-            pihyst_flags fl = 0;
-            if (grp[H_MODE * L + l] != MODE_FAST) {
-                fl = exact_step(b, grp, i, l, cur, yd, &ui);
-                yi = b->comps[i]->y_last;
-            } else if (!(R_FABS(yd - grp[H_Y_LAST * L + l]) > grp[H_TOL * L + l])) {
-                ui = up; /* hold */
-                yi = grp[H_Y_LAST * L + l];
-                fl = isnan(yd) ? PIHYST_COMP_NAN : 0;
-            } else if (ui >= grp[H_U_MIN * L + l] && ui <= grp[H_U_MAX * L + l] &&
-                       R_FABS(ui - up) <= grp[H_MAX_STEP * L + l]) {
-                yi = yd;
-                grp[H_U_LAST * L + l] = ui;
-                grp[H_Y_LAST * L + l] = yd;
-            } else {
-                fl = exact_step(b, grp, i, l, cur, yd, &ui);
+            pihyst_flags fl = isnan(yd[l]) ? PIHYST_COMP_NAN : 0; /* a done NaN lane held */
+            real ui = uo[l], yi = yo[l];
+            if (exact[l] != RC(0.0)) {
+                fl = exact_step(b, grp, i, l, cur, yd[l], &ui);
                 yi = b->comps[i]->y_last;
             }
             u[i] = ui;

@@ -1,8 +1,8 @@
 /* pihyst_bank_soa_model.c - a model bank laid out structure-of-arrays (pihyst_modelbank,
  * the "Model banks, structure-of-arrays" section of pihyst_api.h; docs/c-core.md).
  *
- * Classical channels with K <= 16 operators are stepped L at a time (L = 32 bytes of
- * reals: 4 doubles, 8 floats), one lane per channel, by (1)-(2) of pihyst.h:
+ * Classical channels with K <= 16 operators are stepped L at a time (L = 64 bytes of
+ * reals: 8 doubles, 16 floats), one lane per channel, by (1)-(2) of pihyst.h:
  *
  *     f_k <- max(u - r_k, min(u + r_k, f_k)),   y = offset + sum_k w_k f_k
  *
@@ -98,7 +98,7 @@ PIHYST_HOT
 static void model_lanes(real *restrict ops, const real *restrict u_in,
                         const real *restrict offset_in, real *restrict y_out)
 {
-    vlane *v = (vlane *)__builtin_assume_aligned(ops, 32);
+    vlane *v = (vlane *)__builtin_assume_aligned(ops, 64);
     vlane u, off, s0, s1, s2, s3, y;
     size_t k, i;
     memcpy(&u, u_in, sizeof u);
