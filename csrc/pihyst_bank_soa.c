@@ -25,9 +25,10 @@
  * finds by its walk, to rounding. It is K clamps and a dot product, without a branch.
  *
  * Layout. Channels are grouped L at a time (L = 64 bytes of reals: 8 doubles, 16
- * floats; one AVX-512 register, two AVX2 ones); a group is a header of PIHYST_SOA_HEADER vectors of L lanes (one lane per
- * channel: offset, u_last, y_last, tol, u_min, u_max, max_step, mode) and then, for each
- * operator k < n_ops, four vectors: r'_k, w'_k and the play states z_k in two buffers.
+ * floats; one AVX-512 register, two AVX2 ones); a group is a header of PIHYST_SOA_HEADER
+ * vectors of L lanes (one lane per channel: offset, u_last, y_last, tol, u_min, u_max,
+ * max_step, mode) and then, for each operator k < n_ops, four vectors: r'_k, w'_k and
+ * the play states z_k in two buffers.
  * A tick reads one buffer and writes the other (the parity flips every tick), so the
  * state before the tick is still there for a channel that needs the exact path. The
  * groups lie one after the other on a 64-byte boundary. n_ops is the largest K of the
@@ -35,7 +36,8 @@
  * operators have r' = 0 and w' = 0.
  *
  * A tick, per group: every lane's y~ (the last output for a hold), (I1)-(I2) for the L
- * lanes at once, then per lane:
+ * lanes at once, then per lane (decided for all lanes at once without a branch, the
+ * lanes left for the exact path then taken one by one):
  *   - hold (|y_d - y_last| <= tol, or y_d NaN, as the exact compensator): u_last held,
  *     flag NaN for NaN; (I1) at y_last leaves z as it was, to rounding;
  *   - u inside [u_min, u_max] and |u - u_last| <= max_step (checked in floating point,

@@ -138,8 +138,9 @@ void pihyst_modelbank_step(pihyst_modelbank *b, const real *u, real *y)
         for (l = 0; l < L; ++l) ug[l] = l < lanes ? u[i0 + l] : RC(0.0);
         model_lanes(grp + HEADER * L, ug, grp + H_OFFSET * L, yg);
         for (l = 0; l < lanes; ++l)
-            y[i0 + l] = grp[H_MODE * L + l] != RC(0.0) ? yg[l]
-                                                       : pihyst_model_step(b->models[i0 + l], ug[l]);
+            y[i0 + l] = grp[H_MODE * L + l] != RC(0.0)
+                            ? yg[l]
+                            : pihyst_model_step(b->models[i0 + l], ug[l]);
 #else
         for (l = 0; l < lanes; ++l) y[i0 + l] = pihyst_model_step(b->models[i0 + l], u[i0 + l]);
         (void)grp;
