@@ -40,6 +40,7 @@ void test_check_near(double x, double y, double tol, const char *what, const cha
 void run_model_tests(void);
 void run_inverse_tests(void);
 void run_bank_tests(void);
+void run_bank_soa_tests(void);
 void run_kernel_tests(void);
 void run_twin_tests(void);
 void run_creep_tests(void);
