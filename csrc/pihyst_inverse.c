@@ -515,6 +515,293 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
     }
 }
 
+/* ------------------------------------------------------------------ saturated ramps */
+
+/* A pwl model whose polylines are all saturated ramps (flat at y1 up to x1, rising to y2
+ * at x2, flat beyond: the KP kernels, detected by pihyst_model_init, coef[0] = 1) gets
+ * its own search, without event lists or sorting. From u_p with state f, going up,
+ * operator k follows R_k from its crossing c_k = x1 + (f_k - y1) dx/dy (R_k(c_k) = f_k)
+ * to x2 with the slope s_k = w_k dy/dx, and stays put outside [c_k, x2]. So
+ *
+ *     y(u) - y_p = z(u) = sum_k s_k (clamp(u, lo_k, hi_k) - clamp(u_p, lo_k, hi_k))  (R1)
+ *
+ * with lo_k = max(c_k, u_p), hi_k = x2 (an operator that cannot move, f_k >= y2 or
+ * c_k >= x2 or s_k = 0, gets lo_k = hi_k: no term). Going down, F_k with its crossing
+ * and x1 give the same form in the negated voltage p = -u (negation is exact), so both
+ * directions solve z(p) = target for p >= q (q = +-u_p), z continuous, non-decreasing,
+ * linear between the breakpoints {lo_k, hi_k}.
+ *
+ * lo and hi are set at a reversal (ramps_reverse, one O(K) loop) and kept while the
+ * direction holds, for the reason the event lists are kept: an operator not reached keeps
+ * its f_k, one on its ramp stays on it. One probe (ramps_probe, one O(K) loop with no
+ * data-dependent branch, vectorized) gives at a point m: z(m), the slopes just right and
+ * left of m, and the nearest breakpoints above and below m. The search (solve_ramps):
+ *   - tracking: probe at q; if the segment right of q reaches the target, solve it, else
+ *     probe at its end and try the next segment (usually one probe per sample);
+ *   - otherwise a bracket [L, H] with z(L) < target <= z(H), z(H) probed at the window's
+ *     end (below the target: the end is taken and flagged, as on the lists). Probe at a
+ *     point m inside (the secant point, or the midpoint when the bracket shrank by less
+ *     than half); the segment of m then either holds the answer, solved exactly, or
+ *     moves L up to its right end or H down to its left end. The bracket thus loses
+ *     m's segment and at least half of itself every other probe, and stops when it holds
+ *     no breakpoint.
+ * The answer is the least p with z(p) = target, as on the lists: a flat stretch with
+ * z = target is passed over to its start (H moves down across it). Cost: O(K) per probe,
+ * O(1 + segments passed) probes tracking, O(log K)-like probes for a jump (measured in
+ * benchmarks/bench_kp.py), no sort. */
+
+enum { RAMP_X1, RAMP_X2, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N };
+#define RAMP_LANES 8
+
+/* Scratch of a ramp model: RAMP_N arrays of K constants for the rising ramps, the same
+ * for the falling ones, then lo and hi (K each): 14 K values, inside the scratch of a
+ * pwl model of K 4-point polylines (the event lists' place, unused by this path). */
+static real *ramp_array(const pihyst_compensator *c, int falling, int which)
+{
+    return c->scratch + (size_t)(falling * RAMP_N + which) * c->work_model.n_ops;
+}
+
+#ifdef PIHYST_BUILD_F32
+#define R_MAX FLT_MAX
+#else
+#define R_MAX DBL_MAX
+#endif
+
+/* constants of every ramp, points 1 and 2 of its polyline: x1, x2, y1, y2, dx/dy (0 for
+ * a flat ramp, at most the largest finite value) and the slope w dy/dx */
+static void ramps_init(pihyst_compensator *c)
+{
+    const pihyst_model *m = &c->work_model;
+    const size_t K = m->n_ops;
+    size_t k;
+    int side;
+    for (side = 0; side < 2; ++side) {
+        const real *x = side ? m->pwl.fall_x : m->pwl.rise_x;
+        const real *y = side ? m->pwl.fall_y : m->pwl.rise_y;
+        real *x1 = ramp_array(c, side, RAMP_X1), *x2 = ramp_array(c, side, RAMP_X2);
+        real *y1 = ramp_array(c, side, RAMP_Y1), *y2 = ramp_array(c, side, RAMP_Y2);
+        real *inv = ramp_array(c, side, RAMP_INV), *s = ramp_array(c, side, RAMP_SLOPE);
+        for (k = 0; k < K; ++k) {
+            const real dx = x[4 * k + 2] - x[4 * k + 1], dy = y[4 * k + 2] - y[4 * k + 1];
+            real i = dy > RC(0.0) ? dx / dy : RC(0.0);
+            if (!(i <= R_MAX)) i = R_MAX;
+            x1[k] = x[4 * k + 1];
+            x2[k] = x[4 * k + 2];
+            y1[k] = y[4 * k + 1];
+            y2[k] = y[4 * k + 2];
+            inv[k] = i;
+            s[k] = m->weights[k] * (dy / dx);
+        }
+    }
+}
+
+/* lo, hi of (R1) going up from u_p: crossing c = x1 + (f - y1) dx/dy of the rising ramp,
+ * from x1 on (f <= y1: the ramp's start), joined at u_p if already passed */
+PIHYST_HOT
+static void ramps_reverse_up(size_t K, const real *restrict x1, const real *restrict x2,
+                             const real *restrict y1, const real *restrict y2,
+                             const real *restrict inv, const real *restrict s,
+                             const real *restrict f, real u_p, real *restrict lo,
+                             real *restrict hi)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        real cr = x1[k] + (f[k] - y1[k]) * inv[k];
+        int moves;
+        cr = cr > x1[k] ? cr : x1[k];
+        cr = cr > u_p ? cr : u_p;
+        moves = (f[k] < y2[k]) & (cr < x2[k]) & (s[k] > RC(0.0));
+        lo[k] = moves ? cr : u_p;
+        hi[k] = moves ? x2[k] : u_p;
+    }
+}
+
+/* going down, in p = -u: the falling ramp's crossing (up to x2), down to x1 */
+PIHYST_HOT
+static void ramps_reverse_down(size_t K, const real *restrict x1, const real *restrict x2,
+                               const real *restrict y1, const real *restrict inv,
+                               const real *restrict s, const real *restrict f, real u_p,
+                               real *restrict lo, real *restrict hi)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        real cr = x1[k] + (f[k] - y1[k]) * inv[k];
+        int moves;
+        cr = cr < x2[k] ? cr : x2[k];
+        cr = cr < u_p ? cr : u_p;
+        moves = (f[k] > y1[k]) & (cr > x1[k]) & (s[k] > RC(0.0));
+        lo[k] = moves ? -cr : -u_p;
+        hi[k] = moves ? -x1[k] : -u_p;
+    }
+}
+
+static void ramps_reverse(pihyst_compensator *c, int up, real u_p)
+{
+    const pihyst_model *m = &c->work_model;
+    const size_t K = m->n_ops;
+    real *lo = ramp_array(c, 2, 0), *hi = lo + K;
+    const int side = !up;
+    if (up)
+        ramps_reverse_up(K, ramp_array(c, side, RAMP_X1), ramp_array(c, side, RAMP_X2),
+                         ramp_array(c, side, RAMP_Y1), ramp_array(c, side, RAMP_Y2),
+                         ramp_array(c, side, RAMP_INV), ramp_array(c, side, RAMP_SLOPE),
+                         m->state, u_p, lo, hi);
+    else
+        ramps_reverse_down(K, ramp_array(c, side, RAMP_X1), ramp_array(c, side, RAMP_X2),
+                           ramp_array(c, side, RAMP_Y1), ramp_array(c, side, RAMP_INV),
+                           ramp_array(c, side, RAMP_SLOPE), m->state, u_p, lo, hi);
+}
+
+/* What a probe at m finds: z(m) of (R1), the slopes of z just right and left of m, and
+ * the nearest breakpoints strictly above and below m (+-inf if none). */
+typedef struct {
+    real z, right, left, next, prev;
+} ramp_probe;
+
+/* One term of the probe into lane j. The nearest breakpoint above m is lo if lo > m,
+ * else hi if hi > m (lo <= hi); below m likewise. */
+#define RAMP_PROBE_TERM(i, j)                                                     \
+    do {                                                                          \
+        const real l_ = lo[i], h_ = hi[i], w_ = s[i];                             \
+        real cm_ = m > l_ ? m : l_, cq_ = q > l_ ? q : l_, n_, b_;                \
+        cm_ = cm_ < h_ ? cm_ : h_;                                                \
+        cq_ = cq_ < h_ ? cq_ : h_;                                                \
+        z[j] += w_ * (cm_ - cq_);                                                 \
+        sr[j] += ((l_ <= m) & (m < h_)) ? w_ : RC(0.0);                           \
+        sl[j] += ((l_ < m) & (m <= h_)) ? w_ : RC(0.0);                           \
+        n_ = l_ > m ? l_ : (h_ > m ? h_ : R_INF);                                 \
+        b_ = h_ < m ? h_ : (l_ < m ? l_ : -R_INF);                                \
+        nx[j] = n_ < nx[j] ? n_ : nx[j];                                          \
+        pv[j] = b_ > pv[j] ? b_ : pv[j];                                          \
+    } while (0)
+
+/* z(m) - z(q) and the rest of ramp_probe in RAMP_LANES partial results (vectorized
+ * without reassociating: the lanes are explicit) */
+PIHYST_HOT
+static void ramps_probe(size_t K, const real *restrict lo, const real *restrict hi,
+                        const real *restrict s, real m, real q, ramp_probe *r)
+{
+    real z[RAMP_LANES], sr[RAMP_LANES], sl[RAMP_LANES], nx[RAMP_LANES], pv[RAMP_LANES];
+    const size_t K_lanes = K - K % RAMP_LANES;
+    size_t k, j;
+    for (j = 0; j < RAMP_LANES; ++j) {
+        z[j] = sr[j] = sl[j] = RC(0.0);
+        nx[j] = R_INF;
+        pv[j] = -R_INF;
+    }
+    for (k = 0; k < K_lanes; k += RAMP_LANES)
+        for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(k + j, j);
+    for (k = K_lanes; k < K; ++k) RAMP_PROBE_TERM(k, 0);
+    r->z = z[0];
+    r->right = sr[0];
+    r->left = sl[0];
+    r->next = nx[0];
+    r->prev = pv[0];
+    for (j = 1; j < RAMP_LANES; ++j) {
+        r->z += z[j];
+        r->right += sr[j];
+        r->left += sl[j];
+        r->next = nx[j] < r->next ? nx[j] : r->next;
+        r->prev = pv[j] > r->prev ? pv[j] : r->prev;
+    }
+}
+#undef RAMP_PROBE_TERM
+
+/* the p in [a, b] on the line through (a, za), (b, zb) with z = target (za < target <=
+ * zb) */
+static real ramp_interpolate(real a, real za, real b, real zb, real target)
+{
+    const real p = a + (target - za) * ((b - a) / (zb - za));
+    return p < a ? a : (p > b ? b : p);
+}
+
+/* The least p in (q, q + span] with z(p) = target (> 0), as the distance d = p - q:
+ * returns 1, or 0 with d = span if z(q + span) < target. Same contract as solve. */
+static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real target,
+                       real *d)
+{
+    const size_t K = c->work_model.n_ops;
+    const real *lo = ramp_array(c, 2, 0), *hi = lo + K, *s = ramp_array(c, !up, RAMP_SLOPE);
+    const real q = up ? u_p : -u_p, end = q + span;
+    real L = q, zL = RC(0.0), H = end, zH, p, width;
+    ramp_probe r;
+    int i, halve = 0;
+    if (c->dir != (up ? 1 : -1)) { /* a reversal */
+        c->dir = up ? 1 : -1;
+        ramps_reverse(c, up, u_p);
+    }
+    /* tracking: the segments right of q, one at a time */
+    for (i = 0; i < 2; ++i) {
+        real nb, zn;
+        ramps_probe(K, lo, hi, s, L, q, &r);
+        if (r.z >= target) { /* reached at L already (rounding) */
+            *d = L - q;
+            return 1;
+        }
+        nb = r.next < H ? r.next : H;
+        zn = r.z + r.right * (nb - L);
+        if (zn >= target) { /* right > 0: z rose below the target */
+            p = L + (target - r.z) / r.right;
+            *d = (p < nb ? p : nb) - q;
+            return 1;
+        }
+        if (!(nb < H)) { /* the window ends below the target */
+            *d = span;
+            return 0;
+        }
+        L = nb;
+        zL = zn;
+    }
+    /* a jump: bracket [L, H] */
+    ramps_probe(K, lo, hi, s, H, q, &r);
+    zH = r.z;
+    if (zH < target) {
+        *d = span;
+        return 0;
+    }
+    width = H - L;
+    for (i = 0; i < 100; ++i) {
+        /* the secant point, or the midpoint if the bracket shrank by less than half */
+        real m = halve ? L + RC(0.5) * (H - L) : ramp_interpolate(L, zL, H, zH, target);
+        if (!(m > L && m < H)) m = L + RC(0.5) * (H - L);
+        if (!(m > L && m < H)) break; /* L, H adjacent numbers */
+        ramps_probe(K, lo, hi, s, m, q, &r);
+        if (r.z < target) { /* the answer lies right of m */
+            const real nb = r.next < H ? r.next : H;
+            const real zn = r.z + r.right * (nb - m);
+            if (!(nb < H)) { /* no breakpoint in (m, H): linear up to H */
+                *d = ramp_interpolate(m, r.z, H, zH, target) - q;
+                return 1;
+            }
+            if (zn >= target) {
+                p = m + (target - r.z) / r.right;
+                *d = (p < nb ? p : nb) - q;
+                return 1;
+            }
+            L = nb;
+            zL = zn;
+        } else { /* z(m) >= target: the least such p lies at or left of m */
+            const real pb = r.prev > L ? r.prev : L;
+            const real zp = r.z - r.left * (m - pb);
+            if (!(pb > L)) { /* no breakpoint in (L, m): linear from L */
+                *d = ramp_interpolate(L, zL, m, r.z, target) - q;
+                return 1;
+            }
+            if (zp < target) {
+                p = pb + (target - zp) / r.left;
+                *d = (p < m ? p : m) - q;
+                return 1;
+            }
+            H = pb;
+            zH = zp;
+        }
+        halve = !(H - L <= RC(0.5) * width);
+        width = H - L;
+    }
+    *d = ramp_interpolate(L, zL, H, zH, target) - q;
+    return 1;
+}
+
 /* ------------------------------------------------------------------ reversal */
 
 /* A reversal (or the first sample) on the lists: collect the events of direction `up`
@@ -557,6 +844,7 @@ static PIHYST_INLINE int solve(pihyst_compensator *c, int up, real u_p, real spa
 {
     const pihyst_model *m = &c->work_model;
     events e;
+    if (c->in_order & PIHYST_ORDER_RAMPS) return solve_ramps(c, up, u_p, span, target, d);
     if (c->dir != (up ? 1 : -1)) { /* a reversal: start again from u_p */
         c->dir = up ? 1 : -1;
         c->base = u_p;
@@ -705,6 +993,10 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, re
     for (k = 1; k < K && m->family == PIHYST_MULTISLOPE; ++k) {
         if (scratch[k] < scratch[k - 1]) c->in_order &= ~PIHYST_ORDER_RISING_KINKS;
         if (scratch[K + k] > scratch[K + k - 1]) c->in_order &= ~PIHYST_ORDER_FALLING_KINKS;
+    }
+    if (m->family == PIHYST_PWL && m->coef[0] == RC(1.0)) { /* saturated ramps */
+        c->in_order |= PIHYST_ORDER_RAMPS;
+        ramps_init(c);
     }
     c->work_model.state = working_state(m, scratch);
     if (c->work_model.state != m->state) memcpy(c->work_model.state, m->state, K * sizeof(real));
