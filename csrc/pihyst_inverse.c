@@ -659,39 +659,81 @@ typedef struct {
 } ramp_probe;
 
 /* One term of the probe into lane j. The nearest breakpoint above m is lo if lo > m,
- * else hi if hi > m (lo <= hi); below m likewise. */
+ * else hi if hi > m (lo <= hi); below m likewise. Without `full` only z, the slope right
+ * of m and the next breakpoint (all a probe from the left needs). */
 #define RAMP_PROBE_TERM(i, j)                                                     \
     do {                                                                          \
         const real l_ = lo[i], h_ = hi[i], w_ = s[i];                             \
-        real cm_ = m > l_ ? m : l_, cq_ = q > l_ ? q : l_, n_, b_;                \
+        real cm_ = m > l_ ? m : l_, cq_ = q > l_ ? q : l_, n_;                    \
         cm_ = cm_ < h_ ? cm_ : h_;                                                \
         cq_ = cq_ < h_ ? cq_ : h_;                                                \
         z[j] += w_ * (cm_ - cq_);                                                 \
         sr[j] += ((l_ <= m) & (m < h_)) ? w_ : RC(0.0);                           \
-        sl[j] += ((l_ < m) & (m <= h_)) ? w_ : RC(0.0);                           \
         n_ = l_ > m ? l_ : (h_ > m ? h_ : R_INF);                                 \
-        b_ = h_ < m ? h_ : (l_ < m ? l_ : -R_INF);                                \
         nx[j] = n_ < nx[j] ? n_ : nx[j];                                          \
-        pv[j] = b_ > pv[j] ? b_ : pv[j];                                          \
+        if (full) {                                                               \
+            const real b_ = h_ < m ? h_ : (l_ < m ? l_ : -R_INF);                 \
+            sl[j] += ((l_ < m) & (m <= h_)) ? w_ : RC(0.0);                       \
+            pv[j] = b_ > pv[j] ? b_ : pv[j];                                      \
+        }                                                                         \
     } while (0)
 
-/* z(m) - z(q) and the rest of ramp_probe in RAMP_LANES partial results (vectorized
- * without reassociating: the lanes are explicit) */
-PIHYST_HOT
-static void ramps_probe(size_t K, const real *restrict lo, const real *restrict hi,
-                        const real *restrict s, real m, real q, ramp_probe *r)
+/* The probe's loop over blocks of RAMP_LANES operators, on vectors of RAMP_LANES values
+ * (compiler vector extensions; the portable loop below otherwise) holding the partial
+ * results: the compiler does not vectorize the scalar loop's min/max reductions, while
+ * it does vectorize the same lane-wise statements on vector variables (as the model's
+ * small kernels, pihyst_model.c). */
+#if defined(__GNUC__) && !defined(PIHYST_NO_VECTOR_EXT)
+#define RAMP_VECTOR 1
+typedef real rvec __attribute__((vector_size(RAMP_LANES * sizeof(real))));
+#endif
+
+/* z(m) - z(q) and the rest of ramp_probe (with `full`), in RAMP_LANES partial results */
+static PIHYST_INLINE void probe(size_t K, const real *restrict lo, const real *restrict hi,
+                                const real *restrict s, real m, real q, int full,
+                                ramp_probe *r)
 {
+#ifdef RAMP_VECTOR
+    rvec z, sr, sl, nx, pv;
+#else
     real z[RAMP_LANES], sr[RAMP_LANES], sl[RAMP_LANES], nx[RAMP_LANES], pv[RAMP_LANES];
-    const size_t K_lanes = K - K % RAMP_LANES;
-    size_t k, j;
+#endif
+    size_t k = 0, j;
     for (j = 0; j < RAMP_LANES; ++j) {
         z[j] = sr[j] = sl[j] = RC(0.0);
         nx[j] = R_INF;
         pv[j] = -R_INF;
     }
-    for (k = 0; k < K_lanes; k += RAMP_LANES)
+#ifdef RAMP_VECTOR
+    /* the last block padded with operators that cannot move (lo = hi = q, no slope), so
+     * that no scalar tail with branches follows */
+    while (k < K) {
+        rvec lv, hv, sv;
+        if (k + RAMP_LANES <= K) {
+            memcpy(&lv, lo + k, sizeof lv);
+            memcpy(&hv, hi + k, sizeof hv);
+            memcpy(&sv, s + k, sizeof sv);
+        } else {
+            for (j = 0; j < RAMP_LANES; ++j) {
+                lv[j] = k + j < K ? lo[k + j] : q;
+                hv[j] = k + j < K ? hi[k + j] : q;
+                sv[j] = k + j < K ? s[k + j] : RC(0.0);
+            }
+        }
+#define lo lv
+#define hi hv
+#define s sv
+        for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(j, j);
+#undef lo
+#undef hi
+#undef s
+        k += RAMP_LANES;
+    }
+#else
+    for (; k + RAMP_LANES <= K; k += RAMP_LANES)
         for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(k + j, j);
-    for (k = K_lanes; k < K; ++k) RAMP_PROBE_TERM(k, 0);
+    for (; k < K; ++k) RAMP_PROBE_TERM(k, 0);
+#endif
     r->z = z[0];
     r->right = sr[0];
     r->left = sl[0];
@@ -706,6 +748,21 @@ static void ramps_probe(size_t K, const real *restrict lo, const real *restrict 
     }
 }
 #undef RAMP_PROBE_TERM
+
+/* a probe from the left (tracking): z, right, next; left = 0, prev = -inf */
+PIHYST_HOT
+static void ramps_probe_right(size_t K, const real *restrict lo, const real *restrict hi,
+                              const real *restrict s, real m, real q, ramp_probe *r)
+{
+    probe(K, lo, hi, s, m, q, 0, r);
+}
+
+PIHYST_HOT
+static void ramps_probe(size_t K, const real *restrict lo, const real *restrict hi,
+                        const real *restrict s, real m, real q, ramp_probe *r)
+{
+    probe(K, lo, hi, s, m, q, 1, r);
+}
 
 /* the p in [a, b] on the line through (a, za), (b, zb) with z = target (za < target <=
  * zb) */
@@ -733,7 +790,7 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
     /* tracking: the segments right of q, one at a time */
     for (i = 0; i < 2; ++i) {
         real nb, zn;
-        ramps_probe(K, lo, hi, s, L, q, &r);
+        ramps_probe_right(K, lo, hi, s, L, q, &r);
         if (r.z >= target) { /* reached at L already (rounding) */
             *d = L - q;
             return 1;
@@ -753,7 +810,7 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
         zL = zn;
     }
     /* a jump: bracket [L, H] */
-    ramps_probe(K, lo, hi, s, H, q, &r);
+    ramps_probe_right(K, lo, hi, s, H, q, &r);
     zH = r.z;
     if (zH < target) {
         *d = span;
