@@ -785,7 +785,20 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
     int i, halve = 0;
     if (c->dir != (up ? 1 : -1)) { /* a reversal */
         c->dir = up ? 1 : -1;
+        c->next[0] = 0;
         ramps_reverse(c, up, u_p);
+    }
+    /* The segment of the last answer, kept (next[0] = 1) with its slope (slope[0]) and
+     * right end (ahead): z is linear from q up to there, so while the answer stays
+     * inside it needs no probe (a tracking step mostly does). */
+    if (c->next[0]) {
+        const real nb = c->ahead < H ? c->ahead : H, sigma = c->slope[0];
+        if (nb > q && sigma * (nb - q) >= target) {
+            p = q + target / sigma; /* sigma > 0: z rose by target within the segment */
+            *d = (p < nb ? p : nb) - q;
+            return 1;
+        }
+        c->next[0] = 0;
     }
     /* tracking: the segments right of q, one at a time */
     for (i = 0; i < 2; ++i) {
@@ -800,6 +813,9 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
         if (zn >= target) { /* right > 0: z rose below the target */
             p = L + (target - r.z) / r.right;
             *d = (p < nb ? p : nb) - q;
+            c->next[0] = 1; /* keep the segment [L, r.next] */
+            c->slope[0] = r.right;
+            c->ahead = r.next;
             return 1;
         }
         if (!(nb < H)) { /* the window ends below the target */
@@ -833,6 +849,9 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
             if (zn >= target) {
                 p = m + (target - r.z) / r.right;
                 *d = (p < nb ? p : nb) - q;
+                c->next[0] = 1; /* keep the segment [m, r.next] */
+                c->slope[0] = r.right;
+                c->ahead = r.next;
                 return 1;
             }
             L = nb;
@@ -847,6 +866,9 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
             if (zp < target) {
                 p = pb + (target - zp) / r.left;
                 *d = (p < m ? p : m) - q;
+                c->next[0] = 1; /* keep the segment [pb, m] */
+                c->slope[0] = r.left;
+                c->ahead = m;
                 return 1;
             }
             H = pb;
