@@ -49,6 +49,8 @@
  *   pwl:        the crossing by binary search on the polyline's values, then every
  *               interior breakpoint beyond it with its slope change, as two events
  *               (+ new slope, - old slope) that the walk sums exactly.
+ *   saturated-ramp pwl (every polyline flat, rising, flat: KP kernels): no lists, a
+ *               search by O(K) probes (section "saturated ramps" below).
  * Lists out of order (a state set by reset, an unusual multislope shape, pwl) are
  * sorted: insertion sort, O(K log K) at worst. For pwl the walk keeps its slope as a
  * compensated sum (hi + lo), so that a near-vertical segment joining and leaving
