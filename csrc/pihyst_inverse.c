@@ -552,11 +552,11 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  * O(1 + segments passed) probes tracking, O(log K)-like probes for a jump (measured in
  * benchmarks/bench_kp.py), no sort. */
 
-enum { RAMP_X1, RAMP_X2, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N };
+enum { RAMP_X1, RAMP_X2, RAMP_Y0, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N };
 #define RAMP_LANES 8
 
 /* Scratch of a ramp model: RAMP_N arrays of K constants for the rising ramps, the same
- * for the falling ones, then lo and hi (K each): 14 K values, inside the scratch of a
+ * for the falling ones, then lo and hi (K each): 16 K values, inside the scratch of a
  * pwl model of K 4-point polylines (the event lists' place, unused by this path). */
 static real *ramp_array(const pihyst_compensator *c, int falling, int which)
 {
@@ -569,8 +569,9 @@ static real *ramp_array(const pihyst_compensator *c, int falling, int which)
 #define R_MAX DBL_MAX
 #endif
 
-/* constants of every ramp, points 1 and 2 of its polyline: x1, x2, y1, y2, dx/dy (0 for
- * a flat ramp, at most the largest finite value) and the slope w dy/dx */
+/* constants of every ramp, from points 1 and 2 of its polyline: x1, x2, y0 (the value
+ * below x1: y1 but for the sign of a zero), y1, y2, dx/dy (0 for a flat ramp, at most
+ * the largest finite value) and the slope w dy/dx */
 static void ramps_init(pihyst_compensator *c)
 {
     const pihyst_model *m = &c->work_model;
@@ -581,7 +582,8 @@ static void ramps_init(pihyst_compensator *c)
         const real *x = side ? m->pwl.fall_x : m->pwl.rise_x;
         const real *y = side ? m->pwl.fall_y : m->pwl.rise_y;
         real *x1 = ramp_array(c, side, RAMP_X1), *x2 = ramp_array(c, side, RAMP_X2);
-        real *y1 = ramp_array(c, side, RAMP_Y1), *y2 = ramp_array(c, side, RAMP_Y2);
+        real *y0 = ramp_array(c, side, RAMP_Y0), *y1 = ramp_array(c, side, RAMP_Y1);
+        real *y2 = ramp_array(c, side, RAMP_Y2);
         real *inv = ramp_array(c, side, RAMP_INV), *s = ramp_array(c, side, RAMP_SLOPE);
         for (k = 0; k < K; ++k) {
             const real dx = x[4 * k + 2] - x[4 * k + 1], dy = y[4 * k + 2] - y[4 * k + 1];
@@ -589,6 +591,7 @@ static void ramps_init(pihyst_compensator *c)
             if (!(i <= R_MAX)) i = R_MAX;
             x1[k] = x[4 * k + 1];
             x2[k] = x[4 * k + 2];
+            y0[k] = y[4 * k];
             y1[k] = y[4 * k + 1];
             y2[k] = y[4 * k + 2];
             inv[k] = i;
@@ -765,6 +768,83 @@ static void ramps_probe(size_t K, const real *restrict lo, const real *restrict 
 {
     probe(K, lo, hi, s, m, q, 1, r);
 }
+
+/* The model step of a ramp model, with AVX2 on x86-64 (double precision; the f32 core is
+ * for FPUs without it): the state update of pihyst_model_step bit for bit,
+ *     f_k <- max(R_k(u), min(F_k(u), f_k)),   R, F by PIHYST_RAMP_VALUE,
+ * then the model's own sum. The ramp constants lie one array per quantity (whole-vector
+ * loads: the model reads its 4-point polylines operator by operator, ~16 scalar
+ * instructions each), and a block of 4 operators none of whose ramps has u on its rising
+ * part (u < x1 or u >= x2: most blocks) skips the division. The same operations in the
+ * same order as the scalar expression, lane by lane: (y2 - y1) * (u - x1), / (x2 - x1),
+ * + y1 (nothing to contract into an FMA), and min/max that return their second operand
+ * on equality as `h < f ? h : f` and `r > v ? r : v` do. Picked at init when the CPU has
+ * AVX2 (PIHYST_ORDER_RAMPS_AVX2); the compiler cannot be brought to vectorize the
+ * portable form (it scalarizes the selects around the per-block division). */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(PIHYST_BUILD_F32) && \
+    !defined(PIHYST_NO_VECTOR_EXT)
+#define RAMP_AVX2 1
+#include <immintrin.h>
+
+/* one ramp side of a block: the values at u, the division only where u is on a ramp */
+#define RAMP_AVX2_SIDE(out, a, k)                                                          \
+    do {                                                                                   \
+        const __m256d x1_ = _mm256_loadu_pd((a)[RAMP_X1] + (k));                           \
+        const __m256d x2_ = _mm256_loadu_pd((a)[RAMP_X2] + (k));                           \
+        const __m256d y0_ = _mm256_loadu_pd((a)[RAMP_Y0] + (k));                           \
+        const __m256d y2_ = _mm256_loadu_pd((a)[RAMP_Y2] + (k));                           \
+        const __m256d below_ = _mm256_cmp_pd(uv, x1_, _CMP_LT_OQ); /* u < x1 */           \
+        const __m256d above_ = _mm256_cmp_pd(uv, x2_, _CMP_GE_OQ); /* u >= x2 */           \
+        (out) = _mm256_blendv_pd(y2_, y0_, below_);                                        \
+        if (_mm256_movemask_pd(_mm256_or_pd(below_, above_)) != 15) {                      \
+            const __m256d y1_ = _mm256_loadu_pd((a)[RAMP_Y1] + (k));                       \
+            const __m256d t_ = _mm256_add_pd(                                              \
+                y1_, _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(y2_, y1_),                  \
+                                                 _mm256_sub_pd(uv, x1_)),                  \
+                                   _mm256_sub_pd(x2_, x1_)));                              \
+            (out) = _mm256_blendv_pd(t_, (out), _mm256_or_pd(below_, above_));             \
+        }                                                                                  \
+    } while (0)
+
+__attribute__((target("avx2"))) static void ramps_update_avx2(size_t K,
+                                                               const real *const *rc,
+                                                               const real *const *fc,
+                                                               real *f, real u)
+{
+    const __m256d uv = _mm256_set1_pd(u);
+    size_t k = 0;
+    for (; k + 4 <= K; k += 4) {
+        __m256d r, h;
+        RAMP_AVX2_SIDE(r, rc, k);
+        RAMP_AVX2_SIDE(h, fc, k);
+        /* max(r, min(h, f)): minpd(h, f) = h < f ? h : f, maxpd(r, v) = r > v ? r : v */
+        _mm256_storeu_pd(f + k, _mm256_max_pd(r, _mm256_min_pd(h, _mm256_loadu_pd(f + k))));
+    }
+    for (; k < K; ++k) {
+        const real r = PIHYST_RAMP_VALUE(rc[RAMP_X1][k], rc[RAMP_X2][k], rc[RAMP_Y0][k],
+                                         rc[RAMP_Y1][k], rc[RAMP_Y2][k], u);
+        const real h = PIHYST_RAMP_VALUE(fc[RAMP_X1][k], fc[RAMP_X2][k], fc[RAMP_Y0][k],
+                                         fc[RAMP_Y1][k], fc[RAMP_Y2][k], u);
+        const real v = h < f[k] ? h : f[k];
+        f[k] = r > v ? r : v;
+    }
+}
+#undef RAMP_AVX2_SIDE
+
+/* pihyst_model_step's value and state on a ramp model, through ramps_update_avx2 */
+static real ramps_step_avx2(pihyst_compensator *c, real u)
+{
+    pihyst_model *m = &c->work_model;
+    const real *rc[RAMP_N], *fc[RAMP_N];
+    int i;
+    for (i = 0; i < RAMP_N; ++i) {
+        rc[i] = ramp_array(c, 0, i);
+        fc[i] = ramp_array(c, 1, i);
+    }
+    ramps_update_avx2(m->n_ops, rc, fc, m->state, u);
+    return pihyst_internal_weighted_sum(m->n_ops, m->weights, m->state, m->offset);
+}
+#endif
 
 /* the p in [a, b] on the line through (a, za), (b, zb) with z = target (za < target <=
  * zb) */
@@ -1009,6 +1089,13 @@ static void publish(pihyst_compensator *c)
 /* apply u to the working state */
 static void apply(pihyst_compensator *c, real u)
 {
+#ifdef RAMP_AVX2
+    if (c->in_order & PIHYST_ORDER_RAMPS_AVX2) {
+        c->y_last = ramps_step_avx2(c, u);
+        c->u_last = u;
+        return;
+    }
+#endif
     c->y_last = pihyst_model_step(&c->work_model, u);
     c->u_last = u;
 }
@@ -1078,6 +1165,9 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, re
     if (m->family == PIHYST_PWL && m->coef[0] == RC(1.0)) { /* saturated ramps */
         c->in_order |= PIHYST_ORDER_RAMPS;
         ramps_init(c);
+#ifdef RAMP_AVX2
+        if (__builtin_cpu_supports("avx2")) c->in_order |= PIHYST_ORDER_RAMPS_AVX2;
+#endif
     }
     c->work_model.state = working_state(m, scratch);
     if (c->work_model.state != m->state) memcpy(c->work_model.state, m->state, K * sizeof(real));

@@ -11,6 +11,11 @@
 #include <string.h>
 
 #define LEN_OF(a) (sizeof(a) / sizeof *(a))
+#ifdef PIHYST_TEST_F32
+#define R_NEXT nextafterf
+#else
+#define R_NEXT nextafter
+#endif
 
 #define KR 24
 #define NR 3000
@@ -190,7 +195,7 @@ static void test_ramp_search_equals_generic(void)
         CHECK(pihyst_compensator_init(&cb, &mb, lim[0], lim[1], lim[2], lim[0], sb,
                                       LEN_OF(sb)) == PIHYST_OK);
         ramps_used += (ca.in_order & PIHYST_ORDER_RAMPS) != 0;
-        cb.in_order &= ~PIHYST_ORDER_RAMPS; /* the generic walk */
+        cb.in_order &= ~(unsigned)(PIHYST_ORDER_RAMPS | PIHYST_ORDER_RAMPS_AVX2); /* generic */
         pihyst_compensator_run(&ca, yd, ua, ya, fa, NS);
         pihyst_compensator_run(&cb, yd, ub, yb, fb, NS);
         for (t = 0; t < NS; ++t) {
@@ -253,6 +258,59 @@ static void test_ramp_search_round_trip(void)
     CHECK(bad == 0);
 }
 
+/* The compensator's own model step on a ramp model (AVX2 where the CPU has it) gives the
+ * model step's state and output bit for bit: reset(state, u) applies u, for random
+ * states and voltages on the breakpoints, an ulp off them, and anywhere; ramps with
+ * signed zeros (y0 = -0, y1 = +0). */
+static void test_ramp_step_equals_model_step(void)
+{
+    static size_t st[KMAX + 1];
+    static real rx[4 * KMAX], ry[4 * KMAX], fx[4 * KMAX], fy[4 * KMAX];
+    static real scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 8 * KMAX)];
+    real w[KMAX], coef_a[PIHYST_COEF_LEN(KMAX)], coef_b[PIHYST_COEF_LEN(KMAX)];
+    real st_a[KMAX], st_b[KMAX], state0[KMAX];
+    pihyst_pwl p;
+    pihyst_model ma, mb;
+    pihyst_compensator c;
+    size_t K, k, i, bad = 0;
+    unsigned trial;
+    for (trial = 0; trial < 40; ++trial) {
+        K = 1 + (size_t)(kern_uniform() * (real)KMAX);
+        if (K > KMAX) K = KMAX;
+        random_kp(K, trial % 2 ? 15u : 0u, st, rx, ry, fx, fy, w);
+        for (k = 0; k < K; k += 5) { /* -0 below, +0 on: the same polyline */
+            if (ry[4 * k + 1] == (real)0.0) ry[4 * k] = (real)-0.0;
+            if (fy[4 * k + 1] == (real)0.0) fy[4 * k] = (real)-0.0;
+        }
+        p.rise_start = st; p.rise_x = rx; p.rise_y = ry;
+        p.fall_start = st; p.fall_x = fx; p.fall_y = fy;
+        CHECK(model_init(&ma, PIHYST_PWL, K, NULL, w, 0.3, -20.0, 160.0, NULL, &p, coef_a,
+                         st_a, NULL) == PIHYST_OK);
+        CHECK(model_init(&mb, PIHYST_PWL, K, NULL, w, 0.3, -20.0, 160.0, NULL, &p, coef_b,
+                         st_b, NULL) == PIHYST_OK);
+        CHECK(pihyst_compensator_init(&c, &ma, NAN, NAN, INFINITY, 0.0, scratch,
+                                      LEN_OF(scratch)) == PIHYST_OK);
+        for (i = 0; i < 200; ++i) {
+            const size_t j = (size_t)(kern_uniform() * (real)(4 * K)) % (4 * K);
+            const real x = kern_uniform() < (real)0.5 ? rx[j] : fx[j];
+            const real pick = kern_uniform();
+            real u = pick < (real)0.3 ? x
+                     : pick < (real)0.5 ? R_NEXT(x, (real)-INFINITY)
+                     : pick < (real)0.7 ? R_NEXT(x, (real)INFINITY)
+                                        : (real)(180.0 * (double)kern_uniform() - 20.0);
+            real y;
+            u = u < (real)-20.0 ? (real)-20.0 : (u > (real)160.0 ? (real)160.0 : u);
+            for (k = 0; k < K; ++k) state0[k] = (real)(3.0 * (double)kern_uniform() - 0.7);
+            CHECK(pihyst_compensator_reset(&c, state0, u) == PIHYST_OK);
+            pihyst_model_reset(&mb, state0);
+            y = pihyst_model_step(&mb, u);
+            bad += memcmp(&y, &c.y_last, sizeof y) != 0;
+            bad += memcmp(st_a, st_b, K * sizeof *st_a) != 0;
+        }
+    }
+    CHECK(bad == 0);
+}
+
 /* the small-K kernels: a block equals the same samples stepped one at a time, any K */
 static void test_small_kernels_step_equals_run(void)
 {
@@ -286,5 +344,6 @@ void run_kernel_tests(void)
     test_ramps_equal_generic();
     test_ramp_search_equals_generic();
     test_ramp_search_round_trip();
+    test_ramp_step_equals_model_step();
     test_small_kernels_step_equals_run();
 }
