@@ -11,8 +11,9 @@ while tracking (ramps between random levels at 0.25 V per sample, as
 bench_compensate.py) and in the worst case (a random
 reachable value every sample); also a random walk of 0.5 V steps, a reversal about
 every other sample. On the ramp model the compensator uses its saturated-ramp search
-(probes of (R1), docs/c-core.md), on the reference model the generic event-list walk
-(collect and sort the breakpoints at every reversal). Targets (issue item 2):
+(probes of (R1), docs/c-core.md) and, with AVX2, its own bit-exact ramp model step; on
+the reference model the generic event-list walk (collect and sort the breakpoints at
+every reversal) and the generic model step. Targets (issue item 2):
 compensator <= 200 ns per sample tracking and <= 2 us worst case at K ~ 130.
 
 Run: python benchmarks/bench_kp.py
