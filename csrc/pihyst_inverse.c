@@ -538,8 +538,9 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  * its f_k, one on its ramp stays on it. One probe (ramps_probe, one O(K) loop with no
  * data-dependent branch, vectorized) gives at a point m: z(m), the slopes just right and
  * left of m, and the nearest breakpoints above and below m. The search (solve_ramps):
- *   - tracking: probe at q; if the segment right of q reaches the target, solve it, else
- *     probe at its end and try the next segment (usually one probe per sample);
+ *   - tracking: the last answer's segment is kept (slope and right end); an answer
+ *     inside it needs no probe. Else probe at q; if the segment right of q reaches the
+ *     target, solve it, else probe at its end and try the next segment;
  *   - otherwise a bracket [L, H] with z(L) < target <= z(H), z(H) probed at the window's
  *     end (below the target: the end is taken and flagged, as on the lists). Probe at a
  *     point m inside (the secant point, or the midpoint when the bracket shrank by less
