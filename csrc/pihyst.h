@@ -81,6 +81,9 @@ typedef uint8_t pihyst_flags;
 #define PIHYST_ORDER_FALLING_KINKS 2u  /**< multislope falling kinks sorted by distance */
 #define PIHYST_ORDER_CLASSICAL 4u      /**< classical state 1-Lipschitz in r: crossings in
                                             operator order, read from the state */
+#define PIHYST_ORDER_RAMPS 8u          /**< every polyline a saturated ramp: the ramp search,
+                                            no event lists (pihyst_inverse.c) */
+#define PIHYST_ORDER_RAMPS_AVX2 16u    /**< and the model step of the ramps with AVX2 */
 
 /** Length of the coefficient scratch a model needs, in values of its precision. */
 #define PIHYST_COEF_LEN(n_ops) (4 * (n_ops))

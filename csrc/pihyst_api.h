@@ -169,8 +169,9 @@ typedef struct {
     PIHYST_REAL u_last;       /**< last voltage (applied to the model state) */
     PIHYST_REAL y_last;       /**< model output at u_last with the current state */
     PIHYST_REAL tol;          /**< equality band of |y_d - y_last| (rounding of the output) */
-    PIHYST_REAL *scratch;     /**< caller-owned, scratch_len values: kinks, event lists, the
-                                   aligned working state */
+    PIHYST_REAL *scratch;     /**< caller-owned, scratch_len values: kinks, event lists (or
+                                   the ramp constants of a KP model), the aligned working
+                                   state */
     size_t scratch_len;       /**< >= pihyst_compensator_scratch_len(model) */
     size_t events_cap;        /**< capacity of the crossing list (events, sentinel excluded) */
     /* breakpoints kept between samples while the direction holds (internal): */
