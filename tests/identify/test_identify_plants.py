@@ -30,6 +30,7 @@ def test_default_fit_within_half_a_percent_on_random_ramps(name):
     # mean over runs; no single run may exceed it by more than a quarter.
     u, y = _record(name)
     res = fit(u, y)
+    assert res.model.delay == 0, res.report.to_dict()["data"]["delay"]["rule"]  # no lag
     span = np.ptp(y)
     errors = []
     for seed in range(5):

@@ -19,6 +19,15 @@ voltage and is flagged.
 
 :func:`compensate` does a whole trajectory; :class:`Compensator` does it sample by sample
 with explicit state, like the models' ``step``/``reset``/``state``.
+
+A model with an input delay of d samples (``model.delay``) answers a voltage d samples
+later: y[k] = P[v](k - d). A trajectory known in advance is compensated with preview,
+
+    v[k] = P^-1[y_d](k + d)   for k < N - d,   v[k] = v[N - d - 1] (held) after,
+
+so that the model's output meets y_d[k] on every sample k >= d (the first d samples are
+already decided by the voltage before the run). :func:`compensate` does that shift; the
+streaming :class:`Compensator` takes, at each tick, the target d samples ahead.
 """
 
 from dataclasses import dataclass
@@ -135,6 +144,11 @@ class Compensator:
         For a model with creep: the lag states before the first sample (default:
         settled at the model's output at the initial voltage).
 
+    A model with a delay of d samples (:attr:`delay`) makes the voltage of tick k act
+    at tick k + d: ``step`` and ``run`` take the target d samples ahead (y_d[k + d] at
+    tick k; :func:`compensate` shifts a whole trajectory so), and their displacement is
+    the model's output d samples later.
+
     Examples
     --------
     >>> import pihyst
@@ -195,6 +209,11 @@ class Compensator:
         self._lags = None
         self._start_lags(creep_state)
 
+    @property
+    def delay(self):
+        """The model's input delay in samples: how far ahead the targets are taken."""
+        return self.model.delay
+
     def _start_lags(self, creep_state):
         """With creep: the lags from ``creep_state``, or settled at the output now."""
         if self.model.creep is None:
@@ -251,7 +270,8 @@ class Compensator:
     # ---------------------------------------------------------------- compensation
     def step(self, y_desired, dt=None):
         """The voltage for one desired displacement (applied to the state). With creep,
-        ``dt`` is the time since the previous sample (default ``model.creep.dt``)."""
+        ``dt`` is the time since the previous sample (default ``model.creep.dt``). With a
+        delay of d samples, ``y_desired`` is the target d samples ahead."""
         y_desired = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
         if self._lags is None:
             return self._core.step(y_desired)
@@ -305,6 +325,14 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     and the slew limit. Any values are accepted: out of reach saturates at a limit and
     is flagged, NaN holds the last voltage and is flagged.
 
+    A model with a delay of d samples is compensated with preview (module notes):
+    ``voltage[k]`` aims at ``desired[k + d]``, the last d voltages hold, and
+    ``displacement[k]`` is the model's output at sample k, so that
+    ``model.predict(result.voltage)`` is ``result.displacement``, equal to ``desired``
+    on samples d.. wherever it was reached. The first d samples carry no flags: no
+    voltage of this run reaches them. With sample times ``t`` at another period than
+    the model's, the delay is converted when exact (``model.delay_at``).
+
     Parameters
     ----------
     model : PIModel or BoucWenModel
@@ -337,14 +365,55 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     """
     cls = OTHER_COMPENSATORS.get(getattr(model, "family", None))
     if cls is not None:
-        if t is not None or creep_state is not None:
-            raise InvalidArgumentError(f"a {model.family} model has no creep: t and "
-                                       f"creep_state do not apply")
-        return cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                   initial_voltage=initial_voltage, initial_state=initial_state).run(y_desired)
-    return Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                       initial_voltage=initial_voltage, initial_state=initial_state,
-                       creep_state=creep_state).run(y_desired, t=t)
+        if creep_state is not None:
+            raise InvalidArgumentError(f"a {model.family} model has no creep: "
+                                       f"creep_state does not apply")
+        comp = cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                   initial_voltage=initial_voltage, initial_state=initial_state)
+
+        def run(y, t):           # no creep: t only sets the delay's sample period
+            return comp.run(y)
+    else:
+        comp = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                           initial_voltage=initial_voltage, initial_state=initial_state,
+                           creep_state=creep_state)
+        run = comp.run
+    d = model.delay_at(t=t)
+    if d == 0:
+        return run(y_desired, t)
+    y = _desired(y_desired)
+    if t is not None:
+        t = np.asarray(t, dtype=np.float64)
+        if t.shape != y.shape:
+            raise InvalidArgumentError(f"t must have one time per desired value "
+                                       f"({y.size}), got shape {t.shape}")
+    start = comp.displacement
+    return _previewed(y, run(y[d:], None if t is None else t[d:]), d, start)
+
+
+def _previewed(desired, ahead, d, start):
+    """The result of compensating ``desired`` for a model delayed by d samples, from the
+    run ``ahead`` on desired[d:] (module notes): the voltages, then the last one held d
+    times; the displacement at sample k is the run's at k - d, and before that the
+    model's output at the first voltage (``start``, the output before the run, when no
+    voltage was computed)."""
+    n = desired.size
+    last = ahead.voltage[-1] if ahead.voltage.size else ahead.initial_voltage
+    voltage = np.concatenate([ahead.voltage, np.full(min(d, n), last)])
+    first = ahead.displacement[0] if ahead.displacement.size else start
+    displacement = np.concatenate([np.full(min(d, n), first), ahead.displacement])
+    flags = np.concatenate([np.zeros(min(d, n), dtype=np.uint8), ahead.flags])
+    low = (flags & FLAG_SATURATED_LOW) != 0
+    high = (flags & FLAG_SATURATED_HIGH) != 0
+    return CompensationResult(
+        desired=desired, voltage=voltage, displacement=displacement, flags=flags,
+        saturated=low | high, saturated_low=low, saturated_high=high,
+        slew_limited=(flags & FLAG_SLEW) != 0, nan_held=(flags & FLAG_NAN) != 0,
+        initial_state=ahead.initial_state, initial_voltage=ahead.initial_voltage,
+        final_state=ahead.final_state, final_voltage=ahead.final_voltage,
+        limits=ahead.limits, slew_rate=ahead.slew_rate,
+        initial_creep_state=ahead.initial_creep_state,
+        final_creep_state=ahead.final_creep_state)
 
 
 def _number(value, name, allow_inf=False, allow_nan=False):
