@@ -126,8 +126,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         the delayed output, ``pihyst.compensate`` previews the trajectory). "auto"
         (default): the delay with the lowest held-back RMS of a probe model, 0 to 5 % of
         a cycle, adopted only when it lowers the held-back RMS of that probe and of the
-        fitted structure by more than 5 % (docs/theory/identification.md), else 0. The report states the
-        delay used and why; with 0 it still says which delay the record favours.
+        fitted structure by more than 5 % (docs/theory/identification.md), else 0. The
+        report states the delay used and why; with 0 it still says which delay the
+        record favours.
     max_operators : int, optional
         Choose only among models with at most this many operators.
     max_latency : float, optional

@@ -106,8 +106,9 @@ class FeedbackProgram(FeedforwardProgram):
     (gains in V/um, V/(um s) and V s/um), then clipped to the limits and the slew limit.
     With a model delay of d ticks the feedforward takes the target d ticks ahead (as
     :class:`FeedforwardProgram`) while the PID compares the measurement with the target
-    of its own tick. The feedforward path runs on its own (the compensator's state follows H^-1(y_d), not
-    the corrected voltage): the correction is a small voltage added in parallel. Feeding
+    of its own tick. The feedforward path runs on its own (the compensator's state
+    follows H^-1(y_d), not the corrected voltage): the correction is a small voltage
+    added in parallel. Feeding
     the correction through the inverse instead (a corrected desired value, or an
     operator state that follows every correction) makes small reversals at which the
     model is flat, and the voltage jumps across them.
