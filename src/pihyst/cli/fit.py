@@ -66,10 +66,11 @@ def register(sub):
                    help="a second record (read with the same record options), judged but "
                         "not fitted: every family's error on it is reported and counts in "
                         "the choice")
-    p.add_argument("--delay", metavar="N", default="0",
+    p.add_argument("--delay", metavar="N", default="auto",
                    help="samples by which the displacement lags the voltage (the model "
-                        "maps u[k] to y[k+N]), or 'auto' to choose it on held-back cycles "
-                        "(default 0; the report says which delay the record favours)")
+                        "maps u[k] to y[k+N] and carries the delay), or 'auto' (default): "
+                        "chosen on held-back cycles, adopted only when clearly better "
+                        "(else 0); the report says which delay was used and why")
     p.add_argument("--max-operators", metavar="N", type=int,
                    help="choose only among models with at most N operators")
     p.add_argument("--max-latency", metavar="US", type=float,

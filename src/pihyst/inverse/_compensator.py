@@ -30,7 +30,7 @@ already decided by the voltage before the run). :func:`compensate` does that shi
 streaming :class:`Compensator` takes, at each tick, the target d samples ahead.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -40,7 +40,7 @@ from pihyst.model import InvalidModelError, PIModel
 from pihyst.model._creep import sample_intervals
 from pihyst.model._models import _finite_vector
 
-__all__ = ["CompensationResult", "Compensator", "compensate", "FLAG_SATURATED_LOW",
+__all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLAG_SATURATED_LOW",
            "FLAG_SATURATED_HIGH", "FLAG_NAN", "FLAG_SLEW"]
 
 #: Compensators of the models that are not PI models (family -> class), registered by
@@ -387,33 +387,79 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
         if t.shape != y.shape:
             raise InvalidArgumentError(f"t must have one time per desired value "
                                        f"({y.size}), got shape {t.shape}")
-    start = comp.displacement
-    return _previewed(y, run(y[d:], None if t is None else t[d:]), d, start)
+    return PreviewRun(comp, d).feed(y, t, last=True)
 
 
-def _previewed(desired, ahead, d, start):
-    """The result of compensating ``desired`` for a model delayed by d samples, from the
-    run ``ahead`` on desired[d:] (module notes): the voltages, then the last one held d
-    times; the displacement at sample k is the run's at k - d, and before that the
-    model's output at the first voltage (``start``, the output before the run, when no
-    voltage was computed)."""
-    n = desired.size
-    last = ahead.voltage[-1] if ahead.voltage.size else ahead.initial_voltage
-    voltage = np.concatenate([ahead.voltage, np.full(min(d, n), last)])
-    first = ahead.displacement[0] if ahead.displacement.size else start
-    displacement = np.concatenate([np.full(min(d, n), first), ahead.displacement])
-    flags = np.concatenate([np.zeros(min(d, n), dtype=np.uint8), ahead.flags])
+class PreviewRun:
+    """Compensation with preview for a model delayed by d samples, of a trajectory given
+    whole or block by block (module notes): ``feed(block)`` returns the samples whose
+    voltage is known so far, d behind the targets fed; ``feed(block, last=True)`` also
+    the last d, whose voltage holds. Sample k gets ``voltage[k]`` aiming at
+    ``desired[k + d]``, the displacement the model has at k (the compensator's at
+    ``desired[k]``, and before sample d the one at the first voltage) and the flags of
+    ``desired[k]`` (none before sample d)."""
+
+    def __init__(self, compensator, delay):
+        self.comp, self.d = compensator, int(delay)
+        self._seen = 0                   # targets fed
+        self._desired = np.empty(0)      # targets of the samples not yet returned
+        self._voltage = np.empty(0)      # voltages of those samples, as far as known
+        # the compensator's (displacement, flags) of desired[k - d], sample k on; None:
+        # before sample d (the displacement at the first voltage)
+        self._reached = [None] * self.d
+        self._first = None
+        self._start = None
+
+    def _run(self, y, t):
+        if isinstance(self.comp, Compensator):
+            return self.comp.run(y, t=t)
+        return self.comp.run(y)
+
+    def feed(self, y_desired, t=None, *, last=False):
+        """The samples completed by the targets ``y_desired`` (sample times ``t`` for
+        a model with creep), as a :class:`CompensationResult`; with ``last``, every
+        remaining sample."""
+        y = _desired(y_desired)
+        if self._start is None:
+            self._start = (self.comp.state, self.comp.voltage, self.comp.displacement,
+                           getattr(self.comp, "creep_state", None))
+        skip = max(0, min(self.d - self._seen, y.size))      # the first d: no voltage
+        self._seen += y.size
+        self._desired = np.concatenate([self._desired, y])
+        ahead = self._run(y[skip:], None if t is None else np.asarray(t, float)[skip:])
+        #: the compensator's run on this block's targets (``block[skip:]``)
+        self.ahead, self.skip = ahead, skip
+        if self._first is None and ahead.displacement.size:
+            self._first = float(ahead.displacement[0])
+        self._voltage = np.concatenate([self._voltage, ahead.voltage])
+        self._reached += list(zip(ahead.displacement.tolist(), ahead.flags.tolist()))
+        n = self._desired.size if last else self._voltage.size
+        held = n - self._voltage.size
+        voltage = np.concatenate([self._voltage, np.full(held, self.comp.voltage)])
+        first = self.comp.displacement if self._first is None else self._first
+        reached = [(first, 0) if r is None else r for r in self._reached[:n]]
+        out = CompensationResult(
+            desired=self._desired[:n], voltage=voltage[:n],
+            displacement=np.array([r[0] for r in reached], dtype=np.float64),
+            flags=np.array([r[1] for r in reached], dtype=np.uint8),
+            saturated=None, saturated_low=None, saturated_high=None, slew_limited=None,
+            nan_held=None, initial_state=self._start[0], initial_voltage=self._start[1],
+            final_state=self.comp.state, final_voltage=self.comp.voltage,
+            limits=self.comp.limits, slew_rate=self.comp.slew_rate,
+            initial_creep_state=self._start[3],
+            final_creep_state=getattr(self.comp, "creep_state", None))
+        self._desired, self._voltage = self._desired[n:], voltage[n:]
+        self._reached = self._reached[n:]
+        return _with_flag_arrays(out)
+
+
+def _with_flag_arrays(result):
+    """``result`` with its per-sample booleans derived from its flags."""
+    flags = result.flags
     low = (flags & FLAG_SATURATED_LOW) != 0
     high = (flags & FLAG_SATURATED_HIGH) != 0
-    return CompensationResult(
-        desired=desired, voltage=voltage, displacement=displacement, flags=flags,
-        saturated=low | high, saturated_low=low, saturated_high=high,
-        slew_limited=(flags & FLAG_SLEW) != 0, nan_held=(flags & FLAG_NAN) != 0,
-        initial_state=ahead.initial_state, initial_voltage=ahead.initial_voltage,
-        final_state=ahead.final_state, final_voltage=ahead.final_voltage,
-        limits=ahead.limits, slew_rate=ahead.slew_rate,
-        initial_creep_state=ahead.initial_creep_state,
-        final_creep_state=ahead.final_creep_state)
+    return replace(result, saturated=low | high, saturated_low=low, saturated_high=high,
+                   slew_limited=(flags & FLAG_SLEW) != 0, nan_held=(flags & FLAG_NAN) != 0)
 
 
 def _number(value, name, allow_inf=False, allow_nan=False):
