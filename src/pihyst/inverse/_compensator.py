@@ -25,8 +25,8 @@ later: y[k] = P[v](k - d). A trajectory known in advance is compensated with pre
 
     v[k] = P^-1[y_d](k + d)   for k < N - d,   v[k] = v[N - d - 1] (held) after,
 
-so that the model's output meets y_d[k] on every sample k >= d (the first d samples are
-already decided by the voltage before the run). :func:`compensate` does that shift; the
+so that the model's output meets y_d[k] on every sample k >= d (the first d samples show
+the voltage held before the run, the initial voltage). :func:`compensate` does that shift; the
 streaming :class:`Compensator` takes, at each tick, the target d samples ahead.
 """
 
@@ -284,10 +284,11 @@ class Compensator:
         self._output = float(y[0])
         return float(u[0])
 
-    def run(self, y_desired, t=None):
+    def run(self, y_desired, t=None, t_previous=None):
         """Compensate a block of desired displacements, continuing from the current state.
         With creep, ``t`` are the sample times (s; default: every ``model.creep.dt``,
-        the first one ``creep.dt`` after the previous sample).
+        the first one ``creep.dt`` after the previous sample, or at ``t[0] - t_previous``
+        when the previous sample's time is given).
 
         Returns a :class:`CompensationResult`."""
         y_desired = _desired(y_desired)
@@ -296,8 +297,10 @@ class Compensator:
         if self._lags is None:
             u, y, flags = self._core.run(y_desired)
         else:
-            dt = (None if t is None else
-                  sample_intervals(t, y_desired.size, self.model.creep.dt))
+            first = self.model.creep.dt
+            if t is not None and t_previous is not None and y_desired.size:
+                first = float(np.asarray(t, dtype=np.float64)[0]) - float(t_previous)
+            dt = None if t is None else sample_intervals(t, y_desired.size, first)
             u, y, flags = self._lags.compensate(self._core, y_desired, dt)
             if y.size:
                 self._output = float(y[-1])
@@ -327,11 +330,13 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
 
     A model with a delay of d samples is compensated with preview (module notes):
     ``voltage[k]`` aims at ``desired[k + d]``, the last d voltages hold, and
-    ``displacement[k]`` is the model's output at sample k, so that
-    ``model.predict(result.voltage)`` is ``result.displacement``, equal to ``desired``
-    on samples d.. wherever it was reached. The first d samples carry no flags: no
-    voltage of this run reaches them. With sample times ``t`` at another period than
-    the model's, the delay is converted when exact (``model.delay_at``).
+    ``displacement[k]`` is the model's output at sample k, equal to ``desired`` on
+    samples d.. wherever it was reached. The first d samples show the voltage held
+    before the run and carry no flags (no voltage of this run reaches them):
+    ``displacement`` is ``model.predict(voltage, initial_state=initial_state,
+    pending_input=[initial_voltage] * d)`` (with creep: the same ``t``). With sample
+    times ``t`` at another period than the model's, the delay is converted when exact
+    (``model.delay_at``).
 
     Parameters
     ----------
@@ -396,8 +401,8 @@ class PreviewRun:
     voltage is known so far, d behind the targets fed; ``feed(block, last=True)`` also
     the last d, whose voltage holds. Sample k gets ``voltage[k]`` aiming at
     ``desired[k + d]``, the displacement the model has at k (the compensator's at
-    ``desired[k]``, and before sample d the one at the first voltage) and the flags of
-    ``desired[k]`` (none before sample d)."""
+    ``desired[k]``; before sample d the one at the initial voltage, which the actuator
+    held before the run) and the flags of ``desired[k]`` (none before sample d)."""
 
     def __init__(self, compensator, delay):
         self.comp, self.d = compensator, int(delay)
@@ -405,14 +410,14 @@ class PreviewRun:
         self._desired = np.empty(0)      # targets of the samples not yet returned
         self._voltage = np.empty(0)      # voltages of those samples, as far as known
         # the compensator's (displacement, flags) of desired[k - d], sample k on; None:
-        # before sample d (the displacement at the first voltage)
+        # before sample d (the displacement at the initial voltage)
         self._reached = [None] * self.d
-        self._first = None
         self._start = None
+        self._t_last = None
 
-    def _run(self, y, t):
+    def _run(self, y, t, t_previous):
         if isinstance(self.comp, Compensator):
-            return self.comp.run(y, t=t)
+            return self.comp.run(y, t=t, t_previous=t_previous)
         return self.comp.run(y)
 
     def feed(self, y_desired, t=None, *, last=False):
@@ -426,18 +431,22 @@ class PreviewRun:
         skip = max(0, min(self.d - self._seen, y.size))      # the first d: no voltage
         self._seen += y.size
         self._desired = np.concatenate([self._desired, y])
-        ahead = self._run(y[skip:], None if t is None else np.asarray(t, float)[skip:])
+        t_previous = None
+        if t is not None:
+            # the first target fed comes one sample interval after the sample before it
+            t = np.asarray(t, dtype=np.float64)
+            t_previous = t[skip - 1] if skip > 0 else self._t_last
+            self._t_last = t[-1] if t.size else self._t_last
+        ahead = self._run(y[skip:], None if t is None else t[skip:], t_previous)
         #: the compensator's run on this block's targets (``block[skip:]``)
         self.ahead, self.skip = ahead, skip
-        if self._first is None and ahead.displacement.size:
-            self._first = float(ahead.displacement[0])
         self._voltage = np.concatenate([self._voltage, ahead.voltage])
         self._reached += list(zip(ahead.displacement.tolist(), ahead.flags.tolist()))
         n = self._desired.size if last else self._voltage.size
         held = n - self._voltage.size
         voltage = np.concatenate([self._voltage, np.full(held, self.comp.voltage)])
-        first = self.comp.displacement if self._first is None else self._first
-        reached = [(first, 0) if r is None else r for r in self._reached[:n]]
+        before = self._start[2]          # the displacement at the initial voltage
+        reached = [(before, 0) if r is None else r for r in self._reached[:n]]
         out = CompensationResult(
             desired=self._desired[:n], voltage=voltage[:n],
             displacement=np.array([r[0] for r in reached], dtype=np.float64),
