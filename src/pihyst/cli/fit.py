@@ -183,8 +183,9 @@ def run(args):
                          f"{args.max_latency:g}")
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
+    # the time (when there is a column) gives the sample period a fitted delay holds at
     record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json, optional=())
+                            say=not args.json, optional=("time",))
     u, y = record.voltage, record.displacement
     other = validate = None
     if args.validate is not None:
@@ -199,7 +200,7 @@ def run(args):
                          holdout=holdout, initial_state=args.initial_state,
                          through="top" if args.through_top else None,
                          offset=not args.no_offset, validate=validate, delay=delay,
-                         max_operators=args.max_operators,
+                         t=record.time, max_operators=args.max_operators,
                          max_latency=(None if args.max_latency is None
                                       else 1e-6 * args.max_latency))
         except FitError as err:
@@ -219,8 +220,9 @@ def run(args):
         print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)
     print(result.report.to_json() if args.json else result.report)
     if not args.json:
+        lag = f", input delay {model.delay} samples" if model.delay else ""
         print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
-              f"operators (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+              f"operators{lag} (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
 
 
 def _plain(meta):
