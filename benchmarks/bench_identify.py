@@ -8,7 +8,8 @@
    operators each: multislope (identified shape) against classical.
 3. The P-885 pair (the accuracy issue's target): fit on Model_Vi_Do.dat, predict the
    uncompensated stretch of Test_Vi_Do_Di.dat (samples 5052-10269, mean removed), with
-   delay 0 and delay="auto"; every family's held-back and test RMS, operator count and
+   the default (delay="auto": the delay the rule adopts) and delay 0; every family's
+   held-back RMS and test RMS (predicted with the model's own delay), operator count and
    compensator latency.
 4. Speed: exhaustive 4-of-16 threshold search on 10^5 samples, against a NumPy/SciPy
    reference that fits every subset by scipy.optimize.nnls on the full operator matrix;
