@@ -289,3 +289,16 @@ def test_an_explicit_initial_state_is_not_probed_for_a_delay():
               initial_state=[0.0, 0.0, 0.0])
     rep = res.report.to_dict()["data"]["delay"]
     assert rep["samples"] == 0 and rep["rule"].startswith("not probed")
+
+
+def test_no_delay_is_adopted_without_held_back_data():
+    # a shift fitted and judged on the same samples is no evidence of a dead time
+    u = with_minor_loops(seed=3)
+    d = 3
+    y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45], holdout=None)
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == 0 and rep["best"] == d
+    assert rep["rule"].startswith("nothing is held back")
+    assert fit(u, y, family="classical", thresholds=[0, 20, 45], holdout=None,
+               delay=d).model.delay == d                      # given: used as it is

@@ -24,7 +24,9 @@ A delay is adopted (``fit``'s default ``delay="auto"``) only when it is clearly 
 
     rms_C(d*) < (1 - ADOPT_GAIN) rms_C(0)   and   rms_F(d*) < (1 - ADOPT_GAIN) rms_F(0),  (2)
 
-d* the best delay of the classical probe C, F the fitted structure itself (the requested
+both RMS judged on held-back cycles (with nothing held back no delay is adopted: a
+shift fitted and judged on the same samples always looks a little better), d* the best
+delay of the classical probe C, F the fitted structure itself (the requested
 family if one with thresholds was given, else the modified PI of ``CONFIRM``: plays plus
 a monotone input function, thresholds chosen from the candidates) fitted and judged on
 the same samples as the probe. A dead time belongs to the record, so the structure that
@@ -154,6 +156,10 @@ def adopted(rec, fitter_of, tried, family):
     best = min(finite, key=lambda d: rms[d])
     if best == 0:
         return 0, "no delay lowers the probe's held-back RMS", None
+    if not rec.has_held_back:
+        # the fitted error always falls a little with one more thing fitted to it
+        return 0, ("nothing is held back to judge a delay on (the fitted error is no "
+                   "evidence): none assumed"), None
     g = gain(rms[best], rms.get(0, np.inf))
     if g <= ADOPT_GAIN:
         return 0, (f"{best} samples lower the probe's RMS by only {100 * g:.1f} % "
