@@ -7,7 +7,8 @@ a dead time between the voltage and the displacement recorded with it. A model w
     y[k] = P[u_d](k),   u_d[k] = u[k - d] for k >= d,   u_d[k] = u_pending[k] for k < d,
 
 where the d pending inputs are, by default, u[0] held: the first d outputs are those of
-the initial state at u[0] (y[k] = P[u](0)). A delay is a number of samples, so it holds
+the initial state at u[0] (y[k] = P[u](0) for a rate-independent model; with creep the
+lags run on through those samples). A delay is a number of samples, so it holds
 at one sample period: a model records the period it was identified at
 (``sample_period``, s) when that was known, and a run at another period is converted
 when d T is a whole number of the new samples, refused otherwise.

@@ -316,7 +316,8 @@ class PIModel(Immutable, ABC):
         return self.creep.lags(creep_state)
 
     def operators(self, u, *, initial_state=None):
-        """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8)."""
+        """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8), of the input as
+        given (a delay is not applied: Phi pairs with the output d samples later)."""
         u = self._checked_input(u)
         return self._new_bank(self._state_or_initial(initial_state)).operators(u)
 
