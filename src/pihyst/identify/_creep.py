@@ -200,7 +200,23 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, **kwargs):
                  "sample after the settling sweep"),
     }
     meta["fit"] = summary
+    report = second.report
+    if d and "delay" in summary.get("data", {}):
+        # the delay was chosen by the first fit (the second was given it): its report
+        report = _with_delay_of(second.report, first.report)
+        summary["data"] = report.to_dict()["data"]
+        summary["undetermined"] = report.to_dict()["undetermined"]
     model = model.replace(metadata=meta)
     models = dict(second.models)
     models[summary.get("family", model.family)] = model
-    return type(second)(model=model, report=second.report, models=models)
+    return type(second)(model=model, report=report, models=models)
+
+
+def _with_delay_of(report, chooser):
+    """``report`` with the delay entry and the delay's note of the report ``chooser``."""
+    data, other = report.to_dict(), chooser.to_dict()
+    data["data"]["delay"] = other["data"]["delay"]
+    note = "the input-output delay:"
+    data["undetermined"] = ([t for t in data["undetermined"] if not t.startswith(note)]
+                            + [t for t in other["undetermined"] if t.startswith(note)])
+    return type(report)(data)
