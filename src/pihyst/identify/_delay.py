@@ -34,7 +34,13 @@ will be fitted gains from removing it too; a shift that only the probe likes imi
 loop shape or a threshold the probe's equally spaced plays cannot fit (the simulated
 lens beam: the probe gains 14 % at 17 samples, the modified PI loses there; a single
 play beyond the probe's plays: the probe gains 45 % at 1 sample, the exact structure
-nothing). Otherwise the delay stays 0.
+nothing). Otherwise the delay stays 0. Once (2) holds, the delay adopted is the fitted
+structure's own best near d*,
+
+    d = a local minimum of rms_F, reached from d* one sample at a time,           (3)
+
+since the probe's shape error can move its minimum (a 10-sample lag on the simulated
+paper beam: the probe's best is 8, the modified PI's 10).
 """
 
 import numpy as np
@@ -165,16 +171,38 @@ def adopted(rec, fitter_of, tried, family):
         return 0, (f"{best} samples lower the probe's RMS by only {100 * g:.1f} % "
                    f"(a delay needs more than {100 * ADOPT_GAIN:g} %)"), None
     base, keep = _probe_record(rec)
-    at = {d: _judged(base, keep, d, fitter_of, family) for d in (0, best)}
-    confirm = {"family": family.name, "samples": best, "rms_0": at[0], "rms_d": at[best]}
-    g2 = gain(at[best], at[0])
+    at = {}
+
+    def fitted(d):
+        if d not in at:
+            at[d] = _judged(base, keep, d, fitter_of, family)
+        return at[d]
+
+    g2 = gain(fitted(best), fitted(0))
     if g2 <= ADOPT_GAIN:
         change = (f"by only {100 * g2:.1f} %" if g2 >= 0 else
                   f"not at all (RMS {at[best]:.3g} against {at[0]:.3g})")
         return 0, (f"{best} samples lower the probe's RMS by {100 * g:.1f} % but a fitted "
                    f"{family.name} model's {change} (a delay needs more than "
                    f"{100 * ADOPT_GAIN:g} %): a shape the probe cannot fit, not a dead "
-                   f"time"), confirm
-    return best, (f"{best} samples lower the held-back RMS of the probe by {100 * g:.1f} % "
-                  f"and of a fitted {family.name} model by {100 * g2:.1f} %, more than "
-                  f"{100 * ADOPT_GAIN:g} %"), confirm
+                   f"time"), _confirmation(family, best, best, at)
+    # (3): the fitted structure's own best delay, by descent from the probe's
+    d, top = best, max(rms)
+    while True:
+        steps = [n for n in (d - 1, d + 1) if 1 <= n <= top]
+        n = min(steps, key=fitted, default=d)
+        if not fitted(n) < fitted(d):
+            break
+        d = n
+    near = "" if d == best else f" (the probe's best: {best})"
+    return d, (f"{d} samples{near} lower the held-back RMS of the probe by "
+               f"{100 * gain(rms.get(d, rms[best]), rms.get(0, np.inf)):.1f} % and of a "
+               f"fitted {family.name} model by {100 * gain(at[d], at[0]):.1f} %, more than "
+               f"{100 * ADOPT_GAIN:g} %"), _confirmation(family, best, d, at)
+
+
+def _confirmation(family, best, used, at):
+    """What the report says of the fitted structure's check: its judged RMS per delay."""
+    return {"family": family.name, "probe_best": best, "samples": used,
+            "rms_0": at[0], "rms_d": at[used],
+            "tried": [{"samples": k, "rms": at[k]} for k in sorted(at)]}

@@ -389,12 +389,14 @@ def _undetermined(rec, validation, known, unknown_reason, delay_info, cands):
                      "would tell")
     tried = {t["samples"]: t["rms"] for t in delay_info["tried"]}
     used, best = delay_info["samples"], delay_info["best"]
-    if best is not None and best != used and \
+    adopted = delay_info["auto"] and used     # the rule's sentence says why
+    if best is not None and best != used and not adopted and \
             tried[best] < (1 - DELAY_NOTE_GAIN) * tried.get(used, np.inf):
         hint = (f"not adopted, {delay_info['rule']}" if delay_info["auto"] else
                 "align the record, or fit with delay='auto'")
+        at_used = (f"{tried[used]:.4g} at {used}" if used in tried else
+                   f"{used} not probed")
         out.append(f"the input-output delay: the record fits best with the output lagging "
-                   f"by {best} samples (probe RMS {tried[best]:.4g} against "
-                   f"{tried[used]:.4g} at {used}); the models assume {used}. A delay is not "
-                   f"hysteresis: {hint}")
+                   f"by {best} samples (probe RMS {tried[best]:.4g} against {at_used}); "
+                   f"the models assume {used}. A delay is not hysteresis: {hint}")
     return out
