@@ -11,7 +11,7 @@ import numpy as np
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, count
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
-from pihyst.exceptions import FitError, InvalidModelError, PihystWarning
+from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, RecordError
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
 
@@ -183,9 +183,8 @@ def run(args):
                          f"{args.max_latency:g}")
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
-    # the time (when there is a column) gives the sample period a fitted delay holds at
     record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json, optional=("time",))
+                            say=not args.json, optional=())
     u, y = record.voltage, record.displacement
     other = validate = None
     if args.validate is not None:
@@ -200,7 +199,7 @@ def run(args):
                          holdout=holdout, initial_state=args.initial_state,
                          through="top" if args.through_top else None,
                          offset=not args.no_offset, validate=validate, delay=delay,
-                         t=record.time, max_operators=args.max_operators,
+                         max_operators=args.max_operators,
                          max_latency=(None if args.max_latency is None
                                       else 1e-6 * args.max_latency))
         except FitError as err:
@@ -208,6 +207,8 @@ def run(args):
                 raise _error(err, other) from None
             raise _error(err, record) from None
     model = result.model
+    if model.delay:
+        model = model.replace(sample_period=_sample_period(args))
     if input_range is not None:
         model = _with_input_range(model, input_range, record)
     model = model.replace(metadata={
@@ -223,6 +224,19 @@ def run(args):
         lag = f", input delay {model.delay} samples" if model.delay else ""
         print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
               f"operators{lag} (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+
+
+def _sample_period(args):
+    """The record's sample period (s), which a fitted delay holds at: the median step of
+    its time (read only now, and only the time: a fit without a delay needs none); None
+    when the record has no usable time."""
+    try:
+        times = read_from_args(args, args.data, need=("time",), say=False, optional=())
+    except (RecordError, UsageError):
+        return None
+    steps = np.diff(times.time) if times.time is not None else np.empty(0)
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    return float(np.median(steps)) if steps.size else None
 
 
 def _plain(meta):
