@@ -145,8 +145,10 @@ def gain(rms_at_d, rms_at_0):
 
 
 def confirming_family(families):
-    """F of (2): the one requested family if it has thresholds, else ``CONFIRM``."""
-    if len(families) == 1 and families[0].operators_key == "thresholds":
+    """F of (2): the one requested family if it is a PI family with thresholds, else
+    ``CONFIRM`` (for kernels, Bouc-Wen or several families)."""
+    if len(families) == 1 and families[0].operators_key == "thresholds" and \
+            families[0].name != "bouc-wen":
         return families[0]
     return CONFIRM()
 
