@@ -16,6 +16,7 @@ import numpy as np
 
 from pihyst import _core
 from pihyst.inverse._compensator import Compensator
+from pihyst.model._bank import refuse_delayed
 
 
 def _per_channel(value, n, name):
@@ -32,7 +33,8 @@ class CompensatorBank:
     Parameters
     ----------
     models : sequence of PIModel
-        One model (non-negative weights) per channel.
+        One model (non-negative weights) per channel, without an input delay (a
+        delayed model is refused: each channel would need its own preview).
     u_min, u_max, slew_rate, initial_voltage, initial_state
         As for :class:`Compensator`: one value for every channel, or a sequence of N
         (None entries: that channel's default).
@@ -69,6 +71,7 @@ class CompensatorBank:
     def __init__(self, models, *, u_min=None, u_max=None, slew_rate=None,
                  initial_voltage=None, initial_state=None, fast=False):
         models = tuple(models)
+        refuse_delayed(models)
         n = len(models)
         args = zip(models, _per_channel(u_min, n, "u_min"), _per_channel(u_max, n, "u_max"),
                    _per_channel(slew_rate, n, "slew_rate"),

@@ -8,7 +8,7 @@ channels of up to 16 operators several at a time, with the same bits."""
 import numpy as np
 
 from pihyst import _core
-from pihyst.exceptions import InputRangeError
+from pihyst.exceptions import InputRangeError, InvalidModelError
 from pihyst.model._models import PIModel
 
 
@@ -47,6 +47,7 @@ class ModelBank:
         for i, m in enumerate(models):
             if not isinstance(m, PIModel):
                 raise TypeError(f"models[{i}] must be a pihyst model, not {type(m).__name__}")
+        refuse_delayed(models)
         if initial_states is None:
             initial_states = [None] * len(models)
         initial_states = list(initial_states)
@@ -122,3 +123,14 @@ class ModelBank:
 
     def __repr__(self):
         return f"ModelBank({len(self)} channels)"
+
+
+def refuse_delayed(models):
+    """InvalidModelError for the first model with an input delay: a bank steps every
+    channel by the same tick and has no delay line (docs/fleets.md)."""
+    for i, m in enumerate(models):
+        if getattr(m, "delay", 0):
+            raise InvalidModelError(f"models[{i}] has an input delay of {m.delay} samples: "
+                                    f"a bank does not delay its channels (use "
+                                    f"model.replace(delay=0) and shift the inputs, or "
+                                    f"run the channel on its own)")
