@@ -67,8 +67,9 @@ def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, valid
     the records with indices ``validation`` (default: the last third, leaving at least
     m to fit), the smallest within ``tolerance`` of the best. ``weighted``: weight
     the B, D fit by the BLA's inverse standard deviation (off by default: with few
-    records the variance estimate is too noisy to help). ``q``: FSID block rows (default order + 1). With ``return_selection``
-    returns (model, :class:`OrderSelection` or None)."""
+    records the variance estimate is too noisy to help). ``q``: FSID block rows
+    (default order + 1). With ``return_selection`` returns (model,
+    :class:`OrderSelection` or None)."""
     recs = periodic_records(records, period)
     R, m = len(recs), recs[0][0].shape[1]
     selection = None

@@ -28,8 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst.dynamics._bla import period_spectra, periodic_records
-from pihyst.dynamics._fit_state_space import (DEFAULT_ORDERS, fit_state_space,
-                                              steady_state_rms)
+from pihyst.dynamics._fit_state_space import DEFAULT_ORDERS, fit_state_space, steady_state_rms
 from pihyst.dynamics._statespace import StateSpace
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.model import ClassicalPI
@@ -92,13 +91,14 @@ def _thresholds(u, n_operators):
 
 def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operators=4,
                        input_range=None, refinements=3, orders=DEFAULT_ORDERS,
-                       validation=None, discard=1, weighted=False):
+                       validation=None, discard=1, weighted=False, linear=None):
     """A :class:`StateSpaceHammerstein` fitted to periodic multisine records (module
     notes). ``order``, ``orders``, ``validation``, ``discard``, ``weighted``: as for
     :func:`~pihyst.dynamics.fit_state_space` (the order is chosen once, for the linear
     start). ``thresholds``: one array per input (default: ``n_operators`` equally
     spaced on [0, S/2) of the input's span S); ``input_range`` per input (default 1.5
-    times the span about its centre)."""
+    times the span about its centre). ``linear``: the linear start of step 1 if already
+    fitted to these records (a :class:`StateSpace` with m inputs; its order is kept)."""
     from scipy.optimize import lsq_linear
 
     recs = periodic_records(records, period)
@@ -135,8 +135,15 @@ def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operat
         return steady_state_rms(dyn, hysteresis_records(w), period, discard)
 
     w = [np.r_[1.0, np.zeros(K[i] - 1)] for i in range(m)]
-    dyn = fit_state_space(recs, period, order, orders=orders, validation=validation,
-                          discard=discard, weighted=weighted)
+    if linear is None:
+        dyn = fit_state_space(recs, period, order, orders=orders, validation=validation,
+                              discard=discard, weighted=weighted)
+    elif not isinstance(linear, StateSpace) or linear.n_inputs != m or \
+            linear.n_outputs != recs[0][1].shape[1]:
+        raise InvalidArgumentError(f"linear must be a StateSpace model with {m} inputs and "
+                                   f"{recs[0][1].shape[1]} outputs")
+    else:
+        dyn = linear
     order = dyn.order
     best = (cost(dyn, w), dyn, w)
     for _ in range(refinements):

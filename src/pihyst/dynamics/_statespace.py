@@ -194,9 +194,9 @@ def observability_basis(omega, G, q):
 
 def fit_ac(U, n, p):
     """A and C of order n from the observability basis U (module notes)."""
-    O = U[:, :n]
-    C = O[:p]
-    A = np.linalg.lstsq(O[:-p], O[p:], rcond=None)[0]
+    obs = U[:, :n]
+    C = obs[:p]
+    A = np.linalg.lstsq(obs[:-p], obs[p:], rcond=None)[0]
     return A, C
 
 
