@@ -156,3 +156,33 @@ def test_bad_input_gives_a_one_line_error(call, message):
     with pytest.raises(InvalidArgumentError, match=message) as info:
         call(_good())
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_refinement_recovers_the_system_from_a_perturbed_start(seed):
+    from pihyst.dynamics._refine import refine
+    rng = np.random.default_rng(seed)
+    system = random_system(rng, order=6, m=2, p=3)
+    frf = estimate_bla(records(system, rng, n_records=3), PERIOD)
+    # a start 5 % off: the poles scaled and rotated, B, C, D perturbed
+    lam, V = np.linalg.eig(system.A)
+    A0 = np.real(V @ np.diag(lam * 0.97 * np.exp(0.05j * np.sign(lam.imag))) @
+                 np.linalg.inv(V))
+    start = StateSpace(A0, system.B * (1 + 0.05 * rng.normal(size=system.B.shape)),
+                       system.C * (1 + 0.05 * rng.normal(size=system.C.shape)), system.D * 1.05)
+    assert relative_response_error(start, system) > 0.05
+    model = refine(start, frf.omega, frf.G, max_nfev=200)
+    assert model.spectral_radius < 1 and model.order == 6
+    assert relative_response_error(model, system) < 1e-6
+
+
+def test_refinement_never_raises_the_error_and_keeps_the_poles_inside():
+    from pihyst.dynamics._refine import refine
+    rng = np.random.default_rng(7)
+    system = random_system(rng, order=8, m=2, p=2)
+    frf = estimate_bla(records(system, rng, n_records=4, noise=0.05), PERIOD)
+    for order in (4, 8):
+        start = fsid(frf.omega, frf.G, order)
+        model = refine(start, frf.omega, frf.G)
+        e0, e1 = (np.linalg.norm(m.response(frf.omega) - frf.G) for m in (start, model))
+        assert e1 <= e0 and model.spectral_radius < 1

@@ -11,7 +11,8 @@ error is measured over the periods after the first ``discard`` (steady state):
 
 The smallest order whose e(n) is within ``tolerance`` (relative) of the smallest one is
 refitted on all the records (parsimony: orders above the true one fit as well without
-noise, and only noise with it).
+noise, and only noise with it), then, with ``refine``, refined by nonlinear least squares
+on the BLA of all the records (:mod:`._refine`).
 """
 
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst.dynamics._bla import estimate_bla, periodic_records
+from pihyst.dynamics._refine import refine as refined
 from pihyst.dynamics._statespace import fsid, observability_bases
 from pihyst.exceptions import InvalidArgumentError
 
@@ -57,8 +59,8 @@ def steady_state_rms(model, records, period, discard):
 
 
 def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, validation=None,
-                    discard=1, weighted=False, q=None, tolerance=0.01,
-                    return_selection=False):
+                    discard=1, weighted=False, q=None, tolerance=0.01, refine=True,
+                    max_nfev=30, return_selection=False):
     """A stable MIMO :class:`~pihyst.dynamics.StateSpace` fitted to periodic multisine
     records (list of (u (N, m), y (N, p)), N a multiple of ``period``; the first
     ``discard`` periods of each are the transient).
@@ -68,7 +70,9 @@ def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, valid
     m to fit), the smallest within ``tolerance`` of the best. ``weighted``: weight
     the B, D fit by the BLA's inverse standard deviation (off by default: with few
     records the variance estimate is too noisy to help). ``q``: FSID block rows
-    (default order + 1). With ``return_selection`` returns (model,
+    (default order + 1). ``refine``: finish with the nonlinear least-squares fit of
+    :mod:`pihyst.dynamics._refine` (at most ``max_nfev`` evaluations; kept only if it
+    lowers the error on the BLA). With ``return_selection`` returns (model,
     :class:`OrderSelection` or None)."""
     recs = periodic_records(records, period)
     R, m = len(recs), recs[0][0].shape[1]
@@ -107,5 +111,8 @@ def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, valid
         selection = OrderSelection(orders=orders, errors=tuple(errors), chosen=order,
                                    validation=validation)
     frf = estimate_bla(recs, period, discard=discard)
-    model = fsid(frf.omega, frf.G, order, q=q, weight=_weights(frf, weighted))
+    w = _weights(frf, weighted)
+    model = fsid(frf.omega, frf.G, order, q=q, weight=w)
+    if refine:
+        model = refined(model, frf.omega, frf.G, w, max_nfev=max_nfev)
     return (model, selection) if return_selection else model

@@ -18,7 +18,9 @@ Identification (:func:`fit_hammerstein_ss`), the play thresholds r_ik fixed:
 
    fitted by bounded least squares over all records and lines but DC (w >= 0: each H_i
    monotone with pihyst's exact inverse); sum_k w_ik = 1, the gain moved into G's i-th
-   input column. With w fixed, G is refitted (same order) on (h, y). A step is kept only
+   input column. With w fixed, G is refitted on (h, y): refined by nonlinear least
+   squares on the BLA of (h, y) from the current G (``refine``, :mod:`._refine`), or
+   else identified anew at the same order by FSID. A step is kept only
    while the steady-state simulation error on the records decreases, so the model never
    fits its records worse than the linear model it starts from.
 """
@@ -27,8 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pihyst.dynamics._bla import period_spectra, periodic_records
-from pihyst.dynamics._fit_state_space import DEFAULT_ORDERS, fit_state_space, steady_state_rms
+from pihyst.dynamics._bla import estimate_bla, period_spectra, periodic_records
+from pihyst.dynamics._fit_state_space import (
+    DEFAULT_ORDERS,
+    _weights,
+    fit_state_space,
+    steady_state_rms,
+)
+from pihyst.dynamics._refine import refine as refined
 from pihyst.dynamics._statespace import StateSpace
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.model import ClassicalPI
@@ -91,9 +99,11 @@ def _thresholds(u, n_operators):
 
 def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operators=4,
                        input_range=None, refinements=3, orders=DEFAULT_ORDERS,
-                       validation=None, discard=1, weighted=False, linear=None):
+                       validation=None, discard=1, weighted=False, linear=None,
+                       refine=True, max_nfev=30):
     """A :class:`StateSpaceHammerstein` fitted to periodic multisine records (module
-    notes). ``order``, ``orders``, ``validation``, ``discard``, ``weighted``: as for
+    notes). ``order``, ``orders``, ``validation``, ``discard``, ``weighted``,
+    ``refine``, ``max_nfev``: as for
     :func:`~pihyst.dynamics.fit_state_space` (the order is chosen once, for the linear
     start). ``thresholds``: one array per input (default: ``n_operators`` equally
     spaced on [0, S/2) of the input's span S); ``input_range`` per input (default 1.5
@@ -137,7 +147,8 @@ def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operat
     w = [np.r_[1.0, np.zeros(K[i] - 1)] for i in range(m)]
     if linear is None:
         dyn = fit_state_space(recs, period, order, orders=orders, validation=validation,
-                              discard=discard, weighted=weighted)
+                              discard=discard, weighted=weighted, refine=refine,
+                              max_nfev=max_nfev)
     elif not isinstance(linear, StateSpace) or linear.n_inputs != m or \
             linear.n_outputs != recs[0][1].shape[1]:
         raise InvalidArgumentError(f"linear must be a StateSpace model with {m} inputs and "
@@ -164,8 +175,13 @@ def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operat
         w_new = [wi / g for wi, g in zip(w_new, gains)]
         moved = best[1].scaled_inputs(gains)
         candidates = [(cost(moved, w_new), moved, w_new)]
-        refit = fit_state_space(hysteresis_records(w_new), period, order, discard=discard,
-                                weighted=weighted)
+        if refine:
+            frf = estimate_bla(hysteresis_records(w_new), period, discard=discard)
+            refit = refined(moved, frf.omega, frf.G, _weights(frf, weighted),
+                            max_nfev=max_nfev)
+        else:
+            refit = fit_state_space(hysteresis_records(w_new), period, order,
+                                    discard=discard, weighted=weighted, refine=False)
         candidates.append((cost(refit, w_new), refit, w_new))
         step = min(candidates, key=lambda c: c[0])
         if not step[0] < best[0] * (1 - 1e-6):
