@@ -149,8 +149,7 @@ def _good():
     (lambda r: fit_state_space([5] + r, PERIOD, order=4), "must be a pair"),
     (lambda r: StateSpace(np.eye(2), np.ones((3, 1)), np.ones((1, 2)), [[0.0]]),
      "shapes do not match"),
-    (lambda r: fit_state_space(r, PERIOD, order=4)(r[0][0][:, :1]) if False else
-     fit_state_space(r, PERIOD, order=4).predict(r[0][0][:, :1]), "has 2 inputs"),
+    (lambda r: fit_state_space(r, PERIOD, order=4).predict(r[0][0][:, :1]), "has 2 inputs"),
 ])
 def test_bad_input_gives_a_one_line_error(call, message):
     with pytest.raises(InvalidArgumentError, match=message) as info:

@@ -37,7 +37,9 @@ class OrderSelection:
     validation: tuple
 
 
-def _weights(frf, weighted):
+def bla_weights(frf, weighted):
+    """1 / standard deviation of each BLA element (L, p, m), or None (unweighted, or
+    no variance estimate with only m records)."""
     if not weighted or frf.variance is None:
         return None
     sd = np.sqrt(frf.variance)
@@ -97,7 +99,7 @@ def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, valid
                                        f"need at least {m}")
         held_out = [recs[i] for i in validation]
         frf = estimate_bla(fitting, period, discard=discard)
-        w = _weights(frf, weighted)
+        w = bla_weights(frf, weighted)
         rows = {n: n + 1 if q is None else int(q) for n in orders}
         bases = observability_bases(frf.omega, frf.G, sorted(set(rows.values())))
         errors = []
@@ -111,7 +113,7 @@ def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, valid
         selection = OrderSelection(orders=orders, errors=tuple(errors), chosen=order,
                                    validation=validation)
     frf = estimate_bla(recs, period, discard=discard)
-    w = _weights(frf, weighted)
+    w = bla_weights(frf, weighted)
     model = fsid(frf.omega, frf.G, order, q=q, weight=w)
     if refine:
         model = refined(model, frf.omega, frf.G, w, max_nfev=max_nfev)

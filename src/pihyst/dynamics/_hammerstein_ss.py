@@ -32,7 +32,7 @@ import numpy as np
 from pihyst.dynamics._bla import estimate_bla, period_spectra, periodic_records
 from pihyst.dynamics._fit_state_space import (
     DEFAULT_ORDERS,
-    _weights,
+    bla_weights,
     fit_state_space,
     steady_state_rms,
 )
@@ -177,7 +177,7 @@ def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operat
         candidates = [(cost(moved, w_new), moved, w_new)]
         if refine:
             frf = estimate_bla(hysteresis_records(w_new), period, discard=discard)
-            refit = refined(moved, frf.omega, frf.G, _weights(frf, weighted),
+            refit = refined(moved, frf.omega, frf.G, bla_weights(frf, weighted),
                             max_nfev=max_nfev)
         else:
             refit = fit_state_space(hysteresis_records(w_new), period, order,
