@@ -1,16 +1,23 @@
 """Rate-dependent models: pihyst's static hysteresis followed by identified discrete
-linear dynamics (Hammerstein), and the linear-only reference of the same order
-(docs/theory/hammerstein.md).
+linear dynamics (Hammerstein), and the linear-only references (docs/theory/hammerstein.md).
 
+- :func:`fit_state_space` / :class:`StateSpace`: a stable MIMO state-space model from
+  periodic multisine records (the best linear approximation, frequency-domain subspace
+  identification, the order chosen by validation on held-back records);
+  :func:`estimate_bla` the nonparametric frequency response it starts from;
+- :func:`fit_hammerstein_ss` / :class:`StateSpaceHammerstein`: classical PI per input,
+  then those MIMO dynamics;
 - :func:`fit_hammerstein` / :class:`HammersteinModel`: classical PI per input, then
-  A_j(q) y_j = sum_i B_ji(q) h_i per output;
-- :func:`fit_linear` / :func:`predict_linear`: the same linear structure on the input
-  itself;
+  A_j(q) y_j = sum_i B_ji(q) h_i per output (any records, e.g. sweeps);
+- :func:`fit_linear` / :func:`predict_linear`: the same polynomial structure on the
+  input itself;
 - :func:`compensate_hammerstein`: zero-phase error tracking inverse of the dynamics,
   then the exact hysteresis inverse with voltage and slew limits (SISO).
 """
 
+from pihyst.dynamics._bla import FrequencyResponse, estimate_bla
 from pihyst.dynamics._compensate import compensate_hammerstein, zpetc
+from pihyst.dynamics._fit_state_space import OrderSelection, fit_state_space
 from pihyst.dynamics._hammerstein import (
     HammersteinModel,
     default_thresholds,
@@ -18,6 +25,10 @@ from pihyst.dynamics._hammerstein import (
     fit_linear,
     predict_linear,
 )
+from pihyst.dynamics._hammerstein_ss import StateSpaceHammerstein, fit_hammerstein_ss
+from pihyst.dynamics._statespace import StateSpace, fsid
 
-__all__ = ["HammersteinModel", "compensate_hammerstein", "default_thresholds",
-           "fit_hammerstein", "fit_linear", "predict_linear", "zpetc"]
+__all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "StateSpace",
+           "StateSpaceHammerstein", "compensate_hammerstein", "default_thresholds",
+           "estimate_bla", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
+           "fit_state_space", "fsid", "predict_linear", "zpetc"]
