@@ -37,13 +37,17 @@ GRID_BETA = tuple(np.geomspace(0.5, 60.0, 12).tolist())
 GRID_RATIO = (-0.8, -0.5, -0.25, 0.0, 0.25, 0.5, 0.8)
 GRID_N = (1.0, 1.5, 2.0, 3.0)
 SEARCH_SAMPLES = 600    # the shape search runs on about this many samples (+ reversals)
-# The search's cost grows with beta + |gamma| (the Runge-Kutta substep is 1/(32(beta +
-# |gamma|)) of the range). Beyond 100, z saturates within 1 % of the range after a
-# reversal: a corner no piezo actuator's loop has, reached only by searches on records
-# of other hysteresis (measured: 500 on a Preisach beam, 70 s per fit)
-MAX_SHARPNESS = 100.0
-# the search's substeps, 4 per saturation length (the final z uses the model's 32):
-# coarse, but the same for every shape compared, and z near saturation is attracting
+# How sharp a shape the search may try: the model integrates z in substeps of
+# 1/(32 (beta + |gamma|)) of the range (model._boucwen.substep), so its cost, in the fit
+# and in every compensator step, grows with beta + |gamma|. Beyond 200 (for n = 1: z
+# saturating within 0.5 % of the range after a reversal, a corner no piezo actuator's
+# loop has) only searches on records of other hysteresis go (measured: 500 on a
+# Preisach beam, 70 s per fit); the sharpest shape identified on the simulated
+# Bouc-Wen beams has 150 (n = 3.5, docs/theory/bouc-wen.md)
+MAX_SHARPNESS = 200.0
+# the search's substeps: 4 per 1/stiffness, the stiffness of dz/dx at saturation being
+# n (beta + |gamma|)^(1/n) (the final z uses the model's finer substeps): coarse, but
+# the same for every shape compared, and z near saturation is attracting
 SEARCH_STEPS_PER_SATURATION = 4.0
 # the family in fit()'s comparison runs on at most this many samples plus every input
 # extremum: z at a kept sample depends only on the extrema before it (rate-independent),
@@ -237,11 +241,10 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
 
     def unpack(p):
         ratio = float(np.tanh(p[1]))
-        # beta + |gamma| <= MAX_SHARPNESS: flat beyond it (an inf would stall Nelder-Mead)
-        beta = min(float(np.exp(min(p[0], 50.0))), MAX_SHARPNESS / (1.0 + abs(ratio)))
-        gamma = beta * ratio
         nn = float(np.clip(p[2], 1.0, MAX_EXPONENT)) if n is None else float(n)
-        return beta, gamma, nn
+        # beta + |gamma| <= MAX_SHARPNESS: flat beyond it (an inf stalls Nelder-Mead)
+        beta = min(float(np.exp(min(p[0], 50.0))), MAX_SHARPNESS / (1.0 + abs(ratio)))
+        return beta, beta * ratio, nn
 
     def linear_fit(beta, gamma, nn, rows):
         z = _z(beta, gamma, nn)
@@ -261,7 +264,8 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         nonlocal evaluations
         evaluations += 1
         beta, gamma, nn = unpack(p)
-        h = min(1.0 / 64.0, 1.0 / (SEARCH_STEPS_PER_SATURATION * (beta + abs(gamma))))
+        stiffness = nn * (beta + abs(gamma)) ** (1.0 / nn)
+        h = min(1.0 / 64.0, 1.0 / (SEARCH_STEPS_PER_SATURATION * stiffness))
         x0, z0 = start(beta, gamma, nn, h)
         zk = trajectory(xk, x0, z0, beta, gamma, nn, h=h)
         xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]

@@ -187,7 +187,7 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     qp = dict(offset=offset, nonnegative=nonnegative, duration=duration)
 
     first = fit(u, y, **kwargs)
-    start_model = _creep_capable(first, kwargs.get("family"))
+    start_model = _creep_capable(first, kwargs.get("family") is not None or decide)
     rows = None
     if decide:
         rec = FramedRecord(u, y, input_range=kwargs.get("input_range"),
@@ -198,8 +198,9 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
             return _without_creep(first, {"kept": False, "reason": "nothing held back to "
                                           "judge it on (creep=True fits it regardless)"})
         if start_model is None:
-            return _without_creep(first, {"kept": False, "reason": "no fitted family can "
-                                          "carry creep (only the PI families can)"})
+            return _without_creep(first, {"kept": False, "reason": f"the chosen family, "
+                                          f"{first.report.chosen}, cannot carry creep (the "
+                                          f"PI families can)"})
         rows = rec.layout.indices("fit")
     elif start_model is None:
         raise FitError(f"a {first.report.chosen} model has no creep: fit creep with a PI "
@@ -246,10 +247,17 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     return type(second)(model=model, report=report, models=models)
 
 
-def _creep_capable(result, family):
-    """The model to estimate creep with: the chosen one if it can carry creep, else (the
-    default comparison) the PI family with the lowest judged error; None if there is none."""
-    if result.report.chosen in CREEP_FAMILIES or family is not None:
+def _creep_capable(result, chosen_only):
+    """The model to estimate creep with: the chosen one if it can carry creep, else (with
+    ``chosen_only`` False) the PI family with the lowest judged error; None if none.
+
+    With ``creep="auto"`` only the chosen family is given creep: the family is chosen
+    on the record as it is, and a family that cannot carry creep (Bouc-Wen) keeps the
+    choice. Otherwise the lags of a PI family absorb what its structure lacks (the
+    drifting minor loops of a Bouc-Wen actuator, docs/theory/creep.md) and win the
+    held-back cycles: measured on a random Bouc-Wen actuator with a triangle record,
+    modified-pi with creep erred 1.4 % on ramps and staircases, Bouc-Wen alone 0.8 %."""
+    if result.report.chosen in CREEP_FAMILIES or chosen_only:
         name = result.report.chosen
         return result.models[name] if name in CREEP_FAMILIES else None
     fams = [f for f in result.report.families if f["family"] in CREEP_FAMILIES]

@@ -193,10 +193,11 @@ class Multislope(Family):
 
     name = "multislope"
     title = "multislope PI (paper's shape)"
-    # its geometry is anchored at the top of the range U: after a reversal inside the
-    # range an operator holds flat until the input has moved (1 - a h) r + (1 - a)(U - v)
-    # (docs/theory/operators.md), so its minor loops are not those of any Preisach-type
-    # material (Masing's rule) and a record of major loops says nothing about them
+    # its geometry is anchored at the top of the range U, not at the last turning
+    # point: after a reversal at M inside the range an operator holds flat for
+    # 75 + r/2 - M/2 V (the paper's shape, docs/theory/operators.md), so its minor loops
+    # are not those of a Preisach-type material (Masing's rule), and a record of major
+    # loops alone says nothing about them
     minor_loops_fixed = False
 
     def __init__(self, shape=None):
