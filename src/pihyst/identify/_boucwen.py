@@ -344,6 +344,9 @@ def family_fit(family, fitter):
                        f"state: drop {', '.join(unsupported)}")
     # a long record: fitted and judged on FAMILY_SAMPLES samples and every input extremum
     on = fitter.subsampled(FAMILY_SAMPLES)
+    if on is not fitter:        # judged there too (the PI families are judged on all)
+        fitter.notes[-1] = fitter.notes[-1].replace("errors on all", "errors on those "
+                                                    "samples")
     rec = on.rec
     kwargs = dict(input_range=(rec.lo, rec.lo + rec.S), initial_state=rec.state_mode,
                   n=family.n, layout_=rec.layout)
