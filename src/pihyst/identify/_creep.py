@@ -176,6 +176,7 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                 "kept": False, "reason": "through= (equality constraints) is not available "
                                          "with creep"})
         raise FitError("through= (equality constraints) is not available with creep=True")
+    first = fit(u, y, **kwargs)         # the record's own errors (too short, ...) first
     dt_fixed, dt, duration = _times(t, u.size)
     tau = (default_time_constants(dt_fixed, duration) if time_constants is None
            else np.sort(np.asarray(time_constants, dtype=np.float64)))
@@ -185,8 +186,6 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     nonnegative = kwargs.get("nonnegative", True)
     t = np.asarray(t, dtype=np.float64)
     qp = dict(offset=offset, nonnegative=nonnegative, duration=duration)
-
-    first = fit(u, y, **kwargs)
     start_model = _creep_capable(first, kwargs.get("family") is not None or decide)
     rows = None
     if decide:
