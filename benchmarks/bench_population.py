@@ -1,7 +1,8 @@
 """Population benchmark: >= 30 random simulated actuators (pihyst.sim.random_plant), each
 fitted with pihyst.fit on one record of the kinds users make and judged on signals it
 never saw (random level ramps, a staircase held 10-60 s per level): validation and
-tracking mean absolute error in % of range, with and without creep in the model.
+tracking mean absolute error in % of range, fitted without and with the record's sample
+times (with them the default fit keeps creep where the held-back cycles say it helps).
 
 Targets (the accuracy issue, item 4): median <= 0.25 %, 95th percentile <= 0.5 %.
 Prints one row per actuator, the distributions, and names the worst actuator and its kind.

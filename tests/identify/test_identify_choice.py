@@ -128,6 +128,11 @@ def test_report_gives_errors_per_kind_latency_and_what_is_undetermined():
                for t in rep["undetermined"])
     kp = res.report.family("kp")
     assert kp["excluded"] and not kp["chosen"]
+    # the multislope operator's minor loops are anchored at the top of the range, not
+    # at the last reversal: major loops alone do not make them trustworthy either
+    for name in ("multislope", "multislope-identified"):
+        assert "minor loops" in res.report.family(name)["excluded"]
+    assert res.report.chosen in ("classical", "modified-pi", "bouc-wen")
     for f in rep["families"]:
         assert f["latency"]["typical_us"] > 0 and f["latency"]["worst_us"] > 0
         assert "held-back major cycles" in f["held_back_by_kind"]

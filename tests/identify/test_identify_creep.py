@@ -105,3 +105,44 @@ def test_a_lagged_record_with_creep_gets_both(truth):
     e = model.predict(u, t=t) - y
     assert np.sqrt(np.mean(e ** 2)) < 0.01
     np.testing.assert_allclose(model.creep.gain.sum(), truth.creep.gain.sum(), rtol=0.2)
+
+
+# ------------------------------------------------------------ creep="auto" (the default)
+AUTO_KW = {"family": "classical", "thresholds": [0.0, 10.0, 25.0, 45.0]}
+
+
+def test_default_fit_with_times_keeps_creep_where_held_back_cycles_need_it(truth, record):
+    t, u, y = record
+    res = pihyst.fit(u, y, t=t, **AUTO_KW)
+    decision = res.report.to_dict()["creep"]
+    assert decision["kept"] and res.model.creep is not None
+    assert decision["held_back_rms_with"] < 0.98 * decision["held_back_rms_without"]
+    assert res.model.metadata["fit"]["creep"]["decision"]["kept"]
+    assert "creep: kept" in str(res.report)
+    # without the sample times nothing changes: no creep, no decision
+    plain = pihyst.fit(u, y, **AUTO_KW)
+    assert plain.model.creep is None and "creep" not in plain.report.to_dict()
+    assert pihyst.fit(u, y, t=t, creep=False, **AUTO_KW).model.creep is None
+
+
+def test_default_fit_with_times_leaves_out_creep_an_actuator_does_not_have(truth, record):
+    t, u, _ = record
+    y = truth.replace(creep=None).predict(u) + np.random.default_rng(1).normal(0, 0.002,
+                                                                                u.size)
+    res = pihyst.fit(u, y, t=t, **AUTO_KW)
+    decision = res.report.to_dict()["creep"]
+    assert not decision["kept"] and res.model.creep is None
+    assert "not kept" in str(res.report) and "%" in decision["reason"]
+
+
+def test_creep_auto_without_held_back_cycles_says_why(record):
+    t, u, y = record
+    res = pihyst.fit(u, y, t=t, holdout=None, **AUTO_KW)
+    assert res.model.creep is None
+    assert "nothing held back" in res.report.to_dict()["creep"]["reason"]
+
+
+def test_creep_option_is_checked(record):
+    t, u, y = record
+    with pytest.raises(pihyst.FitError, match="creep must be"):
+        pihyst.fit(u, y, t=t, creep="yes")

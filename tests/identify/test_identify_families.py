@@ -8,6 +8,7 @@ import pihyst
 from pihyst import ClassicalPI, FitError, fit
 from pihyst.identify import (
     FAMILY_NAMES,
+    BoucWen,
     Classical,
     FamilyFit,
     KrasnoselskiiPokrovskii,
@@ -35,7 +36,7 @@ def _record(seed=0):
 def test_names_stand_for_the_default_family_objects():
     assert [as_family(n) for n in FAMILY_NAMES] == [
         Classical(), Multislope(), MultislopeIdentified(), ModifiedPI(4),
-        KrasnoselskiiPokrovskii(16)]
+        KrasnoselskiiPokrovskii(16), BoucWen()]
     assert ModifiedPI(segments=8) != ModifiedPI(segments=4)
     assert Multislope(shape={"a": 0.7}) == Multislope(shape={"a": 0.7, "b": 1.2})
     assert repr(ModifiedPI(8)) == "ModifiedPI(segments=8)"

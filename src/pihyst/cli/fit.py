@@ -76,6 +76,9 @@ def register(sub):
     p.add_argument("--max-latency", metavar="US", type=float,
                    help="choose only among models whose compensator takes at most US "
                         "microseconds per sample in the worst case (measured)")
+    p.add_argument("--no-creep", action="store_true",
+                   help="do not fit creep (default: with a time column, or --rate, creep is "
+                        "fitted and kept when the held-back cycles say it helps)")
     p.add_argument("--input-range", metavar="LO,HI",
                    help="the model's input range: the drive's real limits, e.g. 0,150 "
                         "(default: the span of the record); must contain that span")
@@ -184,8 +187,10 @@ def run(args):
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
     record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json, optional=())
+                            say=not args.json,
+                            optional=() if args.no_creep else ("time",))
     u, y = record.voltage, record.displacement
+    t = None if args.no_creep else record.time
     other = validate = None
     if args.validate is not None:
         other = read_from_args(args, args.validate, need=("voltage", "displacement"),
@@ -201,7 +206,7 @@ def run(args):
                          offset=not args.no_offset, validate=validate, delay=delay,
                          max_operators=args.max_operators,
                          max_latency=(None if args.max_latency is None
-                                      else 1e-6 * args.max_latency))
+                                      else 1e-6 * args.max_latency), t=t)
         except FitError as err:
             if other is not None and str(err).startswith("validate:"):
                 raise _error(err, other) from None

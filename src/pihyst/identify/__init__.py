@@ -27,6 +27,7 @@ returned), ``_fit`` (all of it), ``_report`` (the result).
 from pihyst.exceptions import FitError, IllConditionedWarning, InfeasibleConstraintsError
 from pihyst.identify._families import (
     FAMILY_NAMES,
+    PI_FAMILY_NAMES,
     BoucWen,
     Classical,
     Family,
@@ -40,7 +41,7 @@ from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._fit import fit
 from pihyst.identify._report import FitReport, FitResult
 
-__all__ = ["FAMILY_NAMES", "INITIAL_STATES", "BoucWen", "Classical", "Family", "FamilyFit",
-           "FitError", "FitReport", "FitResult", "IllConditionedWarning",
+__all__ = ["FAMILY_NAMES", "INITIAL_STATES", "PI_FAMILY_NAMES", "BoucWen", "Classical",
+           "Family", "FamilyFit", "FitError", "FitReport", "FitResult", "IllConditionedWarning",
            "InfeasibleConstraintsError", "KrasnoselskiiPokrovskii", "ModifiedPI", "Multislope",
            "MultislopeIdentified", "cycled_state", "fit"]

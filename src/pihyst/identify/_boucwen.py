@@ -36,7 +36,23 @@ from pihyst.model._boucwen import MAX_EXPONENT, BoucWenModel, cycled_z, substep,
 GRID_BETA = tuple(np.geomspace(0.5, 60.0, 12).tolist())
 GRID_RATIO = (-0.8, -0.5, -0.25, 0.0, 0.25, 0.5, 0.8)
 GRID_N = (1.0, 1.5, 2.0, 3.0)
-SEARCH_SAMPLES = 2000   # the shape search runs on about this many samples (+ reversals)
+SEARCH_SAMPLES = 600    # the shape search runs on about this many samples (+ reversals)
+# How sharp a shape the search may try: the model integrates z in substeps of
+# 1/(32 (beta + |gamma|)) of the range (model._boucwen.substep), so its cost, in the fit
+# and in every compensator step, grows with beta + |gamma|. Beyond 200 (for n = 1: z
+# saturating within 0.5 % of the range after a reversal, a corner no piezo actuator's
+# loop has) only searches on records of other hysteresis go (measured: 500 on a
+# Preisach beam, 70 s per fit); the sharpest shape identified on the simulated
+# Bouc-Wen beams has 150 (n = 3.5, docs/theory/bouc-wen.md)
+MAX_SHARPNESS = 200.0
+# the search's substeps: 4 per 1/stiffness, the stiffness of dz/dx at saturation being
+# n (beta + |gamma|)^(1/n) (the final z uses the model's finer substeps): coarse, but
+# the same for every shape compared, and z near saturation is attracting
+SEARCH_STEPS_PER_SATURATION = 4.0
+# the family in fit()'s comparison runs on at most this many samples plus every input
+# extremum: z at a kept sample depends only on the extrema before it (rate-independent),
+# so the kept samples' errors are exact; each sample costs a few microseconds in Python
+FAMILY_SAMPLES = 20_000
 
 
 def _small_nnls(G, b):
@@ -189,12 +205,13 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
     x = v / span
 
-    def start(beta, gamma, nn):
+    def start(beta, gamma, nn, h=None):
         # (x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
         # settled by the first sweep); arrays of shapes share the substep of the largest
         if settle:
             return x[0], 0.0 * beta
-        h = _h(beta, gamma) if np.ndim(beta) else None
+        if h is None and np.ndim(beta):
+            h = _h(beta, gamma)
         return 0.0, cycled_z(beta, gamma, nn, h=h)
 
     def _h(beta, gamma):
@@ -223,10 +240,11 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         b0, g0, n0 = float(shape["beta"]), float(shape["gamma"]), float(shape.get("n", 1))
 
     def unpack(p):
-        beta = float(np.exp(p[0]))
-        gamma = beta * float(np.tanh(p[1]))
+        ratio = float(np.tanh(p[1]))
         nn = float(np.clip(p[2], 1.0, MAX_EXPONENT)) if n is None else float(n)
-        return beta, gamma, nn
+        # beta + |gamma| <= MAX_SHARPNESS: flat beyond it (an inf stalls Nelder-Mead)
+        beta = min(float(np.exp(min(p[0], 50.0))), MAX_SHARPNESS / (1.0 + abs(ratio)))
+        return beta, beta * ratio, nn
 
     def linear_fit(beta, gamma, nn, rows):
         z = _z(beta, gamma, nn)
@@ -246,10 +264,10 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         nonlocal evaluations
         evaluations += 1
         beta, gamma, nn = unpack(p)
-        if not beta + abs(gamma) <= 1000.0:
-            return math.inf
-        x0, z0 = start(beta, gamma, nn)
-        zk = trajectory(xk, x0, z0, beta, gamma, nn)
+        stiffness = nn * (beta + abs(gamma)) ** (1.0 / nn)
+        h = min(1.0 / 64.0, 1.0 / (SEARCH_STEPS_PER_SATURATION * stiffness))
+        x0, z0 = start(beta, gamma, nn, h)
+        zk = trajectory(xk, x0, z0, beta, gamma, nn, h=h)
         xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]
         off, c1, c2, a = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma))
         r = yf - (off + c1 * xf + c2 * xf * xf + a * zf)
@@ -324,6 +342,12 @@ def family_fit(family, fitter):
     if unsupported:
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
                        f"state: drop {', '.join(unsupported)}")
+    # a long record: fitted and judged on FAMILY_SAMPLES samples and every input extremum
+    on = fitter.subsampled(FAMILY_SAMPLES)
+    if on is not fitter:        # judged there too (the PI families are judged on all)
+        fitter.notes[-1] = fitter.notes[-1].replace("errors on all", "errors on those "
+                                                    "samples")
+    rec = on.rec
     kwargs = dict(input_range=(rec.lo, rec.lo + rec.S), initial_state=rec.state_mode,
                   n=family.n, layout_=rec.layout)
     model, report = fit_boucwen(rec.u, rec.y, refit=False, **kwargs)
@@ -332,9 +356,10 @@ def family_fit(family, fitter):
         shape = {k: report.search[k] for k in ("beta", "gamma", "n")}
         return fit_boucwen(rec.u, rec.y, refit=True, shape=shape, **kwargs)[0]
 
-    errors = fitter.errors(model)
+    errors = on.errors(model)
     judged = errors["held_back"]["rms"] if rec.has_held_back else errors["fit"]["rms"]
     return FamilyFit(family=family, model=model, operators=(),
                      weights=np.array([model.linear, model.quadratic, model.hysteretic]),
                      offset=model.offset, errors=errors, judged_rms=judged, n_params=7,
-                     notes=(report.search["summary"],), refit=refit)
+                     notes=(report.search["summary"], *fitter.notes), refit=refit,
+                     judged_on=on)

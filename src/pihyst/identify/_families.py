@@ -94,6 +94,7 @@ class Family(ABC):
     # the report's key for the operators: thresholds (floats) or kernels (index pairs)
     operators_key = "thresholds"
     n_fixed = 0            # operator columns always present after the thresholds'
+    has_thresholds = True  # thresholds to choose (or give): False for kp and bouc-wen
     # PI-type structure: the minor loops follow from the major loop (the operators'
     # geometry fixes them), so a record of major loops alone is enough to fit it
     minor_loops_fixed = True
@@ -192,6 +193,12 @@ class Multislope(Family):
 
     name = "multislope"
     title = "multislope PI (paper's shape)"
+    # its geometry is anchored at the top of the range U, not at the last turning
+    # point: after a reversal at M inside the range an operator holds flat for
+    # 75 + r/2 - M/2 V (the paper's shape, docs/theory/operators.md), so its minor loops
+    # are not those of a Preisach-type material (Masing's rule), and a record of major
+    # loops alone says nothing about them
+    minor_loops_fixed = False
 
     def __init__(self, shape=None):
         shape = {} if shape is None else dict(shape)
@@ -360,6 +367,7 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
     name = "kp"
     title = "Krasnosel'skii-Pokrovskii kernels (regularized)"
     operators_key = "kernels"
+    has_thresholds = False
     # a kernel basis has a weight for every minor loop: a record of major loops alone
     # leaves the interior of the Preisach plane to the regularization
     minor_loops_fixed = False
@@ -417,7 +425,10 @@ class BoucWen(Family):
 
     name = "bouc-wen"
     title = "Bouc-Wen"
-    minor_loops_fixed = False
+    has_thresholds = False
+    # its minor loops follow from the shape (beta, gamma, n) the major loop identifies:
+    # three parameters of a differential equation, none of them seen only inside the range
+    minor_loops_fixed = True
 
     def __init__(self, n=None):
         self.n = None if n is None else float(n)
@@ -441,10 +452,12 @@ class BoucWen(Family):
 
 FAMILIES = {cls.name: cls for cls in (Classical, Multislope, MultislopeIdentified,
                                         ModifiedPI, KrasnoselskiiPokrovskii, BoucWen)}
-# the default comparison: the PI families. Bouc-Wen takes part when asked for
-# (family=[..., "bouc-wen"] or BoucWen()): its model is not a PI model, and the C export,
-# the firmware compensator and the rig's controller take PI models only
-FAMILY_NAMES = tuple(name for name in FAMILIES if name != BoucWen.name)
+# the default comparison: every family
+FAMILY_NAMES = tuple(FAMILIES)
+# the PI families (models of play-type operators: thresholds, weights, the C export)
+PI_FAMILY_NAMES = tuple(name for name in FAMILIES if name != BoucWen.name)
+# the families whose models can carry creep (docs/theory/creep.md): the PI models
+CREEP_FAMILIES = PI_FAMILY_NAMES
 
 
 def as_family(spec):

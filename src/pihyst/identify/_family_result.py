@@ -46,6 +46,9 @@ class FamilyFit:
     warnings: tuple = ()
     # the same structure with its weights fitted on fitted and held-back cycles together
     refit: Callable[[], object] = field(default=None, repr=False, compare=False)
+    # the FamilyFitter whose record the errors are measured on, when not the record's own
+    # (a model slow to run is fitted and judged on a subsampled record)
+    judged_on: object = field(default=None, repr=False, compare=False)
 
     @property
     def name(self):

@@ -55,7 +55,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
         through=None, initial_state="auto", holdout="alternate", refit=True,
         input_range=None, validate=None, delay="auto", max_operators=None, max_latency=None,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep=False):
+        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep="auto"):
     """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
     one of those that generalize best.
 
@@ -138,11 +138,15 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
     t : array_like, optional
-        Sample times (s), needed with ``creep``.
-    creep : bool or array_like
-        Also fit creep (docs/theory/creep.md): first-order lags of the hysteresis output
+        Sample times (s). With them the default fit also tries creep (``creep="auto"``).
+    creep : "auto", bool or array_like
+        Fit creep (docs/theory/creep.md): first-order lags of the hysteresis output
         with half-decade time constants (or these time constants, s), their gains fitted
-        with the weights in one QP. The model then carries ``model.creep``.
+        with the weights in one QP. The model then carries ``model.creep``. ``True``
+        (or time constants): always. ``"auto"`` (default): when ``t`` is given, creep is
+        fitted on the fitted cycles and kept only if it lowers the held-back RMS by more
+        than 2 % (the report's ``creep`` entry says which and why); without ``t``, none.
+        ``False``: none.
 
     Returns
     -------
@@ -187,11 +191,18 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     >>> res.report.chosen, res.model.family
     ('modified-pi', 'pwl')
     """
+    if isinstance(creep, str) and creep != "auto":
+        raise FitError(f"creep must be 'auto', True, False or time constants (s), got "
+                       f"{creep!r}")
+    decide = isinstance(creep, str)
+    if decide and t is None:
+        creep = False            # no sample times: nothing to fit creep on
     if creep is not False and creep is not None:
         from pihyst.identify._creep import fit_with_creep
         kw = {k: v for k, v in locals().items()
-              if k not in ("u", "y", "t", "creep", "fit_with_creep")}
-        return fit_with_creep(fit, u, y, t, time_constants=None if creep is True else creep,
+              if k not in ("u", "y", "t", "creep", "decide", "fit_with_creep")}
+        return fit_with_creep(fit, u, y, t, decide=decide,
+                              time_constants=None if creep is True or decide else creep,
                               **kw)
     explicit_family = family is not None
     specs = FAMILY_NAMES if family is None else (
@@ -232,9 +243,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     results, skipped, caught = [], [], {}
     for fam in families:
         kernels = fam.operators_key == "kernels"
-        if not explicit_family and kernels and chooses_thresholds:
-            skipped.append({"family": fam.name, "reason": "has no thresholds (a grid of "
-                            "kernels, regularized)"})
+        if not explicit_family and not fam.has_thresholds and chooses_thresholds:
+            skipped.append({"family": fam.name, "reason": "has no thresholds (" + (
+                "a grid of kernels, regularized)" if kernels else "not a PI model)")})
             continue
         if not explicit_family and kernels and not rec.has_held_back:
             skipped.append({"family": fam.name, "reason": "nothing held back to regularize "
@@ -261,7 +272,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     known, unknown_reason = minor_loops_determined(rec, validation)
     cands = []
     for r in results:
-        by_kind = errors_by_kind(fitter, r.model, validation)
+        by_kind = errors_by_kind(r.judged_on or fitter, r.model, validation)
         cands.append(Candidate(r, by_kind, judged_rms(r, by_kind), _latency(r.model)))
     best_c, criterion = choose(
         cands, minor_loops_known=known, unknown_reason=unknown_reason,
@@ -281,7 +292,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         if not caught[best.name]:
             for x in w:
                 warnings.warn(f"{best.name} (refit): {x.message}", x.category, stacklevel=2)
-        final_errors = fitter.errors(model)
+        final_errors = (best.judged_on or fitter).errors(model)
         if validation is not None:
             final_errors["validation"] = validation.errors(model)
     check_fit(rec, best_c.judged_rms, model)

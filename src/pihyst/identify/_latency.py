@@ -7,7 +7,9 @@ trajectory: following a smooth trajectory the inverse moves little between sampl
 most operator breakpoints and reversals (**worst case**). Both are measured here, in
 blocks of ``Compensator.run`` (the C loop; no Python per sample), sized to take about
 ``BLOCK_SECONDS`` each, the median of ``REPEATS`` blocks, so a candidate costs a few
-milliseconds to measure and a passing disturbance on the machine does not count.
+milliseconds to measure and a passing disturbance on the machine does not count (a
+compensator slower than ``SLOW_SECONDS`` per sample is timed on the probe's
+``PROBE_SAMPLES`` samples alone).
 """
 
 import time
@@ -20,7 +22,10 @@ from pihyst.inverse._compensator import OTHER_COMPENSATORS
 
 BLOCK_SECONDS = 1e-3
 REPEATS = 3
-PROBE_SAMPLES = 32
+PROBE_SAMPLES = 8
+# a compensator slower than this per sample (a Bouc-Wen model with a sharp shape, in
+# Python: up to 0.3 s) is measured by the probe alone: the blocks would take minutes
+SLOW_SECONDS = 1e-3
 MIN_SAMPLES, MAX_SAMPLES = 32, 4000
 TRACKING_PERIOD = 400        # samples per cycle of the tracking trajectory
 
@@ -51,6 +56,8 @@ def _per_sample(comp, desired):
 def _time(comp, make):
     """Median time per sample of ``make(n)`` blocks of about BLOCK_SECONDS."""
     probe = _per_sample(comp, make(PROBE_SAMPLES))
+    if probe > SLOW_SECONDS:
+        return probe
     n = int(np.clip(BLOCK_SECONDS / max(probe, 1e-9), MIN_SAMPLES, MAX_SAMPLES))
     return float(np.median([_per_sample(comp, make(n)) for _ in range(REPEATS)]))
 

@@ -117,6 +117,12 @@ class FitReport:
         entry["warnings"] = list(r.warnings)
         return entry
 
+    def with_creep(self, decision):
+        """This report with the decision on creep (``fit(..., t=t)``) added."""
+        data = self.to_dict()
+        data["creep"] = _num(decision)
+        return type(self)(data)
+
     # ------------------------------------------------------------------ access
     def to_dict(self):
         """The report as a JSON-ready dict (a copy)."""
@@ -223,6 +229,10 @@ class FitReport:
                          f"and carries it (model.delay)")
         elif delay and delay.get("auto"):
             lines.append(f"delay: none ({delay['rule']})")
+        creep = self._data.get("creep")
+        if creep:
+            lines.append(f"creep: {'kept' if creep['kept'] else 'not kept'}, "
+                         f"{creep['reason']}")
         if self._data["undetermined"]:
             lines.append("what the data could not determine:")
             lines += [f"  - {t}" for t in self._data["undetermined"]]

@@ -6,7 +6,8 @@ For one actuator (:func:`pihyst.sim.random_plant`), at its own sample rate:
 1. a record of the kind users make, chosen by the seed: the paper's triangle (two
    cycles), decaying triangles, or a sine of growing amplitude; its period is set so a
    cycle has about ``samples_per_cycle`` samples (0.5-300 s);
-2. ``pihyst.fit`` on it (the default choice), with ``creep=True`` and without;
+2. ``pihyst.fit`` on it (the default choice), with the record's sample times (creep
+   then fitted and kept where the held-back cycles say it helps) and without them;
 3. judged on random level ramps (at the record's rate of change) and on a staircase held
    10-60 s per level (the level changes at most every 10 ms, so the held levels are
    sampled at up to 100 Hz): **validation**, the model's prediction against the
@@ -31,7 +32,8 @@ JUDGED = ("ramps", "staircase")
 @dataclass
 class PlantResult:
     """Errors of one actuator: ``errors[(creep, task, signal)]`` in % of range, with
-    ``creep`` True/False, ``task`` "validation"/"tracking", ``signal`` in :data:`JUDGED`."""
+    ``creep`` True (fitted with the sample times: creep where it helps) or False
+    (without them), ``task`` "validation"/"tracking", ``signal`` in :data:`JUDGED`."""
 
     seed: int
     description: dict
@@ -76,7 +78,8 @@ def judged_signals(seed, rate_hz, period, lo, hi):
 
 
 def evaluate_plant(seed, samples_per_cycle=10_000):
-    """Fit, validate and track one random actuator, with and without creep in the model."""
+    """Fit, validate and track one random actuator, fitted with and without the record's
+    sample times (with them, the default fit keeps creep where it helps)."""
     plant, desc = random_plant(seed)
     kind, t, u, period = record_for(seed, desc["rate_hz"], samples_per_cycle)
     y = plant.run(u, t)
@@ -86,11 +89,11 @@ def evaluate_plant(seed, samples_per_cycle=10_000):
         # the drive range is known: a record whose peak sample falls just short of u_max
         # must not shrink the model's input range below the signals it is judged on
         span = (0.0, plant.u_max)
-        fitted = (fit(u, y, t=t, creep=True, input_range=span) if creep
-                  else fit(u, y, input_range=span))
+        fitted = fit(u, y, t=t if creep else None, input_range=span)
         model = fitted.model
-        result.families[creep] = model.family
-        if creep:
+        result.families[creep] = model.metadata["fit"]["family"]
+        creeps = getattr(model, "creep", None) is not None
+        if creeps:
             result.creep_gain = float(model.creep.gain.sum())
         rise = model.predict(np.array([0.0, model.input_range[1]]))
         lo, hi = rise[0] + 0.02 * (rise[1] - rise[0]), rise[0] + 0.95 * (rise[1] - rise[0])
@@ -100,9 +103,9 @@ def evaluate_plant(seed, samples_per_cycle=10_000):
             plant.reset()
             measured = plant.run(uv, tv)
             result.errors[(creep, "validation", name)] = _pct(
-                model.predict(uv, t=tv) - measured, measured)
+                model.predict(uv, **({"t": tv} if creeps else {})) - measured, measured)
             td, yd = desired[name]
-            comp = compensate(model, yd, t=td)
+            comp = compensate(model, yd, t=td if creeps else None)
             plant.reset()
             result.errors[(creep, "tracking", name)] = _pct(plant.run(comp.voltage, td) - yd,
                                                             yd)
