@@ -44,6 +44,7 @@ int main(void)
     run_inverse_tests();
     run_bank_tests();
     run_kernel_tests();
+    run_boucwen_tests();
 #ifndef PIHYST_TEST_F32
     run_creep_tests(); /* the creep lags are double precision only */
 #endif
