@@ -300,12 +300,12 @@ real pihyst_bw_compensator_step(pihyst_bw_compensator *c, real yd, pihyst_flags 
     const real up = m->u;
     real yp, s, end, y_end, z_end, u, z;
     pihyst_flags fl = 0;
+    yp = pihyst_bw_output(m, up, m->z);
+    c->y_last = yp;
     if (yd != yd) {
         if (flags) *flags = PIHYST_COMP_NAN;
         return up;
     }
-    yp = pihyst_bw_output(m, up, m->z);
-    c->y_last = yp;
     if (yd == yp) {
         if (flags) *flags = 0;
         return up;

@@ -14,12 +14,17 @@ the bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + 
 bracket keeps the voltage nearest u_p. Out of reach: the voltage saturates at the
 bracket's end and is flagged (limit or slew); NaN holds the last voltage. The flags are
 those of :mod:`pihyst.inverse._compensator`, and so is the result.
+
+:class:`BoucWenCompensator` runs in the C core (csrc/pihyst_boucwen.c, the same algorithm
+operation for operation); :class:`BoucWenCompensatorTwin` is its Python twin, the
+reference the tests compare it against.
 """
 
 import math
 
 import numpy as np
 
+from pihyst import _boucwen_core
 from pihyst.inverse._compensator import (
     FLAG_NAN,
     FLAG_SATURATED_HIGH,
@@ -36,15 +41,16 @@ from pihyst.model._boucwen import BoucWenModel, advance, slope
 _EPS = np.finfo(float).eps
 
 
-class BoucWenCompensator:
+class BoucWenCompensatorTwin:
     """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
-    limits and a slew limit; the same interface as :class:`pihyst.Compensator`.
+    limits and a slew limit; the same interface as :class:`pihyst.Compensator`. In
+    Python: the twin of the C core's :class:`BoucWenCompensator`.
 
     Examples
     --------
     >>> from pihyst.model import BoucWenModel
     >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
-    >>> comp = BoucWenCompensator(m, slew_rate=10.0)
+    >>> comp = BoucWenCompensatorTwin(m, slew_rate=10.0)
     >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
     >>> u, comp.last_flags == comp.FLAG_SLEW
     (10.0, True)
@@ -224,8 +230,81 @@ class BoucWenCompensator:
 
     def __repr__(self):
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
-        return (f"BoucWenCompensator(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
+        return (f"{type(self).__name__}(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
                 f"{slew}, voltage={self.voltage:g})")
+
+
+class BoucWenCompensator(BoucWenCompensatorTwin):
+    """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
+    limits and a slew limit; the same interface as :class:`pihyst.Compensator`. Runs in
+    the C core; :class:`BoucWenCompensatorTwin` is the same algorithm in Python.
+
+    Examples
+    --------
+    >>> from pihyst.model import BoucWenModel
+    >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    >>> comp = BoucWenCompensator(m, slew_rate=10.0)
+    >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
+    >>> u, comp.last_flags == comp.FLAG_SLEW
+    (10.0, True)
+    >>> u = comp.step(5.0)             # within reach: exact
+    >>> round(u, 6), abs(comp.displacement - 5.0) < 1e-12
+    (18.667945, True)
+    """
+
+    @property
+    def state(self):
+        return np.array(self._core_model.state)
+
+    @property
+    def voltage(self):
+        return self._core_model.state[0]
+
+    @property
+    def displacement(self):
+        u, z = self._core_model.state
+        return self.model.output(u, z)
+
+    @property
+    def last_flags(self):
+        return self._core.last_flags
+
+    def reset(self, state=None, voltage=None):
+        """Back to the initial state and voltage, or to ``state`` = (u, z)."""
+        start = self._start if state is None else self.model._state(state)
+        if voltage is not None:
+            voltage = _number(voltage, "voltage")
+            lo, hi = self.limits
+            if not lo <= voltage <= hi:
+                raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+        if not hasattr(self, "_core"):
+            slew = math.inf if self.slew_rate is None else self.slew_rate
+            self._core_model = self.model._core(self._start)
+            self._core = _boucwen_core.BoucWenCompensator(
+                self._core_model, *self.limits, slew, self._start[0])
+        # the state as given (its u may lie outside the voltage limits), then the voltage
+        self._core_model.state = start
+        if voltage is not None:
+            self._core.reset(start, voltage)
+
+    def step(self, y_desired):
+        """The voltage for one desired output (applied to the state)."""
+        return self._core.step(float(y_desired))
+
+    def run(self, y_desired):
+        """Compensate a block of desired outputs; returns a
+        :class:`pihyst.inverse.CompensationResult`."""
+        yd = _desired(y_desired)
+        initial_state, initial_voltage = self.state, self.voltage
+        u, y, flags = self._core.run(yd)
+        low = (flags & FLAG_SATURATED_LOW) != 0
+        high = (flags & FLAG_SATURATED_HIGH) != 0
+        return CompensationResult(
+            desired=yd, voltage=u, displacement=y, flags=flags, saturated=low | high,
+            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
+            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
+            initial_voltage=initial_voltage, final_state=self.state,
+            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
 
 
 OTHER_COMPENSATORS[BoucWenModel.family] = BoucWenCompensator
