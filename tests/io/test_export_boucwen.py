@@ -47,7 +47,8 @@ int main(void)
     for (t = 0; t < n; ++t) printf("%.17g\n", (double)pihyst_bw_step{sfx}(&m, u[t]));
     if ({name}_init(&m) != PIHYST_OK) return 4;
     if ({name}_compensator_init(&c, &m, NAN, NAN, INFINITY, m.u_min) != PIHYST_OK) return 5;
-    for (t = 0; t < n; ++t) printf("%.17g\n", (double)pihyst_bw_compensator_step{sfx}(&c, yd[t], 0));
+    for (t = 0; t < n; ++t)
+        printf("%.17g\n", (double)pihyst_bw_compensator_step{sfx}(&c, yd[t], 0));
     return 0;
 }}
 """
