@@ -1,11 +1,12 @@
 """Real-time cost of a fitted model: the latency of its exact compensator, measured.
 
-A candidate model runs in a controller as :class:`pihyst.Compensator`, one desired
-displacement in, one voltage out, every sample. Its cost per sample depends on the
+A candidate model runs in a controller as its exact compensator
+(:class:`pihyst.Compensator` for a PI model, :class:`pihyst.inverse.BoucWenCompensator`
+for Bouc-Wen; both in C), one desired displacement in, one voltage out, every sample. Its cost per sample depends on the
 trajectory: following a smooth trajectory the inverse moves little between samples
 (**typical**); a desired displacement drawn at random every sample makes it cross the
 most operator breakpoints and reversals (**worst case**). Both are measured here, in
-blocks of ``Compensator.run`` (the C loop; no Python per sample), sized to take about
+blocks of the compensator's ``run`` (the C loop; no Python per sample), sized to take about
 ``BLOCK_SECONDS`` each, the median of ``REPEATS`` blocks, so a candidate costs a few
 milliseconds to measure and a passing disturbance on the machine does not count.
 """
@@ -15,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pihyst.inverse import Compensator
-from pihyst.inverse._compensator import OTHER_COMPENSATORS
+from pihyst.inverse import compensator_for
 
 BLOCK_SECONDS = 1e-3
 REPEATS = 3
@@ -35,7 +35,7 @@ class Latency:
 
     def to_dict(self):
         return {"typical_us": 1e6 * self.typical, "worst_us": 1e6 * self.worst,
-                "measured": "pihyst.Compensator(model).run: median time per sample of "
+                "measured": "the model's compensator's run (C): median time per sample of "
                             f"{REPEATS} blocks; typical: a sine over 5-95 % of the output "
                             f"range, {TRACKING_PERIOD} samples per cycle; worst case: a "
                             "random desired displacement every sample"}
@@ -58,8 +58,7 @@ def _time(comp, make):
 def measure_latency(model, seed=0):
     """:class:`Latency` of ``model``'s compensator."""
     lo, hi = model.input_range
-    # a model that is not a PI model has its own compensator (Bouc-Wen: Python, slower)
-    comp = OTHER_COMPENSATORS.get(getattr(model, "family", None), Compensator)(model)
+    comp = compensator_for(model)
     # outputs the model reaches after a full cycle: its major loop's ends
     y_lo, y_hi = model.predict(np.array([lo, hi, lo]))[[0, 1]]
     y_lo, y_hi = min(y_lo, y_hi), max(y_lo, y_hi)
