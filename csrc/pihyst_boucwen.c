@@ -257,19 +257,48 @@ static real newton(const pihyst_bw_model *m, real u, real z, real err, real s)
 
 static real larger(real a, real b) { return a > b ? a : b; }
 
-/* Solve Y(u) = y_d in the bracket [a, b] (a = u_p with Y(a) before y_d, b the reachable
- * end with Y(b) past it, in direction s); *z_out receives Z(u). */
-static real solve(const pihyst_bw_compensator *c, real a, real b, real yd, real s, real *z_out)
+#define BW_MAX_ITERATIONS 200
+#define BW_NEWTON_FIRST 8 /* Newton steps from u_p before the reachable end must be evaluated */
+
+/* Solve Y(u) = y_d from a = u_p (Y(a) before y_d) towards the reachable end in direction s:
+ * Newton steps from u_p; the end is evaluated only when a step would reach or pass it (or
+ * after BW_NEWTON_FIRST steps without a bracket). Out of reach there: the voltage stops at
+ * the end, *flags says why. Else [a, b] brackets y_d while Newton or bisection steps shrink
+ * it: Newton where its step stays in the bracket and is at most half the step before last,
+ * else bisection. *z_out receives Z(u). */
+static real solve(const pihyst_bw_compensator *c, real a, real end, real yd, real s,
+                  real *z_out, pihyst_flags *flags)
 {
     const pihyst_bw_model *m = c->model;
     const real tol = RC(4.0) * R_EPS * (R_FABS(yd) + c->scale);
     real u = newton(m, a, m->z, pihyst_bw_output(m, a, m->z) - yd, s);
-    real old = R_FABS(b - a), z_b = RC(0.0), z;
-    int have_z_b = 0, i;
-    for (i = 0; i < 200; ++i) {
-        real y, err, width;
-        const real lo = a < b ? a : b, hi = a < b ? b : a;
-        if (!(lo < u && u < hi)) u = RC(0.5) * (a + b);
+    real dx = R_FABS(end - a), dx_old = dx, b = end, z_b = RC(0.0), z;
+    int have_b = 0, i;
+    *flags = 0;
+    for (i = 0; i < BW_MAX_ITERATIONS; ++i) {
+        real y, err, step;
+        if (!have_b) {
+            const real lo_e = a < end ? a : end, hi_e = a < end ? end : a;
+            if (!(lo_e < u && u < hi_e) || i >= BW_NEWTON_FIRST) {
+                real z_end;
+                const real y_end = output_after(m, end, &z_end);
+                if ((y_end - yd) * s <= RC(0.0)) { /* out of reach (or just reached) */
+                    if (y_end != yd)
+                        *flags = end == (s > RC(0.0) ? c->u_max : c->u_min)
+                                     ? (s > RC(0.0) ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW)
+                                     : PIHYST_COMP_SLEW;
+                    *z_out = z_end;
+                    return end;
+                }
+                b = end;
+                z_b = z_end;
+                have_b = 1;
+            }
+        }
+        if (have_b) {
+            const real lo = a < b ? a : b, hi = a < b ? b : a;
+            if (!(lo < u && u < hi)) u = RC(0.5) * (a + b);
+        }
         y = output_after(m, u, &z);
         err = y - yd;
         if (R_FABS(err) <= tol) {
@@ -281,15 +310,25 @@ static real solve(const pihyst_bw_compensator *c, real a, real b, real yd, real 
         } else {
             b = u;
             z_b = z;
-            have_z_b = 1;
+            have_b = 1;
         }
-        width = R_FABS(b - a);
-        if (width <= RC(2.0) * R_EPS * larger(larger(R_FABS(a), R_FABS(b)), R_MIN)) break;
-        /* Newton unless the bracket stopped halving (then bisect) */
-        u = width <= RC(0.5) * old ? newton(m, u, z, err, s) : RC(0.5) * (a + b);
-        old = width;
+        if (!have_b) {
+            u = newton(m, u, z, err, s);
+            continue;
+        }
+        if (R_FABS(b - a) <= RC(2.0) * R_EPS * larger(larger(R_FABS(a), R_FABS(b)), R_MIN))
+            break;
+        step = newton(m, u, z, err, s);
+        dx_old = dx;
+        if ((a < b ? a < step && step < b : b < step && step < a) &&
+            R_FABS(step - u) <= RC(0.5) * dx_old) {
+            dx = R_FABS(step - u);
+            u = step;
+        } else {
+            u = RC(0.5) * (a + b);
+            dx = RC(0.5) * R_FABS(b - a);
+        }
     }
-    if (!have_z_b) (void)output_after(m, b, &z_b); /* the bracket collapsed onto b */
     *z_out = z_b;
     return b;
 }
@@ -298,7 +337,7 @@ real pihyst_bw_compensator_step(pihyst_bw_compensator *c, real yd, pihyst_flags 
 {
     pihyst_bw_model *m = c->model;
     const real up = m->u;
-    real yp, s, end, y_end, z_end, u, z;
+    real yp, s, end, u, z;
     pihyst_flags fl = 0;
     yp = pihyst_bw_output(m, up, m->z);
     c->y_last = yp;
@@ -319,21 +358,10 @@ real pihyst_bw_compensator_step(pihyst_bw_compensator *c, real yd, pihyst_flags 
         if (!(end > c->u_min)) end = c->u_min;
     }
     while (R_FABS(end - up) > c->max_step) end = R_NEXTAFTER(end, up); /* rounding of u_p +- slew */
-    y_end = output_after(m, end, &z_end);
-    if ((y_end - yd) * s <= RC(0.0)) { /* out of reach (or just reached) at the end */
-        if (y_end != yd)
-            fl = end == (s > RC(0.0) ? c->u_max : c->u_min)
-                     ? (s > RC(0.0) ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW)
-                     : PIHYST_COMP_SLEW;
-        u = end;
-        z = z_end;
-        c->y_last = y_end;
-    } else {
-        u = solve(c, up, end, yd, s, &z);
-        c->y_last = pihyst_bw_output(m, u, z);
-    }
+    u = solve(c, up, end, yd, s, &z, &fl);
     m->u = u;
     m->z = z;
+    c->y_last = pihyst_bw_output(m, u, z);
     if (flags) *flags = fl;
     return u;
 }

@@ -39,6 +39,8 @@ from pihyst.model import InvalidModelError
 from pihyst.model._boucwen import BoucWenModel, advance, slope
 
 _EPS = np.finfo(float).eps
+MAX_ITERATIONS = 200
+NEWTON_FIRST = 8      # Newton steps from u_p before the reachable end must be evaluated
 
 
 class BoucWenCompensatorTwin:
@@ -158,21 +160,18 @@ class BoucWenCompensatorTwin:
         end = min(hi, up + slew) if s > 0 else max(lo, up - slew)
         while abs(end - up) > slew:        # rounding of u_p +- slew: stay within the limit
             end = math.nextafter(end, up)
-        y_end, z_end = self._y(end)
-        if (y_end - yd) * s <= 0:          # out of reach (or just reached) at the end
-            reached = y_end == yd
-            self._flags = 0 if reached else (
-                (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
-                if end == (hi if s > 0 else lo) else FLAG_SLEW)
-            self._u, self._z = end, z_end
-            return end
-        u, z = self._solve(up, end, yd, s)
-        self._u, self._z, self._flags = u, z, 0
-        return u
+        self._u, self._z, self._flags = self._solve(up, end, yd, s)
+        return self._u
 
-    def _solve(self, a, b, yd, s):
-        # a = u_p (Y(a) before yd), b = the reachable end (Y(b) past yd); the bracket
-        # [a, b] keeps that property while Newton or bisection steps shrink it
+    def _solve(self, a, end, yd, s):
+        # a = u_p (Y(a) before yd); Newton steps from there. The reachable end is
+        # evaluated only when a step would reach or pass it (or after NEWTON_FIRST steps
+        # without a bracket): out of reach there, the voltage stops at the end; else
+        # [a, b] brackets yd (Y(a) before, Y(b) past it) while Newton or bisection steps
+        # shrink it: Newton where its step stays in the bracket and is at most half the
+        # step before last, else bisection (so the bracket at least halves every two
+        # steps, and Newton converging from one side is not interrupted). A tracking step
+        # thus costs a few short model steps, not a long one.
         m = self.model
         span = m.input_range[1] - m.input_range[0]
         tol = 4 * _EPS * (abs(yd) + self._scale)
@@ -184,28 +183,42 @@ class BoucWenCompensatorTwin:
             return u - err / dy if dy > 0 else math.nan
 
         u = newton(a, self._z, m.output(a, self._z) - yd)
-        old = abs(b - a)
-        z_b = None
-        for _ in range(200):
-            if not min(a, b) < u < max(a, b):
+        dx = dx_old = abs(end - a)
+        b = z_b = None
+        for i in range(MAX_ITERATIONS):
+            if b is None and (not min(a, end) < u < max(a, end) or i >= NEWTON_FIRST):
+                y_end, z_end = self._y(end)
+                if (y_end - yd) * s <= 0:      # out of reach (or just reached) at the end
+                    limit = self.limits[1] if s > 0 else self.limits[0]
+                    flags = 0 if y_end == yd else (
+                        (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
+                        if end == limit else FLAG_SLEW)
+                    return end, z_end, flags
+                b, z_b = end, z_end
+            if b is not None and not min(a, b) < u < max(a, b):
                 u = 0.5 * (a + b)
             y, z = self._y(u)
             err = y - yd
             if abs(err) <= tol:
-                return u, z
+                return u, z, 0
             if err * s < 0:
                 a = u
             else:
                 b, z_b = u, z
-            width = abs(b - a)
-            if width <= 2 * _EPS * max(abs(a), abs(b), 1e-300):
+            if b is None:
+                u = newton(u, z, err)
+                continue
+            if abs(b - a) <= 2 * _EPS * max(abs(a), abs(b), 1e-300):
                 break
-            # Newton unless the bracket stopped halving (then bisect)
-            u = newton(u, z, err) if width <= 0.5 * old else 0.5 * (a + b)
-            old = width
-        if z_b is None:      # the bracket collapsed onto its far end, which reaches yd
-            _, z_b = self._y(b)
-        return b, z_b
+            step = newton(u, z, err)
+            dx_old = dx
+            if min(a, b) < step < max(a, b) and abs(step - u) <= 0.5 * dx_old:
+                dx = abs(step - u)
+                u = step
+            else:
+                u = 0.5 * (a + b)
+                dx = 0.5 * abs(b - a)
+        return b, z_b, 0
 
     def run(self, y_desired):
         """Compensate a block of desired outputs; returns a
