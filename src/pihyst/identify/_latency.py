@@ -3,12 +3,13 @@
 A candidate model runs in a controller as its exact compensator
 (:class:`pihyst.Compensator` for a PI model, :class:`pihyst.inverse.BoucWenCompensator`
 for Bouc-Wen; both in C), one desired displacement in, one voltage out, every sample. Its
-cost per sample depends on the trajectory: following a smooth trajectory the inverse moves little between samples
-(**typical**); a desired displacement drawn at random every sample makes it cross the
-most operator breakpoints and reversals (**worst case**). Both are measured here, in
-blocks of the compensator's ``run`` (the C loop; no Python per sample), sized to take about
-``BLOCK_SECONDS`` each, the median of ``REPEATS`` blocks, so a candidate costs a few
-milliseconds to measure and a passing disturbance on the machine does not count.
+cost per sample depends on the trajectory: following a smooth trajectory the inverse moves
+little between samples (**typical**); a desired displacement drawn at random every sample
+makes it cross the most operator breakpoints and reversals (**worst case**). Both are
+measured here, in blocks of the compensator's ``run`` (the C loop; no Python per sample),
+sized to take about ``BLOCK_SECONDS`` each, the median of ``REPEATS`` blocks, so a
+candidate costs a few milliseconds to measure and a passing disturbance on the machine
+does not count.
 """
 
 import time
