@@ -19,12 +19,14 @@
  *
  * Compensator: from the state (u_p, z_p), Y(u) = (B1) after the step u_p -> u is
  * non-decreasing on both sides of u_p when the model is monotone, min(c_1, c_1 + 2 c_2) +
- * min(a, 0) 2 beta / (beta + gamma) >= 0 (others are refused). Each sample brackets y_d
- * between u_p and the reachable end [max(u_min, u_p - max_step), min(u_max, u_p +
- * max_step)] and solves Y(u) = y_d by Newton steps kept in the bracket (bisection when a
- * step leaves it or does not halve it) until |Y(u) - y_d| <= 4 eps (|y_d| + |offset| +
- * |c_1| + |c_2| + |a| z_max) or the bracket is two adjacent numbers; eps is that of the
- * precision. Out of reach: the voltage stops at the bracket's end, flagged
+ * min(a, 0) 2 beta / (beta + gamma) >= 0 (others are refused). Each sample solves
+ * Y(u) = y_d between u_p and the reachable end [max(u_min, u_p - max_step), min(u_max,
+ * u_p + max_step)] by Newton steps from u_p; the end is evaluated only when a step would
+ * reach or pass it (or after 8 steps without a bracket). Once y_d is bracketed, a Newton
+ * step is taken if it stays in the bracket and is at most half the step before last,
+ * else the bracket is bisected. It stops at |Y(u) - y_d| <= 4 eps (|y_d| + |offset| +
+ * |c_1| + |c_2| + |a| z_max) or when the bracket is two adjacent numbers; eps is that of
+ * the precision. Out of reach: the voltage stops at the bracket's end, flagged
  * PIHYST_COMP_SAT_LOW/HIGH at a limit or PIHYST_COMP_SLEW at the slew bound; NaN holds
  * the last voltage (PIHYST_COMP_NAN). Every voltage lies in [u_min, u_max] and within
  * max_step of the previous one, whatever y_d is.

@@ -6,12 +6,13 @@ From the state (u_p, z_p) the output for the next voltage u is
 
 (the model's own Runge-Kutta arithmetic, docs/theory/bouc-wen.md). A monotone model
 (``model.is_monotone``) has Y non-decreasing on both sides of u_p, with Y(u_p) the current
-output. The compensator brackets the desired value y_d between u_p and the reachable end
-[max(u_min, u_p - slew), min(u_max, u_p + slew)] and solves Y(u) = y_d by Newton steps
-kept inside the bracket (bisection when a step leaves it or does not halve it), until
-the bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + |c_1| +
-|c_2| + |a| z_max): the inverse is exact to that tolerance. Where Y is flat at y_d the
-bracket keeps the voltage nearest u_p. Out of reach: the voltage saturates at the
+output. The compensator solves Y(u) = y_d between u_p and the reachable end
+[max(u_min, u_p - slew), min(u_max, u_p + slew)] by Newton steps from u_p, evaluating the
+end only when a step would reach or pass it; once y_d is bracketed, Newton steps that stay
+inside and halve the step before last, else bisection (:meth:`_solve`), until the
+bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + |c_1| +
+|c_2| + |a| z_max): the inverse is exact to that tolerance. Where Y is flat at y_d (a
+model at its monotone bound) the voltage is one of the flat stretch. Out of reach: the voltage saturates at the
 bracket's end and is flagged (limit or slew); NaN holds the last voltage. The flags are
 those of :mod:`pihyst.inverse._compensator`, and so is the result.
 
