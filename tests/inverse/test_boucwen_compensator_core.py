@@ -129,3 +129,10 @@ def test_compensator_for_picks_the_family_and_refuses_creep_state():
     assert type(compensator_for(m)) is BoucWenCompensator
     with pytest.raises(ValueError, match="no creep"):
         compensator_for(m, creep_state=[0.0])
+
+
+def test_banks_refuse_bouc_wen_models_with_one_line():
+    from pihyst.inverse import CompensatorBank
+    m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    with pytest.raises(ValueError, match="not BoucWenModel"):
+        CompensatorBank([m, m])
