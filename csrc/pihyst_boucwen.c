@@ -134,6 +134,7 @@ pihyst_status pihyst_bw_init(pihyst_bw_model *m, const pihyst_bw_params *p)
         return PIHYST_ENONFINITE;
     spread = p->beta + R_FABS(p->gamma);
     if (!(p->beta > R_FABS(p->gamma)) || !(spread <= RC(PIHYST_BW_MAX_SHAPE)) ||
+        !(p->beta + p->gamma >= RC(PIHYST_BW_MIN_SPREAD)) ||
         !(RC(1.0) <= p->n && p->n <= RC(PIHYST_BW_MAX_EXPONENT)))
         return PIHYST_ESHAPE;
     if (!(p->u_min < p->u_max)) return PIHYST_ERANGE;

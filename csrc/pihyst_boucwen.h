@@ -43,6 +43,7 @@ extern "C" {
 
 #define PIHYST_BW_MAX_SHAPE 1000.0   /* beta + |gamma| above this: a step, not a model */
 #define PIHYST_BW_MAX_EXPONENT 10.0
+#define PIHYST_BW_MIN_SPREAD 1e-9    /* beta + gamma below this: z_max beyond use, |z|^n overflows */
 
 #define PIHYST_REAL double
 #define PIHYST_NAME(name) name

@@ -10,7 +10,8 @@
  *  docs/interfaces.md). Fill it with a designated initializer. */
 typedef struct {
     PIHYST_REAL beta, gamma;   /**< shape on the normalized input: beta > |gamma|,
-                                    beta + |gamma| <= PIHYST_BW_MAX_SHAPE */
+                                    beta + |gamma| <= PIHYST_BW_MAX_SHAPE,
+                                    beta + gamma >= PIHYST_BW_MIN_SPREAD */
     PIHYST_REAL n;             /**< exponent, 1 <= n <= PIHYST_BW_MAX_EXPONENT */
     PIHYST_REAL hysteretic;    /**< a, weight of z (output units) */
     PIHYST_REAL linear;        /**< c_1 */

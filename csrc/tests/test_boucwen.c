@@ -93,6 +93,8 @@ static void test_validation(void)
     CHECK(BW(pihyst_bw_init)(&m, &p) == PIHYST_ESHAPE);   /* n >= 1 */
     p = params_of(900.0, 200.0, 1.0, -8.0, 40.0, 0.0);
     CHECK(BW(pihyst_bw_init)(&m, &p) == PIHYST_ESHAPE);   /* beta + |gamma| <= 1000 */
+    p = params_of(1e-12, 0.0, 4.0, -8.0, 40.0, 0.0);
+    CHECK(BW(pihyst_bw_init)(&m, &p) == PIHYST_ESHAPE);   /* beta + gamma >= 1e-9 */
     p = params_of(5.0, 1.0, 1.0, (double)NAN, 40.0, 0.0);
     CHECK(BW(pihyst_bw_init)(&m, &p) == PIHYST_ENONFINITE);
     p = params_of(5.0, 1.0, 1.0, -8.0, 40.0, 0.0);

@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pihyst import _boucwen_core
+from pihyst.exceptions import InvalidModelError
 from pihyst.model import BoucWenModel
 from pihyst.model._boucwen import advance
 
@@ -110,3 +111,9 @@ def test_the_core_refuses_what_the_model_refuses():
         _boucwen_core.BoucWen(2.0, 1.0, 0.5, 1.0, 1.0, 0.0, 0.0, (0.0, 1.0), (0.0, 0.0))
     with pytest.raises(_boucwen_core.CoreError):
         _boucwen_core.BoucWen(2.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, (1.0, 1.0), (1.0, 0.0))
+    # beta + gamma so small that z_max = (beta + gamma)^(-1/n) is beyond use (found by
+    # fuzzing: |z|^n overflowed to NaN); the model refuses it too
+    with pytest.raises(_boucwen_core.CoreError):
+        _boucwen_core.BoucWen(5e-324, 0.0, 4.8, 1.0, 1.0, 0.0, 0.0, (0.0, 1.0), (0.0, 0.0))
+    with pytest.raises(InvalidModelError, match="beta \\+ gamma >= 1e-09"):
+        BoucWenModel(beta=5e-324, gamma=0.0, n=4.8, hysteretic=1.0, linear=1.0)

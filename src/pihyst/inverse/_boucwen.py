@@ -12,9 +12,9 @@ end only when a step would reach or pass it; once y_d is bracketed, Newton steps
 inside and halve the step before last, else bisection (:meth:`_solve`), until the
 bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + |c_1| +
 |c_2| + |a| z_max): the inverse is exact to that tolerance. Where Y is flat at y_d (a
-model at its monotone bound) the voltage is one of the flat stretch. Out of reach: the voltage saturates at the
-bracket's end and is flagged (limit or slew); NaN holds the last voltage. The flags are
-those of :mod:`pihyst.inverse._compensator`, and so is the result.
+model at its monotone bound) the voltage is one of the flat stretch. Out of reach: the
+voltage saturates at the bracket's end and is flagged (limit or slew); NaN holds the last
+voltage. The flags are those of :mod:`pihyst.inverse._compensator`, and so is the result.
 
 :class:`BoucWenCompensator` runs in the C core (csrc/pihyst_boucwen.c, the same algorithm
 operation for operation); :class:`BoucWenCompensatorTwin` is its Python twin, the

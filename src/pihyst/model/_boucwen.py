@@ -51,6 +51,8 @@ SCHEMA_VERSION = 1
 DEFAULT_UNITS = MappingProxyType({"input": "V", "output": "um"})
 MAX_SHAPE = 1000.0   # beta + |gamma| above this: the loop is a step, not a model
 MAX_EXPONENT = 10.0
+MIN_SPREAD = 1e-9    # beta + gamma below this: z_max = (beta + gamma)^(-1/n) is beyond use
+                     # and |z|^n overflows (the C core refuses it as well)
 
 
 def _number(value, name):
@@ -197,6 +199,9 @@ class BoucWenModel(Immutable):
                                     f"beta={self.beta:g}, gamma={self.gamma:g}")
         if not self.beta + abs(self.gamma) <= MAX_SHAPE:
             raise InvalidModelError(f"Bouc-Wen needs beta + |gamma| <= {MAX_SHAPE:g}")
+        if not self.beta + self.gamma >= MIN_SPREAD:
+            raise InvalidModelError(f"Bouc-Wen needs beta + gamma >= {MIN_SPREAD:g} (a finite "
+                                    f"bound of z); got {self.beta + self.gamma:g}")
         if not 1.0 <= self.n <= MAX_EXPONENT:
             raise InvalidModelError(f"Bouc-Wen exponent n must be in [1, {MAX_EXPONENT:g}], "
                                     f"got {self.n:g}")
