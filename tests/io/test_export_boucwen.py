@@ -241,4 +241,4 @@ def test_export_command_writes_bouc_wen_header_and_flat_file(tmp_path, capsys):
     assert "pihyst_bw_init_f32" in (tmp_path / "a.h").read_text()
     assert main(["export", str(model_path), "--flat", "-o", str(tmp_path / "m.pihyst")]) == 0
     assert (tmp_path / "m.pihyst").read_text() == flat_text(model)
-    assert "bouc-wen model" in capsys.readouterr().out
+    assert "bouc-wen model, state (u, z)" in capsys.readouterr().out
