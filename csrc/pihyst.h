@@ -81,6 +81,9 @@ typedef uint8_t pihyst_flags;
 #define PIHYST_ORDER_FALLING_KINKS 2u  /**< multislope falling kinks sorted by distance */
 #define PIHYST_ORDER_CLASSICAL 4u      /**< classical state 1-Lipschitz in r: crossings in
                                             operator order, read from the state */
+#define PIHYST_ORDER_RAMPS 8u          /**< every polyline a saturated ramp: the ramp search,
+                                            no event lists (pihyst_inverse.c) */
+#define PIHYST_ORDER_RAMPS_AVX2 16u    /**< and the model step of the ramps with AVX2 */
 
 /** Length of the coefficient scratch a model needs, in values of its precision. */
 #define PIHYST_COEF_LEN(n_ops) (4 * (n_ops))
@@ -100,6 +103,27 @@ typedef uint8_t pihyst_flags;
 #define PIHYST_COMPENSATOR_SCRATCH_LEN(n_ops, n_points) (10 * (n_ops) + 8 * (n_points) + 12)
 #define PIHYST_COMPENSATOR_SCRATCH_LEN_F32(n_ops, n_points) \
     (10 * (n_ops) + 8 * (n_points) + 20)
+
+/** Compensator banks in structure-of-arrays layout (pihyst_compbank): channels are
+ *  grouped PIHYST_SOA_LANES_OF(real) at a time (64 bytes of reals), each group a header of
+ *  PIHYST_SOA_HEADER vectors and four vectors per operator. Work length in values of the
+ *  precision for n channels whose fast (classical) channels have at most n_ops operators;
+ *  pihyst_compbank_work_len gives the exact figure for a set of channels. */
+#define PIHYST_SOA_LANES_OF(type) (64 / sizeof(type))
+#define PIHYST_SOA_HEADER 8
+#define PIHYST_COMPBANK_WORK_LEN_OF(type, n, n_ops)                                      \
+    (((n) + PIHYST_SOA_LANES_OF(type) - 1) / PIHYST_SOA_LANES_OF(type) *                  \
+         (PIHYST_SOA_HEADER + 4 * (((n_ops) + 3) / 4 * 4)) * PIHYST_SOA_LANES_OF(type) +  \
+     64 / sizeof(type))
+#define PIHYST_COMPBANK_WORK_LEN(n, n_ops) PIHYST_COMPBANK_WORK_LEN_OF(double, n, n_ops)
+#define PIHYST_COMPBANK_WORK_LEN_F32(n, n_ops) PIHYST_COMPBANK_WORK_LEN_OF(float, n, n_ops)
+/** Work length of a structure-of-arrays model bank (pihyst_modelbank) of n channels. */
+#define PIHYST_MODELBANK_WORK_LEN_OF(type, n)                                            \
+    (((n) + PIHYST_SOA_LANES_OF(type) - 1) / PIHYST_SOA_LANES_OF(type) * (2 + 3 * 16) *    \
+         PIHYST_SOA_LANES_OF(type) +                                                      \
+     64 / sizeof(type))
+#define PIHYST_MODELBANK_WORK_LEN(n) PIHYST_MODELBANK_WORK_LEN_OF(double, n)
+#define PIHYST_MODELBANK_WORK_LEN_F32(n) PIHYST_MODELBANK_WORK_LEN_OF(float, n)
 
 /** Human-readable text of a status code (static storage). */
 const char *pihyst_status_text(pihyst_status status);

@@ -169,8 +169,9 @@ typedef struct {
     PIHYST_REAL u_last;       /**< last voltage (applied to the model state) */
     PIHYST_REAL y_last;       /**< model output at u_last with the current state */
     PIHYST_REAL tol;          /**< equality band of |y_d - y_last| (rounding of the output) */
-    PIHYST_REAL *scratch;     /**< caller-owned, scratch_len values: kinks, event lists, the
-                                   aligned working state */
+    PIHYST_REAL *scratch;     /**< caller-owned, scratch_len values: kinks, event lists (or
+                                   the ramp constants of a KP model), the aligned working
+                                   state */
     size_t scratch_len;       /**< >= pihyst_compensator_scratch_len(model) */
     size_t events_cap;        /**< capacity of the crossing list (events, sentinel excluded) */
     /* breakpoints kept between samples while the direction holds (internal): */
@@ -247,3 +248,100 @@ size_t PIHYST_NAME(pihyst_bank_compensate)(PIHYST_NAME(pihyst_compensator) *cons
                                            size_t n, const PIHYST_REAL *y_desired,
                                            PIHYST_REAL *u, PIHYST_REAL *y,
                                            pihyst_flags *flags);
+
+/* ======================================================================
+ * Compensator banks, structure-of-arrays: the fast bank (csrc/pihyst_bank_soa.c)
+ * ======================================================================
+ *
+ * The same channels as pihyst_bank_compensate (N initialised compensators, any
+ * families), run from a work array laid out channel-interleaved, L = 64 bytes of reals
+ * per group. Classical channels with r_0 = 0 and w_0 > 0 (and w_0 >= sum w / 1024) step
+ * the model's exact inverse, itself a classical PI model, vectorized across channels:
+ * K branch-free clamps and a dot product per channel. Where that voltage would leave the
+ * limits or the slew limit, or y_d is NaN or within tol of the last output, the channel
+ * does what its compensator does (the compensator itself takes the ticks that leave the
+ * limits, from the state the bank holds for it); every other channel runs its
+ * compensator every tick. So every voltage lies inside its channel's limits and slew
+ * limit, the flags are the compensator's, and the voltages and outputs are those of the
+ * separate compensators to rounding (not bit for bit: the inverse reaches y_d by other
+ * operations; docs/c-core.md gives the measured agreement). The output of a fast tick is
+ * y_d itself.
+ *
+ * State: between pihyst_compbank_init and pihyst_compbank_sync the fast channels' state
+ * is in the work array, and their compensators (u_last, y_last, model state) are stale.
+ * pihyst_compbank_sync brings them up to date (the bank may go on afterwards). A
+ * compensator stepped or reset outside the bank needs pihyst_compbank_init again.
+ */
+
+/** A structure-of-arrays compensator bank. Transparent for static allocation; fill it
+ *  with pihyst_compbank_init. */
+typedef struct {
+    PIHYST_NAME(pihyst_compensator) *const *comps; /**< N channels (caller-owned) */
+    size_t n;              /**< N */
+    size_t n_ops;          /**< operators per group: the largest fast K, rounded up to 4 */
+    size_t n_fast;         /**< channels on the fast path */
+    PIHYST_REAL *groups;   /**< the groups, in the caller's work array (64-byte aligned) */
+    unsigned parity;       /**< which play-state buffer holds the state (internal) */
+} PIHYST_NAME(pihyst_compbank);
+
+/** Work length (values) that pihyst_compbank_init needs for these channels. */
+size_t PIHYST_NAME(pihyst_compbank_work_len)(PIHYST_NAME(pihyst_compensator) *const *comps,
+                                             size_t n);
+
+/** Lay out N initialised, distinct compensators (their current state and last voltage)
+ *  in the work array. comps and the compensators must outlive the bank.
+ *  @return PIHYST_OK, PIHYST_ENULL, PIHYST_ESCRATCH (work shorter than
+ *          pihyst_compbank_work_len) */
+pihyst_status PIHYST_NAME(pihyst_compbank_init)(PIHYST_NAME(pihyst_compbank) *b,
+                                                PIHYST_NAME(pihyst_compensator) *const *comps,
+                                                size_t n, PIHYST_REAL *work, size_t work_len);
+
+/** One tick: u[i] for y_desired[i] (any values), y[i] the model output (y_d on a fast
+ *  tick; may be NULL), flags[i] the PIHYST_COMP_* bits (may be NULL). Arrays may not
+ *  overlap. @return the number of channels with a flag set. */
+size_t PIHYST_NAME(pihyst_compbank_compensate)(PIHYST_NAME(pihyst_compbank) *b,
+                                               const PIHYST_REAL *y_desired, PIHYST_REAL *u,
+                                               PIHYST_REAL *y, pihyst_flags *flags);
+
+/** Write the fast channels' state back to their compensators (model state, u_last,
+ *  y_last), by pihyst_compensator_reset at the last voltage. */
+void PIHYST_NAME(pihyst_compbank_sync)(PIHYST_NAME(pihyst_compbank) *b);
+
+/* ======================================================================
+ * Model banks, structure-of-arrays (csrc/pihyst_bank_soa_model.c)
+ * ======================================================================
+ *
+ * The same channels as pihyst_bank_step (N initialised models, any families), run from
+ * a work array laid out channel-interleaved: classical channels with K <= 16 are stepped
+ * 64 bytes of reals at a time with the operations of the single model's K <= 16 kernel,
+ * in the same order, so every output is bit for bit pihyst_model_step's; other channels
+ * (and all of them in a build without compiler vector extensions) are stepped by
+ * pihyst_model_step in the same call. Between pihyst_modelbank_init and
+ * pihyst_modelbank_sync the fast channels' states are in the work array (their models'
+ * state arrays are stale); a model stepped or reset outside the bank needs init again.
+ */
+
+/** A structure-of-arrays model bank. Fill it with pihyst_modelbank_init. */
+typedef struct {
+    PIHYST_NAME(pihyst_model) *const *models; /**< N channels (caller-owned) */
+    size_t n;              /**< N */
+    size_t n_fast;         /**< channels stepped in the groups */
+    PIHYST_REAL *groups;   /**< the groups, in the caller's work array (64-byte aligned) */
+} PIHYST_NAME(pihyst_modelbank);
+
+/** Work length (values) that pihyst_modelbank_init needs for n channels. */
+size_t PIHYST_NAME(pihyst_modelbank_work_len)(PIHYST_NAME(pihyst_model) *const *models,
+                                              size_t n);
+
+/** Lay out N initialised, distinct models (their current states) in the work array.
+ *  @return PIHYST_OK, PIHYST_ENULL, PIHYST_ESCRATCH (work too short) */
+pihyst_status PIHYST_NAME(pihyst_modelbank_init)(PIHYST_NAME(pihyst_modelbank) *b,
+                                                 PIHYST_NAME(pihyst_model) *const *models,
+                                                 size_t n, PIHYST_REAL *work, size_t work_len);
+
+/** One tick: y[i] = the output of channel i for u[i] (as pihyst_model_step). */
+void PIHYST_NAME(pihyst_modelbank_step)(PIHYST_NAME(pihyst_modelbank) *b,
+                                        const PIHYST_REAL *u, PIHYST_REAL *y);
+
+/** Copy the fast channels' states back to their models' state arrays. */
+void PIHYST_NAME(pihyst_modelbank_sync)(PIHYST_NAME(pihyst_modelbank) *b);

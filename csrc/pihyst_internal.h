@@ -45,4 +45,18 @@ typedef double real;
 #define PIHYST_HOT
 #endif
 
+/* A saturated ramp's value, shared by the model and the compensator's ramp step so that
+ * both give the same bits: flat at y0 up to x1, from y1 to y2 between x1 and x2, flat
+ * beyond:  u < x1: y0;  u >= x2: y2;  else y1 + (y2 - y1)(u - x1)/(x2 - x1). */
+#define PIHYST_RAMP_VALUE(x1, x2, y0, y1, y2, u)                                   \
+    ((u) < (x1) ? (y0)                                                           \
+                : ((u) >= (x2) ? (y2)                                            \
+                               : (y1) + ((y2) - (y1)) * ((u) - (x1)) / ((x2) - (x1))))
+
+#ifdef PIHYST_BUILD_F32
+#define pihyst_internal_weighted_sum pihyst_internal_weighted_sum_f32
+#endif
+/* offset + sum_k w_k f_k exactly as the model step sums it (pihyst_model.c) */
+real pihyst_internal_weighted_sum(size_t K, const real *w, const real *f, real offset);
+
 #endif /* PIHYST_INTERNAL_H */

@@ -49,6 +49,8 @@
  *   pwl:        the crossing by binary search on the polyline's values, then every
  *               interior breakpoint beyond it with its slope change, as two events
  *               (+ new slope, - old slope) that the walk sums exactly.
+ *   saturated-ramp pwl (every polyline flat, rising, flat: KP kernels): no lists, a
+ *               search by O(K) probes (section "saturated ramps" below).
  * Lists out of order (a state set by reset, an unusual multislope shape, pwl) are
  * sorted: insertion sort, O(K log K) at worst. For pwl the walk keeps its slope as a
  * compensated sum (hi + lo), so that a near-vertical segment joining and leaving
@@ -515,6 +517,453 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
     }
 }
 
+/* ------------------------------------------------------------------ saturated ramps */
+
+/* A pwl model whose polylines are all saturated ramps (flat at y1 up to x1, rising to y2
+ * at x2, flat beyond: the KP kernels, detected by pihyst_model_init, coef[0] = 1) gets
+ * its own search, without event lists or sorting. From u_p with state f, going up,
+ * operator k follows R_k from its crossing c_k = x1 + (f_k - y1) dx/dy (R_k(c_k) = f_k)
+ * to x2 with the slope s_k = w_k dy/dx, and stays put outside [c_k, x2]. So
+ *
+ *     y(u) - y_p = z(u) = sum_k s_k (clamp(u, lo_k, hi_k) - clamp(u_p, lo_k, hi_k))  (R1)
+ *
+ * with lo_k = max(c_k, u_p), hi_k = x2 (an operator that cannot move, f_k >= y2 or
+ * c_k >= x2 or s_k = 0, gets lo_k = hi_k: no term). Going down, F_k with its crossing
+ * and x1 give the same form in the negated voltage p = -u (negation is exact), so both
+ * directions solve z(p) = target for p >= q (q = +-u_p), z continuous, non-decreasing,
+ * linear between the breakpoints {lo_k, hi_k}.
+ *
+ * lo and hi are set at a reversal (ramps_reverse, one O(K) loop) and kept while the
+ * direction holds, for the reason the event lists are kept: an operator not reached keeps
+ * its f_k, one on its ramp stays on it. One probe (ramps_probe, one O(K) loop with no
+ * data-dependent branch, vectorized) gives at a point m: z(m), the slopes just right and
+ * left of m, and the nearest breakpoints above and below m. The search (solve_ramps):
+ *   - tracking: the last answer's segment is kept (slope and right end); an answer
+ *     inside it needs no probe. Else probe at q; if the segment right of q reaches the
+ *     target, solve it, else probe at its end and try the next segment;
+ *   - otherwise a bracket [L, H] with z(L) < target <= z(H), z(H) probed at the window's
+ *     end (below the target: the end is taken and flagged, as on the lists). Probe at a
+ *     point m inside (the secant point, or the midpoint when the bracket shrank by less
+ *     than half); the segment of m then either holds the answer, solved exactly, or
+ *     moves L up to its right end or H down to its left end. The bracket thus loses
+ *     m's segment and at least half of itself every other probe, and stops when it holds
+ *     no breakpoint.
+ * The answer is the least p with z(p) = target, as on the lists: a flat stretch with
+ * z = target is passed over to its start (H moves down across it). Cost: O(K) per probe,
+ * O(1 + segments passed) probes tracking, O(log K)-like probes for a jump (measured in
+ * benchmarks/bench_kp.py), no sort. */
+
+enum { RAMP_X1, RAMP_X2, RAMP_Y0, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N };
+#define RAMP_LANES 8
+
+/* Scratch of a ramp model: RAMP_N arrays of K constants for the rising ramps, the same
+ * for the falling ones, then lo and hi (K each): 16 K values, inside the scratch of a
+ * pwl model of K 4-point polylines (the event lists' place, unused by this path). */
+static real *ramp_array(const pihyst_compensator *c, int falling, int which)
+{
+    return c->scratch + (size_t)(falling * RAMP_N + which) * c->work_model.n_ops;
+}
+
+#ifdef PIHYST_BUILD_F32
+#define R_MAX FLT_MAX
+#else
+#define R_MAX DBL_MAX
+#endif
+
+/* constants of every ramp, from points 1 and 2 of its polyline: x1, x2, y0 (the value
+ * below x1: y1 but for the sign of a zero), y1, y2, dx/dy (0 for a flat ramp, at most
+ * the largest finite value) and the slope w dy/dx */
+static void ramps_init(pihyst_compensator *c)
+{
+    const pihyst_model *m = &c->work_model;
+    const size_t K = m->n_ops;
+    size_t k;
+    int side;
+    for (side = 0; side < 2; ++side) {
+        const real *x = side ? m->pwl.fall_x : m->pwl.rise_x;
+        const real *y = side ? m->pwl.fall_y : m->pwl.rise_y;
+        real *x1 = ramp_array(c, side, RAMP_X1), *x2 = ramp_array(c, side, RAMP_X2);
+        real *y0 = ramp_array(c, side, RAMP_Y0), *y1 = ramp_array(c, side, RAMP_Y1);
+        real *y2 = ramp_array(c, side, RAMP_Y2);
+        real *inv = ramp_array(c, side, RAMP_INV), *s = ramp_array(c, side, RAMP_SLOPE);
+        for (k = 0; k < K; ++k) {
+            const real dx = x[4 * k + 2] - x[4 * k + 1], dy = y[4 * k + 2] - y[4 * k + 1];
+            real i = dy > RC(0.0) ? dx / dy : RC(0.0);
+            if (!(i <= R_MAX)) i = R_MAX;
+            x1[k] = x[4 * k + 1];
+            x2[k] = x[4 * k + 2];
+            y0[k] = y[4 * k];
+            y1[k] = y[4 * k + 1];
+            y2[k] = y[4 * k + 2];
+            inv[k] = i;
+            s[k] = m->weights[k] * (dy / dx);
+        }
+    }
+}
+
+/* lo, hi of (R1) going up from u_p: crossing c = x1 + (f - y1) dx/dy of the rising ramp,
+ * from x1 on (f <= y1: the ramp's start), joined at u_p if already passed */
+PIHYST_HOT
+static void ramps_reverse_up(size_t K, const real *restrict x1, const real *restrict x2,
+                             const real *restrict y1, const real *restrict y2,
+                             const real *restrict inv, const real *restrict s,
+                             const real *restrict f, real u_p, real *restrict lo,
+                             real *restrict hi)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        real cr = x1[k] + (f[k] - y1[k]) * inv[k];
+        int moves;
+        cr = cr > x1[k] ? cr : x1[k];
+        cr = cr > u_p ? cr : u_p;
+        moves = (f[k] < y2[k]) & (cr < x2[k]) & (s[k] > RC(0.0));
+        lo[k] = moves ? cr : u_p;
+        hi[k] = moves ? x2[k] : u_p;
+    }
+}
+
+/* going down, in p = -u: the falling ramp's crossing (up to x2), down to x1 */
+PIHYST_HOT
+static void ramps_reverse_down(size_t K, const real *restrict x1, const real *restrict x2,
+                               const real *restrict y1, const real *restrict inv,
+                               const real *restrict s, const real *restrict f, real u_p,
+                               real *restrict lo, real *restrict hi)
+{
+    size_t k;
+    for (k = 0; k < K; ++k) {
+        real cr = x1[k] + (f[k] - y1[k]) * inv[k];
+        int moves;
+        cr = cr < x2[k] ? cr : x2[k];
+        cr = cr < u_p ? cr : u_p;
+        moves = (f[k] > y1[k]) & (cr > x1[k]) & (s[k] > RC(0.0));
+        lo[k] = moves ? -cr : -u_p;
+        hi[k] = moves ? -x1[k] : -u_p;
+    }
+}
+
+static void ramps_reverse(pihyst_compensator *c, int up, real u_p)
+{
+    const pihyst_model *m = &c->work_model;
+    const size_t K = m->n_ops;
+    real *lo = ramp_array(c, 2, 0), *hi = lo + K;
+    const int side = !up;
+    if (up)
+        ramps_reverse_up(K, ramp_array(c, side, RAMP_X1), ramp_array(c, side, RAMP_X2),
+                         ramp_array(c, side, RAMP_Y1), ramp_array(c, side, RAMP_Y2),
+                         ramp_array(c, side, RAMP_INV), ramp_array(c, side, RAMP_SLOPE),
+                         m->state, u_p, lo, hi);
+    else
+        ramps_reverse_down(K, ramp_array(c, side, RAMP_X1), ramp_array(c, side, RAMP_X2),
+                           ramp_array(c, side, RAMP_Y1), ramp_array(c, side, RAMP_INV),
+                           ramp_array(c, side, RAMP_SLOPE), m->state, u_p, lo, hi);
+}
+
+/* What a probe at m finds: z(m) of (R1), the slopes of z just right and left of m, and
+ * the nearest breakpoints strictly above and below m (+-inf if none). */
+typedef struct {
+    real z, right, left, next, prev;
+} ramp_probe;
+
+/* One term of the probe into lane j. The nearest breakpoint above m is lo if lo > m,
+ * else hi if hi > m (lo <= hi); below m likewise. Without `full` only z, the slope right
+ * of m and the next breakpoint (all a probe from the left needs). */
+#define RAMP_PROBE_TERM(i, j)                                                     \
+    do {                                                                          \
+        const real l_ = lo[i], h_ = hi[i], w_ = s[i];                             \
+        real cm_ = m > l_ ? m : l_, cq_ = q > l_ ? q : l_, n_;                    \
+        cm_ = cm_ < h_ ? cm_ : h_;                                                \
+        cq_ = cq_ < h_ ? cq_ : h_;                                                \
+        z[j] += w_ * (cm_ - cq_);                                                 \
+        sr[j] += ((l_ <= m) & (m < h_)) ? w_ : RC(0.0);                           \
+        n_ = l_ > m ? l_ : (h_ > m ? h_ : R_INF);                                 \
+        nx[j] = n_ < nx[j] ? n_ : nx[j];                                          \
+        if (full) {                                                               \
+            const real b_ = h_ < m ? h_ : (l_ < m ? l_ : -R_INF);                 \
+            sl[j] += ((l_ < m) & (m <= h_)) ? w_ : RC(0.0);                       \
+            pv[j] = b_ > pv[j] ? b_ : pv[j];                                      \
+        }                                                                         \
+    } while (0)
+
+/* The probe's loop over blocks of RAMP_LANES operators, on vectors of RAMP_LANES values
+ * (compiler vector extensions; the portable loop below otherwise) holding the partial
+ * results: the compiler does not vectorize the scalar loop's min/max reductions, while
+ * it does vectorize the same lane-wise statements on vector variables (as the model's
+ * small kernels, pihyst_model.c). */
+#if defined(__GNUC__) && !defined(PIHYST_NO_VECTOR_EXT)
+#define RAMP_VECTOR 1
+typedef real rvec __attribute__((vector_size(RAMP_LANES * sizeof(real))));
+#endif
+
+/* z(m) - z(q) and the rest of ramp_probe (with `full`), in RAMP_LANES partial results */
+static PIHYST_INLINE void probe(size_t K, const real *restrict lo, const real *restrict hi,
+                                const real *restrict s, real m, real q, int full,
+                                ramp_probe *r)
+{
+#ifdef RAMP_VECTOR
+    rvec z, sr, sl, nx, pv;
+#else
+    real z[RAMP_LANES], sr[RAMP_LANES], sl[RAMP_LANES], nx[RAMP_LANES], pv[RAMP_LANES];
+#endif
+    size_t k = 0, j;
+    for (j = 0; j < RAMP_LANES; ++j) {
+        z[j] = sr[j] = sl[j] = RC(0.0);
+        nx[j] = R_INF;
+        pv[j] = -R_INF;
+    }
+#ifdef RAMP_VECTOR
+    /* the last block padded with operators that cannot move (lo = hi = q, no slope), so
+     * that no scalar tail with branches follows */
+    while (k < K) {
+        rvec lv, hv, sv;
+        if (k + RAMP_LANES <= K) {
+            memcpy(&lv, lo + k, sizeof lv);
+            memcpy(&hv, hi + k, sizeof hv);
+            memcpy(&sv, s + k, sizeof sv);
+        } else {
+            for (j = 0; j < RAMP_LANES; ++j) {
+                lv[j] = k + j < K ? lo[k + j] : q;
+                hv[j] = k + j < K ? hi[k + j] : q;
+                sv[j] = k + j < K ? s[k + j] : RC(0.0);
+            }
+        }
+#define lo lv
+#define hi hv
+#define s sv
+        for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(j, j);
+#undef lo
+#undef hi
+#undef s
+        k += RAMP_LANES;
+    }
+#else
+    for (; k + RAMP_LANES <= K; k += RAMP_LANES)
+        for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(k + j, j);
+    for (; k < K; ++k) RAMP_PROBE_TERM(k, 0);
+#endif
+    r->z = z[0];
+    r->right = sr[0];
+    r->left = sl[0];
+    r->next = nx[0];
+    r->prev = pv[0];
+    for (j = 1; j < RAMP_LANES; ++j) {
+        r->z += z[j];
+        r->right += sr[j];
+        r->left += sl[j];
+        r->next = nx[j] < r->next ? nx[j] : r->next;
+        r->prev = pv[j] > r->prev ? pv[j] : r->prev;
+    }
+}
+#undef RAMP_PROBE_TERM
+
+/* a probe from the left (tracking): z, right, next; left = 0, prev = -inf */
+PIHYST_HOT
+static void ramps_probe_right(size_t K, const real *restrict lo, const real *restrict hi,
+                              const real *restrict s, real m, real q, ramp_probe *r)
+{
+    probe(K, lo, hi, s, m, q, 0, r);
+}
+
+PIHYST_HOT
+static void ramps_probe(size_t K, const real *restrict lo, const real *restrict hi,
+                        const real *restrict s, real m, real q, ramp_probe *r)
+{
+    probe(K, lo, hi, s, m, q, 1, r);
+}
+
+/* The model step of a ramp model, with AVX2 on x86-64 (double precision; the f32 core is
+ * for FPUs without it): the state update of pihyst_model_step bit for bit,
+ *     f_k <- max(R_k(u), min(F_k(u), f_k)),   R, F by PIHYST_RAMP_VALUE,
+ * then the model's own sum. The ramp constants lie one array per quantity (whole-vector
+ * loads: the model reads its 4-point polylines operator by operator, ~16 scalar
+ * instructions each), and a block of 4 operators none of whose ramps has u on its rising
+ * part (u < x1 or u >= x2: most blocks) skips the division. The same operations in the
+ * same order as the scalar expression, lane by lane: (y2 - y1) * (u - x1), / (x2 - x1),
+ * + y1 (nothing to contract into an FMA), and min/max that return their second operand
+ * on equality as `h < f ? h : f` and `r > v ? r : v` do. Picked at init when the CPU has
+ * AVX2 (PIHYST_ORDER_RAMPS_AVX2); the compiler cannot be brought to vectorize the
+ * portable form (it scalarizes the selects around the per-block division). */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(PIHYST_BUILD_F32) && \
+    !defined(PIHYST_NO_VECTOR_EXT)
+#define RAMP_AVX2 1
+#include <immintrin.h>
+
+/* one ramp side of a block: the values at u, the division only where u is on a ramp */
+#define RAMP_AVX2_SIDE(out, a, k)                                                          \
+    do {                                                                                   \
+        const __m256d x1_ = _mm256_loadu_pd((a)[RAMP_X1] + (k));                           \
+        const __m256d x2_ = _mm256_loadu_pd((a)[RAMP_X2] + (k));                           \
+        const __m256d y0_ = _mm256_loadu_pd((a)[RAMP_Y0] + (k));                           \
+        const __m256d y2_ = _mm256_loadu_pd((a)[RAMP_Y2] + (k));                           \
+        const __m256d below_ = _mm256_cmp_pd(uv, x1_, _CMP_LT_OQ); /* u < x1 */           \
+        const __m256d above_ = _mm256_cmp_pd(uv, x2_, _CMP_GE_OQ); /* u >= x2 */           \
+        (out) = _mm256_blendv_pd(y2_, y0_, below_);                                        \
+        if (_mm256_movemask_pd(_mm256_or_pd(below_, above_)) != 15) {                      \
+            const __m256d y1_ = _mm256_loadu_pd((a)[RAMP_Y1] + (k));                       \
+            const __m256d t_ = _mm256_add_pd(                                              \
+                y1_, _mm256_div_pd(_mm256_mul_pd(_mm256_sub_pd(y2_, y1_),                  \
+                                                 _mm256_sub_pd(uv, x1_)),                  \
+                                   _mm256_sub_pd(x2_, x1_)));                              \
+            (out) = _mm256_blendv_pd(t_, (out), _mm256_or_pd(below_, above_));             \
+        }                                                                                  \
+    } while (0)
+
+__attribute__((target("avx2"))) static void ramps_update_avx2(size_t K,
+                                                               const real *const *rc,
+                                                               const real *const *fc,
+                                                               real *f, real u)
+{
+    const __m256d uv = _mm256_set1_pd(u);
+    size_t k = 0;
+    for (; k + 4 <= K; k += 4) {
+        __m256d r, h;
+        RAMP_AVX2_SIDE(r, rc, k);
+        RAMP_AVX2_SIDE(h, fc, k);
+        /* max(r, min(h, f)): minpd(h, f) = h < f ? h : f, maxpd(r, v) = r > v ? r : v */
+        _mm256_storeu_pd(f + k, _mm256_max_pd(r, _mm256_min_pd(h, _mm256_loadu_pd(f + k))));
+    }
+    for (; k < K; ++k) {
+        const real r = PIHYST_RAMP_VALUE(rc[RAMP_X1][k], rc[RAMP_X2][k], rc[RAMP_Y0][k],
+                                         rc[RAMP_Y1][k], rc[RAMP_Y2][k], u);
+        const real h = PIHYST_RAMP_VALUE(fc[RAMP_X1][k], fc[RAMP_X2][k], fc[RAMP_Y0][k],
+                                         fc[RAMP_Y1][k], fc[RAMP_Y2][k], u);
+        const real v = h < f[k] ? h : f[k];
+        f[k] = r > v ? r : v;
+    }
+}
+#undef RAMP_AVX2_SIDE
+
+/* pihyst_model_step's value and state on a ramp model, through ramps_update_avx2 */
+static real ramps_step_avx2(pihyst_compensator *c, real u)
+{
+    pihyst_model *m = &c->work_model;
+    const real *rc[RAMP_N], *fc[RAMP_N];
+    int i;
+    for (i = 0; i < RAMP_N; ++i) {
+        rc[i] = ramp_array(c, 0, i);
+        fc[i] = ramp_array(c, 1, i);
+    }
+    ramps_update_avx2(m->n_ops, rc, fc, m->state, u);
+    return pihyst_internal_weighted_sum(m->n_ops, m->weights, m->state, m->offset);
+}
+#endif
+
+/* the p in [a, b] on the line through (a, za), (b, zb) with z = target (za < target <=
+ * zb) */
+static real ramp_interpolate(real a, real za, real b, real zb, real target)
+{
+    const real p = a + (target - za) * ((b - a) / (zb - za));
+    return p < a ? a : (p > b ? b : p);
+}
+
+/* The least p in (q, q + span] with z(p) = target (> 0), as the distance d = p - q:
+ * returns 1, or 0 with d = span if z(q + span) < target. Same contract as solve. */
+static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real target,
+                       real *d)
+{
+    const size_t K = c->work_model.n_ops;
+    const real *lo = ramp_array(c, 2, 0), *hi = lo + K, *s = ramp_array(c, !up, RAMP_SLOPE);
+    const real q = up ? u_p : -u_p, end = q + span;
+    real L = q, zL = RC(0.0), H = end, zH, p, width;
+    ramp_probe r;
+    int i, halve = 0;
+    if (c->dir != (up ? 1 : -1)) { /* a reversal */
+        c->dir = up ? 1 : -1;
+        c->next[0] = 0;
+        ramps_reverse(c, up, u_p);
+    }
+    /* The segment of the last answer, kept (next[0] = 1) with its slope (slope[0]) and
+     * right end (ahead): z is linear from q up to there, so while the answer stays
+     * inside it needs no probe (a tracking step mostly does). */
+    if (c->next[0]) {
+        const real nb = c->ahead < H ? c->ahead : H, sigma = c->slope[0];
+        if (nb > q && sigma * (nb - q) >= target) {
+            p = q + target / sigma; /* sigma > 0: z rose by target within the segment */
+            *d = (p < nb ? p : nb) - q;
+            return 1;
+        }
+        c->next[0] = 0;
+    }
+    /* tracking: the segments right of q, one at a time */
+    for (i = 0; i < 2; ++i) {
+        real nb, zn;
+        ramps_probe_right(K, lo, hi, s, L, q, &r);
+        if (r.z >= target) { /* reached at L already (rounding) */
+            *d = L - q;
+            return 1;
+        }
+        nb = r.next < H ? r.next : H;
+        zn = r.z + r.right * (nb - L);
+        if (zn >= target) { /* right > 0: z rose below the target */
+            p = L + (target - r.z) / r.right;
+            *d = (p < nb ? p : nb) - q;
+            c->next[0] = 1; /* keep the segment [L, r.next] */
+            c->slope[0] = r.right;
+            c->ahead = r.next;
+            return 1;
+        }
+        if (!(nb < H)) { /* the window ends below the target */
+            *d = span;
+            return 0;
+        }
+        L = nb;
+        zL = zn;
+    }
+    /* a jump: bracket [L, H] */
+    ramps_probe_right(K, lo, hi, s, H, q, &r);
+    zH = r.z;
+    if (zH < target) {
+        *d = span;
+        return 0;
+    }
+    width = H - L;
+    for (i = 0; i < 100; ++i) {
+        /* the secant point, or the midpoint if the bracket shrank by less than half */
+        real m = halve ? L + RC(0.5) * (H - L) : ramp_interpolate(L, zL, H, zH, target);
+        if (!(m > L && m < H)) m = L + RC(0.5) * (H - L);
+        if (!(m > L && m < H)) break; /* L, H adjacent numbers */
+        ramps_probe(K, lo, hi, s, m, q, &r);
+        if (r.z < target) { /* the answer lies right of m */
+            const real nb = r.next < H ? r.next : H;
+            const real zn = r.z + r.right * (nb - m);
+            if (!(nb < H)) { /* no breakpoint in (m, H): linear up to H */
+                *d = ramp_interpolate(m, r.z, H, zH, target) - q;
+                return 1;
+            }
+            if (zn >= target) {
+                p = m + (target - r.z) / r.right;
+                *d = (p < nb ? p : nb) - q;
+                c->next[0] = 1; /* keep the segment [m, r.next] */
+                c->slope[0] = r.right;
+                c->ahead = r.next;
+                return 1;
+            }
+            L = nb;
+            zL = zn;
+        } else { /* z(m) >= target: the least such p lies at or left of m */
+            const real pb = r.prev > L ? r.prev : L;
+            const real zp = r.z - r.left * (m - pb);
+            if (!(pb > L)) { /* no breakpoint in (L, m): linear from L */
+                *d = ramp_interpolate(L, zL, m, r.z, target) - q;
+                return 1;
+            }
+            if (zp < target) {
+                p = pb + (target - zp) / r.left;
+                *d = (p < m ? p : m) - q;
+                c->next[0] = 1; /* keep the segment [pb, m] */
+                c->slope[0] = r.left;
+                c->ahead = m;
+                return 1;
+            }
+            H = pb;
+            zH = zp;
+        }
+        halve = !(H - L <= RC(0.5) * width);
+        width = H - L;
+    }
+    *d = ramp_interpolate(L, zL, H, zH, target) - q;
+    return 1;
+}
+
 /* ------------------------------------------------------------------ reversal */
 
 /* A reversal (or the first sample) on the lists: collect the events of direction `up`
@@ -557,6 +1006,7 @@ static PIHYST_INLINE int solve(pihyst_compensator *c, int up, real u_p, real spa
 {
     const pihyst_model *m = &c->work_model;
     events e;
+    if (c->in_order & PIHYST_ORDER_RAMPS) return solve_ramps(c, up, u_p, span, target, d);
     if (c->dir != (up ? 1 : -1)) { /* a reversal: start again from u_p */
         c->dir = up ? 1 : -1;
         c->base = u_p;
@@ -640,6 +1090,13 @@ static void publish(pihyst_compensator *c)
 /* apply u to the working state */
 static void apply(pihyst_compensator *c, real u)
 {
+#ifdef RAMP_AVX2
+    if (c->in_order & PIHYST_ORDER_RAMPS_AVX2) {
+        c->y_last = ramps_step_avx2(c, u);
+        c->u_last = u;
+        return;
+    }
+#endif
     c->y_last = pihyst_model_step(&c->work_model, u);
     c->u_last = u;
 }
@@ -705,6 +1162,13 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, re
     for (k = 1; k < K && m->family == PIHYST_MULTISLOPE; ++k) {
         if (scratch[k] < scratch[k - 1]) c->in_order &= ~PIHYST_ORDER_RISING_KINKS;
         if (scratch[K + k] > scratch[K + k - 1]) c->in_order &= ~PIHYST_ORDER_FALLING_KINKS;
+    }
+    if (m->family == PIHYST_PWL && m->coef[0] == RC(1.0)) { /* saturated ramps */
+        c->in_order |= PIHYST_ORDER_RAMPS;
+        ramps_init(c);
+#ifdef RAMP_AVX2
+        if (__builtin_cpu_supports("avx2")) c->in_order |= PIHYST_ORDER_RAMPS_AVX2;
+#endif
     }
     c->work_model.state = working_state(m, scratch);
     if (c->work_model.state != m->state) memcpy(c->work_model.state, m->state, K * sizeof(real));

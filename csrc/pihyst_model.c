@@ -496,12 +496,9 @@ static void run_multislope(size_t K, real a, real b, const real *restrict w,
 }
 
 /* Saturated-ramp polylines (see the coef layout): every polyline has 4 points, so
- * operator k's are at 4k. The value equals polyline_eval's (up to the sign of a zero). */
-#define PIHYST_RAMP(x, y, u)                                                          \
-    ((u) < (x)[1] ? (y)[0]                                                            \
-                  : ((u) >= (x)[2] ? (y)[2]                                           \
-                                   : (y)[1] + ((y)[2] - (y)[1]) * ((u) - (x)[1]) /    \
-                                                  ((x)[2] - (x)[1])))
+ * operator k's are at 4k. The value (PIHYST_RAMP_VALUE, pihyst_internal.h, which the
+ * compensator's ramp step shares) equals polyline_eval's (up to the sign of a zero). */
+#define PIHYST_RAMP(x, y, u) PIHYST_RAMP_VALUE((x)[1], (x)[2], (y)[0], (y)[1], (y)[2], u)
 
 PIHYST_HOT
 static void update_ramps(size_t K, const real *restrict rx, const real *restrict ry,
@@ -558,6 +555,12 @@ static real weighted_sum(size_t K, const real *restrict w, const real *restrict 
     for (k = K_lanes; k < K; ++k) sum += w[k] * f[k];
     for (j = 0; j < PIHYST_LANES; ++j) sum += acc[j];
     return sum;
+}
+
+/* the model's sum for the compensator's ramp step (pihyst_internal.h), bit for bit */
+real pihyst_internal_weighted_sum(size_t K, const real *w, const real *f, real offset)
+{
+    return weighted_sum(K, w, f, offset);
 }
 
 static void run_pwl(pihyst_model *m, const real *u, real *y, size_t n)

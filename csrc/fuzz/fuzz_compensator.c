@@ -22,7 +22,13 @@
  *     sample through pihyst_bank_step) is ca.y_last bit for bit, and model A's state array equals R's after every call;
  *   - a sample without flags meets the desired value: |y_last - y_d| <= 16 tol plus the
  *     output change of a few ulps of voltage at the steepest slope, plus underflow
- *     (when sane).
+ *     (when sane);
+ *   - the structure-of-arrays bank (pihyst_compbank, one channel: a fourth copy C of the
+ *     model with its compensator, reset with A): the same limits, slew limit and flag
+ *     invariants, and a separate model R2 stepped with its voltages meets every unflagged
+ *     desired value to 16 tol (sum w / w_0) plus the ulps above (its classical fast path
+ *     inverts through 1 / w_0); after pihyst_compbank_sync the compensator holds the
+ *     bank's last voltage.
  * Build and run: make -C csrc fuzz (see docs/c-core.md). */
 #include "fuzz_common.h"
 
@@ -58,6 +64,41 @@ static void flush(pihyst_compensator *cb, samples *ref, int bank)
     ref->n = 0;
 }
 
+static real bank_last_u; /* the bank's last voltage */
+
+/* one tick of the one-channel structure-of-arrays bank on compensator cc; mr2 is a
+ * separate model stepped with its voltages */
+static void step_bank(pihyst_compbank *bank, pihyst_compensator *cc, pihyst_model *mr2,
+                      const fuzz_params *f, real yd, double sum_w, size_t steps)
+{
+    const real u_p = bank_last_u;
+    real u, y;
+    pihyst_flags fl = 0xff;
+    const size_t count = pihyst_compbank_compensate(bank, &yd, &u, &y, &fl);
+    const real y_r = pihyst_model_step(mr2, u);
+    bank_last_u = u;
+    REQUIRE(count == (fl != 0));
+    REQUIRE(isfinite(u) && u >= cc->u_min && u <= cc->u_max);
+    REQUIRE(fabs((double)(real)(u - u_p)) <= (double)cc->max_step);
+    REQUIRE((fl & ~(PIHYST_COMP_SAT_LOW | PIHYST_COMP_SAT_HIGH | PIHYST_COMP_NAN |
+                    PIHYST_COMP_SLEW)) == 0);
+    REQUIRE(!(fl & PIHYST_COMP_NAN) == !isnan(yd));
+    if (isnan(yd)) REQUIRE(fl == PIHYST_COMP_NAN && u == u_p);
+    if (fl & PIHYST_COMP_SAT_LOW) REQUIRE(u == cc->u_min);
+    if (fl & PIHYST_COMP_SAT_HIGH) REQUIRE(u == cc->u_max);
+    if (fl == 0 && sane(f) && f->w[0] > 0.0) {
+        const double ulp_y =
+            8.0 * FUZZ_EPS * (fabs((double)u) + fabs((double)u_p) + 1.0) * f->max_slope * sum_w +
+            ((double)f->p.n_ops + 2.0) * FUZZ_TINY;
+        const double amp = bank->n_fast ? sum_w / (double)f->w[0] : 1.0;
+        REQUIRE(fabs((double)y_r - (double)yd) <= 16.0 * (double)cc->tol * amp + ulp_y);
+    }
+    if (steps % 64 == 0) {
+        pihyst_compbank_sync(bank);
+        REQUIRE(cc->u_last == u);
+    }
+}
+
 static void check(const uint8_t *data, size_t size)
 {
     reader in = {data, size};
@@ -69,8 +110,13 @@ static void check(const uint8_t *data, size_t size)
     real coef_r[PIHYST_COEF_LEN(FUZZ_KMAX)], state_a[FUZZ_KMAX], state_r[FUZZ_KMAX];
     /* off a 64-byte boundary by 1 to 7 values */
     real *state_b = (real *)(((uintptr_t)state_b_buf + 63) / 64 * 64) + 1 + take_u8(&in) % 7;
-    pihyst_model ma, mb, mr;
-    pihyst_compensator ca, cb;
+    static real scratch_c[SCRATCH_MAX], bank_work[PIHYST_COMPBANK_WORK_LEN(1, FUZZ_KMAX)];
+    real coef_c[PIHYST_COEF_LEN(FUZZ_KMAX)], coef_r2[PIHYST_COEF_LEN(FUZZ_KMAX)];
+    real state_c[FUZZ_KMAX], state_r2[FUZZ_KMAX];
+    pihyst_model ma, mb, mr, mc, mr2;
+    pihyst_compensator ca, cb, cc;
+    pihyst_compensator *const bank_ch[1] = {&cc};
+    pihyst_compbank bank;
     pihyst_status sa, sb;
     size_t need, scratch_len, K, k, steps = 0;
     real lo, hi, max_step, u_init;
@@ -80,6 +126,8 @@ static void check(const uint8_t *data, size_t size)
     if (pihyst_model_init(&ma, &f.p, coef_a, state_a) != PIHYST_OK) return;
     REQUIRE(pihyst_model_init(&mb, &f.p, coef_b, state_b) == PIHYST_OK);
     REQUIRE(pihyst_model_init(&mr, &f.p, coef_r, state_r) == PIHYST_OK);
+    REQUIRE(pihyst_model_init(&mc, &f.p, coef_c, state_c) == PIHYST_OK);
+    REQUIRE(pihyst_model_init(&mr2, &f.p, coef_r2, state_r2) == PIHYST_OK);
     K = ma.n_ops;
 
     /* limits: NaN (the model's bound) half the time */
@@ -96,6 +144,13 @@ static void check(const uint8_t *data, size_t size)
     REQUIRE(known_status(sa) && sa == sb);
     if (scratch_len < need) REQUIRE(sa != PIHYST_OK);
     if (sa != PIHYST_OK) return;
+    REQUIRE(pihyst_compensator_init(&cc, &mc, lo, hi, max_step, u_init, scratch_c,
+                                    scratch_len) == PIHYST_OK);
+    REQUIRE(pihyst_compbank_work_len(bank_ch, 1) <= sizeof bank_work / sizeof(real));
+    REQUIRE(pihyst_compbank_init(&bank, bank_ch, 1, bank_work,
+                                 sizeof bank_work / sizeof(real)) == PIHYST_OK);
+    pihyst_model_step(&mr2, u_init);
+    bank_last_u = u_init;
     REQUIRE(ca.u_last == u_init && ma.state == state_a && mb.state == state_b);
     pihyst_model_step(&mr, u_init);
     REQUIRE(same_bits(state_a, state_r, K) && same_bits(state_b, state_r, K));
@@ -149,6 +204,7 @@ static void check(const uint8_t *data, size_t size)
                             (double)ca.y_last, (double)ca.tol, ulp_y);
                 REQUIRE(fabs((double)ca.y_last - (double)yd) <= 16.0 * (double)ca.tol + ulp_y);
             }
+            step_bank(&bank, &cc, &mr2, &f, yd, sum_w, steps);
             if (ref.n == N_MAX) flush(&cb, &ref, 0);
             ref.yd[ref.n] = yd;
             ref.u[ref.n] = u;
@@ -170,6 +226,13 @@ static void check(const uint8_t *data, size_t size)
                 REQUIRE(ca.u_last == u_last);
                 pihyst_model_reset(&mr, with_state ? reset_state : NULL);
                 pihyst_model_step(&mr, u_last);
+                REQUIRE(pihyst_compensator_reset(&cc, with_state ? reset_state : NULL,
+                                                 u_last) == PIHYST_OK);
+                REQUIRE(pihyst_compbank_init(&bank, bank_ch, 1, bank_work,
+                                             sizeof bank_work / sizeof(real)) == PIHYST_OK);
+                pihyst_model_reset(&mr2, with_state ? reset_state : NULL);
+                pihyst_model_step(&mr2, u_last);
+                bank_last_u = u_last;
             } else {
                 REQUIRE(!isfinite(u_last) || u_last < ca.u_min || u_last > ca.u_max ||
                         with_state);

@@ -3,7 +3,9 @@
  * Input: model parameters (fuzz_common.h), then up to 256 input voltages. Invariants:
  *   - init returns a status code of pihyst.h; when it accepts, the parameters satisfy
  *     every documented constraint (require_valid);
- *   - run == step by step == run in two chunks, bit for bit (NaN inputs included);
+ *   - run == step by step == run in two chunks == the structure-of-arrays model bank
+ *     (pihyst_modelbank, one channel), bit for bit (NaN inputs included), and the bank's
+ *     state after pihyst_modelbank_sync is run's;
  *   - every operator output stays between its envelopes,
  *         R_k(u) <= f_k <= max(R_k(u), F_k(u))      (to rounding; (1) of pihyst.h)
  *   - outputs are finite when parameters and inputs are below FUZZ_BIG (no overflow);
@@ -71,6 +73,19 @@ static void check(const uint8_t *data, size_t size)
     pihyst_model_run(&m, u, y_chunk, cut);
     pihyst_model_run(&m, u + cut, y_chunk + cut, n - cut);
     REQUIRE(same_bits(y_run, y_chunk, n));
+    {
+        static real work[PIHYST_MODELBANK_WORK_LEN(1)], state_run[FUZZ_KMAX];
+        pihyst_model *const channel[1] = {&m};
+        pihyst_modelbank b;
+        memcpy(state_run, state, K * sizeof(real));
+        pihyst_model_reset(&m, f.p.initial_state);
+        REQUIRE(pihyst_modelbank_init(&b, channel, 1, work, sizeof work / sizeof(real)) ==
+                PIHYST_OK);
+        for (t = 0; t < n; ++t) pihyst_modelbank_step(&b, &u[t], &y_chunk[t]);
+        REQUIRE(same_bits(y_run, y_chunk, n));
+        pihyst_modelbank_sync(&b);
+        REQUIRE(same_bits(state, state_run, K));
+    }
     if (sane(&f) && u_sane)
         for (t = 0; t < n; ++t) REQUIRE(isfinite(y_run[t]));
 

@@ -1,15 +1,26 @@
 /* Tests of the dedicated kernels: saturated-ramp polylines (the KP kernels) give the
  * values of the generic polyline path, found by adding a point on a flat part of every
  * polyline (which keeps the function and sends the model down the generic path); the
- * compensator inverts a ramp model exactly; small-K classical and multislope kernels
- * give step == run for every K <= 16 (blocks of any length). */
+ * compensator inverts a ramp model exactly, and its ramp search (PIHYST_ORDER_RAMPS)
+ * gives the generic event-list walk's voltages, outputs and flags on many random KP
+ * models, limits, slew limits, signals and set states; small-K classical and multislope
+ * kernels give step == run for every K <= 16 (blocks of any length). */
 #include "pihyst.h"
 #include "test_util.h"
 
 #include <string.h>
 
+#define LEN_OF(a) (sizeof(a) / sizeof *(a))
+#ifdef PIHYST_TEST_F32
+#define R_NEXT nextafterf
+#else
+#define R_NEXT nextafter
+#endif
+
 #define KR 24
 #define NR 3000
+#define KMAX 48
+#define NS 400
 
 static unsigned kern_lcg = 4242u;
 static real kern_uniform(void)
@@ -94,6 +105,212 @@ static void test_ramps_equal_generic(void)
     CHECK_NEAR(err, 0.0, TOL(1e-11, 2e-4));
 }
 
+/* A random KP model of K ramps (F's switching voltage <= R's, equal heights): on a grid
+ * of `grid` voltages (coincident breakpoints, as pihyst.identify builds them) or anywhere
+ * (grid 0), ramps of mixed widths, some flat (height 0), some weights 0. */
+static void random_kp(size_t K, unsigned grid, size_t *starts, real *rx, real *ry, real *fx,
+                      real *fy, real *w)
+{
+    size_t k;
+    for (k = 0; k <= K; ++k) starts[k] = 4 * k;
+    for (k = 0; k < K; ++k) {
+        const real width = grid ? (real)150.0 / (real)grid
+                                : (kern_uniform() < (real)0.3 ? (real)0.5 : (real)12.0);
+        real a = (real)(170.0 * (double)kern_uniform() - 20.0);
+        real b = (real)(170.0 * (double)kern_uniform() - 20.0);
+        const real lo = kern_uniform() < (real)0.5 ? (real)0.0 : (real)-0.5;
+        const real hi = k % 7 == 3 ? lo : lo + (real)0.1 + (real)2.0 * kern_uniform();
+        if (grid) {
+            a = (real)(150.0 / grid) * (real)(unsigned)(kern_uniform() * (real)(grid + 1));
+            b = (real)(150.0 / grid) * (real)(unsigned)(kern_uniform() * (real)(grid + 1));
+        }
+        if (a > b) {
+            const real t = a;
+            a = b;
+            b = t;
+        }
+        ramp(rx + 4 * k, ry + 4 * k, b, width, lo, hi);
+        ramp(fx + 4 * k, fy + 4 * k, a, width, lo, hi);
+        w[k] = kern_uniform() < (real)0.15 ? (real)0.0 : kern_uniform();
+    }
+}
+
+/* The ramp search against the generic walk on the same model (the compensator told not
+ * to use it: PIHYST_ORDER_RAMPS cleared after init). Same flags; outputs and voltages
+ * equal to rounding, except that on a flat stretch at the level y_d (to rounding) either
+ * end is an exact answer: there both outputs meet y_d. Then the limits. */
+static void test_ramp_search_equals_generic(void)
+{
+    static size_t st[KMAX + 1];
+    static real rx[4 * KMAX], ry[4 * KMAX], fx[4 * KMAX], fy[4 * KMAX];
+    static real yd[NS], ua[NS], ya[NS], ub[NS], yb[NS], state0[KMAX];
+    static real sa[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 8 * KMAX)];
+    static real sb[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 8 * KMAX)];
+    static pihyst_flags fa[NS], fb[NS];
+    static const real limits[4][3] = {
+        {0.0, 150.0, INFINITY}, {10.0, 140.0, 15.0}, {0.0, 150.0, 0.7}, {-20.0, 160.0, 40.0}};
+    real w[KMAX], coef_a[PIHYST_COEF_LEN(KMAX)], coef_b[PIHYST_COEF_LEN(KMAX)];
+    real st_a[KMAX], st_b[KMAX];
+    const real du_tol = TOL(1e-9, 2e-3), dy_tol = TOL(1e-9, 2e-4);
+    pihyst_pwl p;
+    pihyst_model ma, mb;
+    pihyst_compensator ca, cb;
+    size_t K, k, t, bad_flags = 0, bad_y = 0, bad_u = 0, bad_limits = 0, ramps_used = 0;
+    unsigned trial;
+    for (trial = 0; trial < 96; ++trial) {
+        const real *lim = limits[trial % 4];
+        const unsigned grid = trial % 3 == 0 ? 0u : (trial % 3 == 1 ? 15u : 6u);
+        real y_lo = INFINITY, y_hi = -INFINITY;
+        K = 1 + (size_t)(kern_uniform() * (real)KMAX);
+        if (K > KMAX) K = KMAX;
+        random_kp(K, grid, st, rx, ry, fx, fy, w);
+        p.rise_start = st; p.rise_x = rx; p.rise_y = ry;
+        p.fall_start = st; p.fall_x = fx; p.fall_y = fy;
+        CHECK(model_init(&ma, PIHYST_PWL, K, NULL, w, 0.3, -20.0, 160.0, NULL, &p, coef_a,
+                         st_a, NULL) == PIHYST_OK);
+        CHECK(model_init(&mb, PIHYST_PWL, K, NULL, w, 0.3, -20.0, 160.0, NULL, &p, coef_b,
+                         st_b, NULL) == PIHYST_OK);
+        /* the output range, to draw desired values in and around it */
+        for (t = 0; t < 64; ++t) {
+            const real y = pihyst_model_step(&ma, (real)(180.0 * (double)t / 63.0 - 20.0));
+            y_lo = y < y_lo ? y : y_lo;
+            y_hi = y > y_hi ? y : y_hi;
+        }
+        for (t = 0; t < NS; ++t) {
+            const real r = kern_uniform();
+            if (trial % 2 == 0) /* a walk: tracking, minor loops */
+                yd[t] = t == 0 ? y_lo : yd[t - 1] + (y_hi - y_lo) * (real)0.06 * (r - (real)0.5);
+            else /* noise: a jump every sample */
+                yd[t] = y_lo - (real)0.05 + (y_hi - y_lo + (real)0.1) * r;
+            if (t % 37 == 5) yd[t] = NAN;
+            if (t % 53 == 7) yd[t] = t % 2 ? INFINITY : -INFINITY;
+            if (t % 61 == 11) yd[t] = (real)1e30;
+        }
+        /* a set state now and then (crossings anywhere on the ramps) */
+        for (k = 0; k < K; ++k) state0[k] = (real)(3.0 * (double)kern_uniform() - 0.7);
+        pihyst_model_reset(&ma, trial % 5 == 4 ? state0 : NULL);
+        pihyst_model_reset(&mb, trial % 5 == 4 ? state0 : NULL);
+        CHECK(pihyst_compensator_init(&ca, &ma, lim[0], lim[1], lim[2], lim[0], sa,
+                                      LEN_OF(sa)) == PIHYST_OK);
+        CHECK(pihyst_compensator_init(&cb, &mb, lim[0], lim[1], lim[2], lim[0], sb,
+                                      LEN_OF(sb)) == PIHYST_OK);
+        ramps_used += (ca.in_order & PIHYST_ORDER_RAMPS) != 0;
+        cb.in_order &= ~(unsigned)(PIHYST_ORDER_RAMPS | PIHYST_ORDER_RAMPS_AVX2); /* generic */
+        pihyst_compensator_run(&ca, yd, ua, ya, fa, NS);
+        pihyst_compensator_run(&cb, yd, ub, yb, fb, NS);
+        for (t = 0; t < NS; ++t) {
+            const int met = fabs(ya[t] - yd[t]) <= ca.tol + dy_tol &&
+                            fabs(yb[t] - yd[t]) <= cb.tol + dy_tol;
+            bad_flags += fa[t] != fb[t];
+            bad_y += !(fabs(ya[t] - yb[t]) <= dy_tol);
+            bad_u += !(fabs(ua[t] - ub[t]) <= du_tol) && !met;
+            bad_limits += !(ua[t] >= lim[0] && ua[t] <= lim[1]) ||
+                          !(fabs(ua[t] - (t ? ua[t - 1] : lim[0])) <= lim[2]);
+        }
+        /* the state the compensator leaves is the model's for its voltages */
+        for (k = 0; k < K; ++k) bad_y += !(fabs(st_a[k] - st_b[k]) <= dy_tol);
+    }
+    CHECK(ramps_used == 96);
+    CHECK(bad_flags == 0);
+    CHECK(bad_y == 0);
+    CHECK(bad_u == 0);
+    CHECK(bad_limits == 0);
+}
+
+/* the ramp search's outputs are the model's own outputs for its voltages (the
+ * compensator steps the model), and predict(compensate(y_d)) == y_d on a reachable
+ * walk of a large KP model */
+static void test_ramp_search_round_trip(void)
+{
+    static size_t st[KMAX + 1];
+    static real rx[4 * KMAX], ry[4 * KMAX], fx[4 * KMAX], fy[4 * KMAX];
+    static real u[NR], yd[NR], uc[NR], yc[NR], yp[NR];
+    static real scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 8 * KMAX)];
+    real w[KMAX], coef[PIHYST_COEF_LEN(KMAX)], state[KMAX], v = 0.0, err = 0.0;
+    pihyst_pwl p;
+    pihyst_model m;
+    pihyst_compensator c;
+    size_t t, bad = 0;
+    random_kp(KMAX, 15u, st, rx, ry, fx, fy, w);
+    p.rise_start = st; p.rise_x = rx; p.rise_y = ry;
+    p.fall_start = st; p.fall_x = fx; p.fall_y = fy;
+    CHECK(model_init(&m, PIHYST_PWL, KMAX, NULL, w, 0.0, 0.0, 150.0, NULL, &p, coef, state,
+                     NULL) == PIHYST_OK);
+    for (t = 0; t < NR; ++t) {
+        v += (real)(6.0 * ((double)kern_uniform() - 0.5));
+        if (kern_uniform() < 0.05) v = (real)(150.0 * (double)kern_uniform());
+        v = v < 0.0 ? 0.0 : (v > 150.0 ? 150.0 : v);
+        u[t] = v;
+    }
+    pihyst_model_run(&m, u, yd, NR);
+    pihyst_model_reset(&m, NULL);
+    CHECK(pihyst_compensator_init(&c, &m, 0.0, 150.0, INFINITY, 0.0, scratch, LEN_OF(scratch)) ==
+          PIHYST_OK);
+    CHECK((c.in_order & PIHYST_ORDER_RAMPS) != 0);
+    pihyst_compensator_run(&c, yd, uc, yc, NULL, NR);
+    for (t = 0; t < NR; ++t)
+        if (fabs(yc[t] - yd[t]) > err) err = fabs(yc[t] - yd[t]);
+    CHECK_NEAR(err, 0.0, TOL(1e-11, 4.0 * c.tol));
+    pihyst_model_reset(&m, NULL);
+    pihyst_model_step(&m, 0.0);
+    pihyst_model_run(&m, uc, yp, NR);
+    for (t = 0; t < NR; ++t) bad += yp[t] != yc[t];
+    CHECK(bad == 0);
+}
+
+/* The compensator's own model step on a ramp model (AVX2 where the CPU has it) gives the
+ * model step's state and output bit for bit: reset(state, u) applies u, for random
+ * states and voltages on the breakpoints, an ulp off them, and anywhere; ramps with
+ * signed zeros (y0 = -0, y1 = +0). */
+static void test_ramp_step_equals_model_step(void)
+{
+    static size_t st[KMAX + 1];
+    static real rx[4 * KMAX], ry[4 * KMAX], fx[4 * KMAX], fy[4 * KMAX];
+    static real scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(KMAX, 8 * KMAX)];
+    real w[KMAX], coef_a[PIHYST_COEF_LEN(KMAX)], coef_b[PIHYST_COEF_LEN(KMAX)];
+    real st_a[KMAX], st_b[KMAX], state0[KMAX];
+    pihyst_pwl p;
+    pihyst_model ma, mb;
+    pihyst_compensator c;
+    size_t K, k, i, bad = 0;
+    unsigned trial;
+    for (trial = 0; trial < 40; ++trial) {
+        K = 1 + (size_t)(kern_uniform() * (real)KMAX);
+        if (K > KMAX) K = KMAX;
+        random_kp(K, trial % 2 ? 15u : 0u, st, rx, ry, fx, fy, w);
+        for (k = 0; k < K; k += 5) { /* -0 below, +0 on: the same polyline */
+            if (ry[4 * k + 1] == (real)0.0) ry[4 * k] = (real)-0.0;
+            if (fy[4 * k + 1] == (real)0.0) fy[4 * k] = (real)-0.0;
+        }
+        p.rise_start = st; p.rise_x = rx; p.rise_y = ry;
+        p.fall_start = st; p.fall_x = fx; p.fall_y = fy;
+        CHECK(model_init(&ma, PIHYST_PWL, K, NULL, w, 0.3, -20.0, 160.0, NULL, &p, coef_a,
+                         st_a, NULL) == PIHYST_OK);
+        CHECK(model_init(&mb, PIHYST_PWL, K, NULL, w, 0.3, -20.0, 160.0, NULL, &p, coef_b,
+                         st_b, NULL) == PIHYST_OK);
+        CHECK(pihyst_compensator_init(&c, &ma, NAN, NAN, INFINITY, 0.0, scratch,
+                                      LEN_OF(scratch)) == PIHYST_OK);
+        for (i = 0; i < 200; ++i) {
+            const size_t j = (size_t)(kern_uniform() * (real)(4 * K)) % (4 * K);
+            const real x = kern_uniform() < (real)0.5 ? rx[j] : fx[j];
+            const real pick = kern_uniform();
+            real u = pick < (real)0.3 ? x
+                     : pick < (real)0.5 ? R_NEXT(x, (real)-INFINITY)
+                     : pick < (real)0.7 ? R_NEXT(x, (real)INFINITY)
+                                        : (real)(180.0 * (double)kern_uniform() - 20.0);
+            real y;
+            u = u < (real)-20.0 ? (real)-20.0 : (u > (real)160.0 ? (real)160.0 : u);
+            for (k = 0; k < K; ++k) state0[k] = (real)(3.0 * (double)kern_uniform() - 0.7);
+            CHECK(pihyst_compensator_reset(&c, state0, u) == PIHYST_OK);
+            pihyst_model_reset(&mb, state0);
+            y = pihyst_model_step(&mb, u);
+            bad += memcmp(&y, &c.y_last, sizeof y) != 0;
+            bad += memcmp(st_a, st_b, K * sizeof *st_a) != 0;
+        }
+    }
+    CHECK(bad == 0);
+}
+
 /* the small-K kernels: a block equals the same samples stepped one at a time, any K */
 static void test_small_kernels_step_equals_run(void)
 {
@@ -125,5 +342,8 @@ static void test_small_kernels_step_equals_run(void)
 void run_kernel_tests(void)
 {
     test_ramps_equal_generic();
+    test_ramp_search_equals_generic();
+    test_ramp_search_round_trip();
+    test_ramp_step_equals_model_step();
     test_small_kernels_step_equals_run();
 }

@@ -43,6 +43,7 @@ int main(void)
     run_model_tests();
     run_inverse_tests();
     run_bank_tests();
+    run_bank_soa_tests();
     run_kernel_tests();
     run_boucwen_tests();
 #ifndef PIHYST_TEST_F32

@@ -41,6 +41,7 @@ void run_model_tests(void);
 void run_boucwen_tests(void);
 void run_inverse_tests(void);
 void run_bank_tests(void);
+void run_bank_soa_tests(void);
 void run_kernel_tests(void);
 void run_twin_tests(void);
 void run_creep_tests(void);

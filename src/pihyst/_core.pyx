@@ -435,6 +435,77 @@ cdef class BankArray:
         return y
 
 
+cdef extern from "pihyst.h" nogil:
+    ctypedef struct pihyst_modelbank:
+        size_t n
+        size_t n_fast
+    size_t pihyst_modelbank_work_len(pihyst_model *const *models, size_t n)
+    pihyst_status pihyst_modelbank_init(pihyst_modelbank *b, pihyst_model *const *models,
+                                        size_t n, double *work, size_t work_len)
+    void pihyst_modelbank_step(pihyst_modelbank *b, const double *u, double *y)
+    void pihyst_modelbank_sync(pihyst_modelbank *b)
+
+
+cdef class BankSoA:
+    """N :class:`Bank` objects stepped from a structure-of-arrays copy of their states
+    (pihyst_modelbank): classical banks of K <= 16 L at a time, bit for bit as
+    :class:`BankArray`. The banks' states are stale until :meth:`sync`; after a bank is
+    stepped or its state set outside this object, call :meth:`reload`."""
+    cdef pihyst_modelbank b
+    cdef readonly tuple banks
+    cdef object _ptrs, _work
+    cdef readonly Py_ssize_t n
+
+    def __init__(self, banks):
+        cdef Bank bk
+        cdef size_t[::1] p_v
+        self.banks = tuple(banks)
+        self.n = len(self.banks)
+        if len({id(bk) for bk in self.banks}) != self.n:
+            raise ValueError("the channels must be distinct banks")
+        self._ptrs = np.zeros(max(self.n, 1), dtype=np.uintp)
+        p_v = self._ptrs
+        for i, obj in enumerate(self.banks):
+            bk = <Bank?>obj
+            p_v[i] = <size_t>&bk.m
+        self._work = np.zeros(max(pihyst_modelbank_work_len(
+            <pihyst_model *const *>&p_v[0], self.n), 1))
+        self.reload()
+
+    def reload(self):
+        """Take the banks' current states."""
+        cdef size_t[::1] p_v = self._ptrs
+        cdef double[::1] w_v = self._work
+        status = pihyst_modelbank_init(&self.b, <pihyst_model *const *>&p_v[0], self.n,
+                                       &w_v[0], w_v.shape[0])
+        if status != PIHYST_OK:
+            raise CoreError(pihyst_status_text(status).decode())
+
+    def sync(self):
+        """Write the states back to the banks."""
+        pihyst_modelbank_sync(&self.b)
+
+    @property
+    def n_fast(self):
+        """Channels stepped in the structure-of-arrays groups."""
+        return self.b.n_fast
+
+    def run(self, u):
+        """y[t, i] for u[t, i] (T x N, row t one tick), advancing every channel."""
+        u_a = np.ascontiguousarray(u, dtype=np.float64)
+        if u_a.ndim != 2 or u_a.shape[1] != self.n:
+            raise ValueError(f"input must have shape (T, {self.n}), got {u_a.shape}")
+        cdef const double[:, ::1] u_v = u_a
+        y = np.empty(u_a.shape)
+        cdef double[:, ::1] y_v = y
+        cdef Py_ssize_t t, T = u_a.shape[0]
+        if self.n:
+            with nogil:
+                for t in range(T):
+                    pihyst_modelbank_step(&self.b, &u_v[t, 0], &y_v[t, 0])
+        return y
+
+
 cdef class CompensatorArray:
     """N :class:`Compensator` objects run together, one desired value per channel per
     call. Steps the compensators' own C structs (no copies)."""
@@ -488,6 +559,104 @@ cdef class CompensatorArray:
                 for t in range(T):
                     pihyst_bank_compensate(<pihyst_compensator *const *>&p_v[0], self.n,
                                            &d_v[t, 0], &u_v[t, 0], &y_v[t, 0], &f_v[t, 0])
+            self._set_last_flags(flags[T - 1])
+        return u, y, flags
+
+    def _set_last_flags(self, flags):
+        cdef Compensator c
+        for i, obj in enumerate(self.compensators):
+            c = <Compensator>obj
+            c.last_flags = flags[i]
+
+
+cdef extern from "pihyst.h" nogil:
+    ctypedef struct pihyst_compbank:
+        size_t n
+        size_t n_ops
+        size_t n_fast
+    size_t pihyst_compbank_work_len(pihyst_compensator *const *comps, size_t n)
+    pihyst_status pihyst_compbank_init(pihyst_compbank *b, pihyst_compensator *const *comps,
+                                       size_t n, double *work, size_t work_len)
+    size_t pihyst_compbank_compensate(pihyst_compbank *b, const double *y_desired, double *u,
+                                      double *y, pihyst_flags *flags)
+    void pihyst_compbank_sync(pihyst_compbank *b)
+
+
+cdef class CompensatorSoA:
+    """N :class:`Compensator` objects run from a structure-of-arrays copy of their state
+    (pihyst_compbank): classical channels step their exact inverse, vectorized across
+    channels; the others, and every tick that would leave a limit, run the compensator.
+    The compensators are stale until :meth:`sync`; after a compensator is stepped or
+    reset outside this object, call :meth:`reload`."""
+    cdef pihyst_compbank b
+    cdef readonly tuple compensators
+    cdef object _ptrs, _work
+    cdef readonly Py_ssize_t n
+
+    def __init__(self, compensators):
+        cdef Compensator c
+        cdef size_t[::1] p_v
+        self.compensators = tuple(compensators)
+        self.n = len(self.compensators)
+        if len({id(c) for c in self.compensators}) != self.n:
+            raise ValueError("the channels must be distinct compensators")
+        self._ptrs = np.zeros(max(self.n, 1), dtype=np.uintp)
+        p_v = self._ptrs
+        for i, obj in enumerate(self.compensators):
+            c = <Compensator?>obj
+            p_v[i] = <size_t>&c.c
+        self._work = np.zeros(max(pihyst_compbank_work_len(
+            <pihyst_compensator *const *>&p_v[0], self.n), 1))
+        self.reload()
+
+    def reload(self):
+        """Take the compensators' current states and voltages."""
+        cdef size_t[::1] p_v = self._ptrs
+        cdef double[::1] w_v = self._work
+        status = pihyst_compbank_init(&self.b, <pihyst_compensator *const *>&p_v[0], self.n,
+                                      &w_v[0], w_v.shape[0])
+        if status != PIHYST_OK:
+            raise CoreError(pihyst_status_text(status).decode())
+
+    def sync(self):
+        """Write the fast channels' states back to their compensators."""
+        pihyst_compbank_sync(&self.b)
+
+    @property
+    def n_fast(self):
+        """Channels on the fast path (classical inverse)."""
+        return self.b.n_fast
+
+    def step_into(self, y_desired, double[::1] u, double[::1] y, pihyst_flags[::1] flags):
+        """One tick into caller-owned arrays (N each); returns the count flagged."""
+        cdef const double[::1] d_v = _vector(y_desired, self.n, "y_desired")
+        cdef size_t count = 0
+        if u.shape[0] != self.n or y.shape[0] != self.n or flags.shape[0] != self.n:
+            raise ValueError(f"u, y and flags must have {self.n} values")
+        if self.n:
+            with nogil:
+                count = pihyst_compbank_compensate(&self.b, &d_v[0], &u[0], &y[0], &flags[0])
+            self._set_last_flags(flags)
+        return count
+
+    def run(self, y_desired):
+        """(u, y, flags), each T x N, for desired values T x N (row t one tick)."""
+        d_a = np.ascontiguousarray(y_desired, dtype=np.float64)
+        if d_a.ndim != 2 or d_a.shape[1] != self.n:
+            raise ValueError(f"y_desired must have shape (T, {self.n}), got {d_a.shape}")
+        cdef const double[:, ::1] d_v = d_a
+        u = np.empty(d_a.shape)
+        y = np.empty(d_a.shape)
+        flags = np.zeros(d_a.shape, dtype=np.uint8)
+        cdef double[:, ::1] u_v = u
+        cdef double[:, ::1] y_v = y
+        cdef pihyst_flags[:, ::1] f_v = flags
+        cdef Py_ssize_t t, T = d_a.shape[0]
+        if self.n and T:
+            with nogil:
+                for t in range(T):
+                    pihyst_compbank_compensate(&self.b, &d_v[t, 0], &u_v[t, 0], &y_v[t, 0],
+                                               &f_v[t, 0])
             self._set_last_flags(flags[T - 1])
         return u, y, flags
 

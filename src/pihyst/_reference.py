@@ -271,6 +271,130 @@ class Compensator:
         return u, y, flags
 
 
+class CompensatorSoA:
+    """NumPy twin of :class:`pihyst._core.CompensatorSoA` (csrc/pihyst_bank_soa.c): N
+    :class:`Compensator` objects; classical channels with r_0 = 0 and w_0 >= sum w / 1024
+    (> 0) step the model's exact inverse, a classical PI model in y~ = y - offset,
+
+        z_j <- clip(z_j, y~ - r'_j, y~ + r'_j),   u = w' . z
+        r'_j = sum_{i<=j} w_i (r_j - r_i),  w'_0 = 1/W_0,  w'_j = -w_j / (W_j W_{j-1})
+
+    with W_j = sum_{i<=j} w_i, whose state is z_j = W_j f_j + sum_{i>j} w_i f_i of the
+    model's state f (it needs a state 1-Lipschitz in r: |f_i - f_j| <= r_j - r_i).
+    A tick whose voltage would leave the limits or the slew limit goes to the channel's
+    compensator from the state f of z; a desired value within the compensator's
+    tolerance of the last output, or NaN, holds. One channel at a time, for clarity."""
+
+    def __init__(self, compensators):
+        self.compensators = tuple(compensators)
+        self.reload()
+
+    @staticmethod
+    def _has_fast_path(c):
+        b = c.bank
+        if b.family != "classical" or b.thresholds[0] != 0.0:
+            return False
+        w = b.weights
+        return bool(w[0] > 0 and w[0] >= np.sum(w) / 1024)
+
+    @staticmethod
+    def _lipschitz(c):
+        r, f = c.bank.thresholds, c.bank.state
+        tol = 8 * np.finfo(float).eps * (max(abs(c.limits[0]), abs(c.limits[1])) + r[-1])
+        return bool(np.all(np.abs(np.diff(f)) <= np.diff(r) + tol))
+
+    @staticmethod
+    def _to_z(c):
+        w, f = c.bank.weights, c.bank.state
+        above = np.cumsum((w * f)[::-1])[::-1] - w * f  # sum_{i>j} w_i f_i
+        return np.cumsum(w) * f + above
+
+    @staticmethod
+    def _from_z(c, z):
+        W = np.cumsum(c.bank.weights)
+        f = np.empty_like(z)
+        f[-1] = z[-1] / W[-1]
+        for j in range(z.size - 2, -1, -1):
+            f[j] = f[j + 1] + (z[j] - z[j + 1]) / W[j]
+        return f
+
+    def _load(self, i):
+        c = self.compensators[i]
+        r, w = c.bank.thresholds, c.bank.weights
+        W = np.cumsum(w)
+        r_inv = np.array([np.sum(w[:j + 1] * (r[j] - r[:j + 1])) for j in range(w.size)])
+        w_inv = np.r_[1.0 / w[0], -w[1:] / (W[1:] * W[:-1])]
+        self._fast[i] = [r_inv, w_inv, self._to_z(c), c.voltage, c.output]
+
+    def reload(self):
+        self._fast = {}
+        self._pending = set()
+        for i, c in enumerate(self.compensators):
+            if self._has_fast_path(c):
+                if self._lipschitz(c):
+                    self._load(i)
+                else:
+                    self._pending.add(i)
+
+    @property
+    def n_fast(self):
+        return len(self._fast)
+
+    def sync(self):
+        for i, (_, _, z, u_last, _) in self._fast.items():
+            c = self.compensators[i]
+            c.reset(self._from_z(c, z), u_last)
+
+    def _exact(self, i, y_d):
+        c = self.compensators[i]
+        if i in self._fast:
+            fast = self._fast[i]
+            c.reset(self._from_z(c, fast[2]), fast[3])
+            c.step(y_d)
+            fast[2:] = [self._to_z(c), c.voltage, c.output]
+        else:
+            c.step(y_d)
+            if i in self._pending and self._lipschitz(c):
+                self._pending.discard(i)
+                self._load(i)
+        return c.voltage, c.output, c.last_flags
+
+    def step(self, y_desired):
+        """One tick: (u, y, flags) for one desired value per channel."""
+        n = len(self.compensators)
+        u, y, flags = np.empty(n), np.empty(n), np.zeros(n, dtype=np.uint8)
+        for i, y_d in enumerate(np.asarray(y_desired, dtype=float)):
+            c = self.compensators[i]
+            if i not in self._fast:
+                u[i], y[i], flags[i] = self._exact(i, y_d)
+                continue
+            fast = self._fast[i]
+            r_inv, w_inv, z, u_p, y_p = fast
+            if not abs(y_d - y_p) > c.tolerance:  # hold (NaN included)
+                u[i], y[i], flags[i] = u_p, y_p, FLAG_NAN if np.isnan(y_d) else 0
+                continue
+            y_t = y_d - c.bank.offset
+            with np.errstate(invalid="ignore", over="ignore"):  # y_d infinite: u NaN
+                z_new = np.clip(z, y_t - r_inv, y_t + r_inv)
+                u_new = float(w_inv @ z_new)
+            lo, hi = c.limits
+            if lo <= u_new <= hi and abs(u_new - u_p) <= c.max_step:
+                fast[2:] = [z_new, u_new, y_d]
+                u[i], y[i] = u_new, y_d
+            else:
+                u[i], y[i], flags[i] = self._exact(i, y_d)
+        return u, y, flags
+
+    def run(self, y_desired):
+        """(u, y, flags), each T x N, for desired values T x N."""
+        y_desired = np.asarray(y_desired, dtype=float)
+        out = [self.step(row) for row in y_desired]
+        shape = y_desired.shape
+        return (np.array([o[0] for o in out]).reshape(shape),
+                np.array([o[1] for o in out]).reshape(shape),
+                np.array([o[2] for o in out], dtype=np.uint8).reshape(shape))
+
+
 class Creep:
     """NumPy twin of :class:`pihyst._core.Creep` (docs/theory/creep.md), same methods.
 

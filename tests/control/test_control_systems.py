@@ -130,3 +130,11 @@ def test_only_models():
         model_system("model.json")
     with pytest.raises(pihyst.InvalidModelError, match="non-negative"):
         compensator_system(CLASSICAL.replace(weights=[0.3, -0.1, 0.05, 0.02]))
+
+
+def test_a_delayed_model_is_refused_in_one_line():
+    delayed = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028], delay=2)
+    for make in (model_system, compensator_system):
+        with pytest.raises(pihyst.InvalidModelError, match="input delay of 2 samples") as err:
+            make(delayed)
+        assert "\n" not in str(err.value)

@@ -71,3 +71,16 @@ def test_latency_of_a_bouc_wen_model_is_measured_on_its_c_compensator(monkeypatc
     u, y = record(TRUE, n_triangles=2)
     entry = fit(u, y, family="bouc-wen").report.family("bouc-wen")
     assert entry["latency"]["typical_us"] > 0 and entry["latency"]["worst_us"] > 0
+
+
+@pytest.mark.slow
+def test_a_lagged_bouc_wen_record_gives_a_delayed_bouc_wen_model():
+    truth = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    legs = [(0, 150, 100), (150, 0, 100), (0, 110, 80), (110, 40, 50), (40, 150, 80),
+            (150, 0, 100)]
+    u = np.concatenate([np.linspace(a, b, n) for a, b, n in legs] * 3)
+    y = truth.replace(delay=2).predict(u)
+    res = fit(u, y, family="bouc-wen")
+    assert isinstance(res.model, BoucWenModel) and res.model.delay == 2
+    e = res.model.predict(u) - y
+    assert np.sqrt(np.mean(e ** 2)) < 0.01 * np.ptp(y)

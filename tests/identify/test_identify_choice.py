@@ -185,23 +185,59 @@ def test_delay_is_found_and_removed():
     u = with_minor_loops(seed=3)
     d = 3
     y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]   # y[k + d] = H[u](k)
-    plain = fit(u, y, family="classical", thresholds=[0, 20, 45])
-    assert any("lagging by 3 samples" in t for t in plain.report.to_dict()["undetermined"])
+    plain = fit(u, y, family="classical", thresholds=[0, 20, 45], delay=0)
+    assert any("lagging by 3 samples" in t and "delay='auto'" in t
+               for t in plain.report.to_dict()["undetermined"])
     assert plain.report.family("classical")["judged_rms"] > 0.1
-    res = fit(u, y, family="classical", thresholds=[0, 20, 45], delay="auto")
-    assert res.report.to_dict()["data"]["delay"]["samples"] == d
+    assert plain.model.delay == 0
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45])     # default: "auto"
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == d and rep["auto"] and "more than 5 %" in rep["rule"]
+    assert res.model.delay == d and res.model.sample_period is None
     np.testing.assert_allclose(res.model.weights, TRUE.weights, atol=1e-9)
-    np.testing.assert_allclose(res.model.predict(u)[:-d], y[d:], atol=1e-9)
-    given = fit(u, y, family="classical", thresholds=[0, 20, 45], delay=3)
+    # the model carries the delay: its own prediction is the delayed output
+    np.testing.assert_allclose(res.model.predict(u)[d:], y[d:], atol=1e-9)
+    np.testing.assert_allclose(res.model.replace(delay=0).predict(u)[:-d], y[d:], atol=1e-9)
+    assert "carries it (model.delay)" in str(res.report)
+    given = fit(u, y, family="classical", thresholds=[0, 20, 45], delay=3, t=np.arange(u.size)
+                * 1e-3)
     np.testing.assert_allclose(given.model.weights, TRUE.weights, atol=1e-9)
     assert "y[k + 3]" in str(given.report)
+    assert given.model.delay == 3 and given.model.sample_period == pytest.approx(1e-3)
+
+
+def test_default_delay_stays_zero_without_a_lag():
+    u = with_minor_loops(seed=3)
+    res = fit(u, TRUE.predict(u) + 0.01 * np.sin(u / 5), family="classical",
+              thresholds=[0, 20, 45])
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == 0 and res.model.delay == 0
+    assert "delay: none" in str(res.report)
+    assert "delay_samples" not in res.model.to_dict()
+
+
+def test_a_delay_only_the_classical_probe_likes_is_not_adopted(monkeypatch):
+    # rule (2): the modified PI probe must confirm the classical probe's delay
+    from pihyst.identify import _delay
+    u = with_minor_loops(seed=3)
+    d = 3
+    y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]
+    real = _delay._judged
+
+    def unconfirmed(base, keep, k, fitter_of, probe):
+        rms = real(base, keep, k, fitter_of, probe)
+        return rms if probe is _delay.PROBE else real(base, keep, 0, fitter_of, probe)
+    monkeypatch.setattr(_delay, "_judged", unconfirmed)
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45])
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == 0 and "not a dead time" in rep["rule"]
+    assert rep["confirmation"]["samples"] == d
+    assert any("not adopted" in t for t in res.report.to_dict()["undetermined"])
 
 
 @pytest.mark.parametrize("kw, match", [
     ({"delay": -1}, "delay must be"), ({"delay": 1.5}, "delay must be"),
     ({"max_operators": 0}, "max_operators"), ({"max_latency": -1.0}, "max_latency"),
-    ({"delay": "auto", "thresholds": [0, 20, 45], "initial_state": [0.0, 0.0, 0.0]},
-     "no delay could be judged"),
 ])
 def test_bad_options(kw, match):
     u = with_minor_loops(seed=4)
@@ -242,5 +278,27 @@ def test_long_record_paths_subsample_and_still_find_the_delay(monkeypatch):
     kp = res.report.family("kp")
     assert any("every input extremum" in n for n in kp["notes"])
     assert rep["data"]["n_samples"] == u.size - d          # errors on the full record
-    e = res.models["kp"].predict(u)[:-d] - y[d:]
+    assert res.models["kp"].delay == d                     # every model carries it
+    e = res.models["kp"].predict(u)[d:] - y[d:]
     assert np.sqrt(np.mean(e ** 2)) < 0.01 * np.ptp(y)
+
+
+def test_an_explicit_initial_state_is_not_probed_for_a_delay():
+    u = with_minor_loops(seed=4)
+    res = fit(u, TRUE.predict(u), family="classical", thresholds=[0, 20, 45],
+              initial_state=[0.0, 0.0, 0.0])
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == 0 and rep["rule"].startswith("not probed")
+
+
+def test_no_delay_is_adopted_without_held_back_data():
+    # a shift fitted and judged on the same samples is no evidence of a dead time
+    u = with_minor_loops(seed=3)
+    d = 3
+    y = np.r_[np.full(d, TRUE.predict(u)[0]), TRUE.predict(u)[:-d]]
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45], holdout=None)
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == 0 and rep["best"] == d
+    assert rep["rule"].startswith("nothing is held back")
+    assert fit(u, y, family="classical", thresholds=[0, 20, 45], holdout=None,
+               delay=d).model.delay == d                      # given: used as it is

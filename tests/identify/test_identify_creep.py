@@ -85,3 +85,23 @@ def test_log_t_basis_keeps_gains_admissible():
         top = b @ np.full(2, 0.9 / (2 * n))
         assert np.all(b >= 0) and top.sum() <= 0.9 + 1e-12
         assert np.all(np.diff(b[:, 1]) >= 0)   # the rise goes toward the slow lags
+
+
+def test_a_lagged_record_with_creep_gets_both(truth):
+    # a 2-sample dead time on the creeping record: the delay rule adopts it, the creep
+    # QPs run on the aligned record, and the model carries both
+    d = 2
+    t, u = signals.decaying_triangles(period_s=60.0, dt=0.1)
+    lagged = truth.replace(delay=d)
+    y = lagged.predict(u, t=t) + np.random.default_rng(0).normal(0, 0.002, u.size)
+    res = pihyst.fit(u, y, t=t, creep=TAU, family="classical",
+                     thresholds=[0.0, 10.0, 25.0, 45.0], initial_state="zero")
+    model = res.model
+    assert model.delay == d and model.sample_period == pytest.approx(0.1)
+    assert model.creep is not None
+    rep = res.report.to_dict()["data"]["delay"]
+    assert rep["samples"] == d and rep["auto"] and "more than 5 %" in rep["rule"]
+    assert model.metadata["fit"]["data"]["delay"]["samples"] == d
+    e = model.predict(u, t=t) - y
+    assert np.sqrt(np.mean(e ** 2)) < 0.01
+    np.testing.assert_allclose(model.creep.gain.sum(), truth.creep.gain.sum(), rtol=0.2)

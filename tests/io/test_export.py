@@ -263,3 +263,45 @@ def test_export_command_errors(tmp_path, capsys, extra, message):
     out = tmp_path / "out.h"
     assert main(["export", str(model_path), *extra, "-o", str(out)]) == 2
     assert message in capsys.readouterr().err and not out.exists()
+
+
+def test_a_delayed_model_carries_its_delay_into_both_forms():
+    model = MODELS["multislope"].replace(delay=3, sample_period=5e-3)
+    header = c_header(model, "stage_x")
+    assert "#define STAGE_X_DELAY_SAMPLES 3\n" in header
+    assert "desired displacement of tick k + 3" in header and "0.005 s per tick" in header
+    assert "#define STAGE_X_DELAY_SAMPLES 0\n" in c_header(MODELS["multislope"], "stage_x")
+    text = flat_text(model)
+    assert text.endswith("\ndelay 3\n")
+    assert text[:-len("delay 3\n")] == flat_text(model.replace(delay=0))
+    assert "delay" not in flat_text(MODELS["multislope"])     # old files stay as they were
+
+
+def test_the_library_runs_a_delayed_model_as_firmware_does(lib, tmp_path):
+    # the library loads the flat file of a delayed model (its last line is the delay);
+    # fed the target d ticks ahead it gives pihyst.compensate's voltages, and its
+    # prediction is the model's d ticks early
+    d = 3
+    model = MODELS["classical"].replace(delay=d)
+    path = tmp_path / "m.pihyst"
+    path.write_text(flat_text(model))
+    assert path.read_text().splitlines()[-1] == f"delay {d}"
+    status = ctypes.c_int32(1)
+    h = lib.pihyst_lib_load(str(path).encode(), ctypes.byref(status))
+    assert status.value == 0, lib.pihyst_lib_status_text(status.value)
+    try:
+        u, yd = _signals(model)
+        y = np.empty_like(u)
+        assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
+        np.testing.assert_allclose(y[:-d], model.predict(u)[d:], rtol=0, atol=1e-12)
+        assert lib.pihyst_lib_reset(h, None, 0) == 0
+        assert lib.pihyst_lib_compensator_start(h, np.nan, np.nan, 0.0, 0.0) == 0
+        ahead = np.ascontiguousarray(yd[d:])
+        volts = np.empty_like(ahead)
+        flags = np.empty(ahead.size, dtype=np.uint8)
+        lib.pihyst_lib_compensate(h, _ptr(ahead), _ptr(volts), _ptr(flags, ctypes.c_uint8),
+                                  ahead.size)
+    finally:
+        lib.pihyst_lib_free(h)
+    ref = pihyst.compensate(model, yd, initial_voltage=0.0)
+    np.testing.assert_allclose(volts, ref.voltage[:-d], rtol=0, atol=1e-12)

@@ -106,3 +106,17 @@ def test_record_a_csv_of_voltages(tmp_path, capsys, cfg):
                  "-o", str(tmp_path / "no.csv")]) == 2
     assert "outside the rig's limits" in error_line(capsys)
     assert not (tmp_path / "no.csv").exists()
+
+
+def test_track_refuses_a_delay_that_is_no_whole_number_of_ticks(tmp_path, capsys, cfg):
+    model = tmp_path / "m.json"
+    model.write_text('{"family": "classical", "thresholds": [0, 10], "weights": [0.1, 0.2], '
+                     '"delay_samples": 3, "sample_period_s": 0.0123}')
+    desired = tmp_path / "desired.csv"
+    desired.write_text("time_s,displacement_um\n0,0\n1,5\n2,0\n")
+    out = tmp_path / "run.csv"
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "-o", str(out)]) == 2
+    line = error_line(capsys)
+    assert "delay of 3 samples at 0.0123 s" in line and "not a whole number" in line
+    assert not out.exists()

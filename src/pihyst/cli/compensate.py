@@ -10,7 +10,7 @@ from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
 from pihyst.cli.model_inputs import add_initial_state_option, initial_state
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
-from pihyst.inverse import compensator_for
+from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import ColumnWriter, load_model
 
 
@@ -137,14 +137,27 @@ def run(args):
         lo, hi = compensator.limits
         y_lo, y_hi = reachable(model, state, lo, hi)
         unit = model.units.get("output", "um")
-        stats = _Stats()
+        stats = _Stats(compensator.delay)
         writer = None
+        # a delayed model: voltages with preview (pihyst.compensate), written d samples
+        # behind the targets read, the last d at the end
+        preview = PreviewRun(compensator, compensator.delay) if compensator.delay else None
+        times = np.empty(0)
         try:
             for rec in reader.chunks(progress=bar):
                 y_d = rec.displacement
-                result = compensator.run(y_d)
-                if args.strict and result.n_saturated:
-                    i = int(np.flatnonzero(result.saturated)[0])
+                t = rec.time if rec.time is not None else \
+                    np.arange(rec.start, rec.start + len(rec), dtype=float)
+                if preview is None:
+                    result = ahead = compensator.run(y_d)
+                    skip = 0
+                else:
+                    result = preview.feed(y_d)
+                    ahead, skip = preview.ahead, preview.skip
+                    times = np.concatenate([times, t])
+                    t, times = times[:len(result.voltage)], times[len(result.voltage):]
+                if args.strict and ahead.n_saturated:
+                    i = skip + int(np.flatnonzero(ahead.saturated)[0])
                     raise rec.error(i, "displacement",
                                     f"displacement_um = {y_d[i]:g} is out of reach: the "
                                     f"model reaches [{y_lo:.4g}, {y_hi:.4g}] {unit} with the "
@@ -152,15 +165,12 @@ def run(args):
                                     + reach_hint(model, y_lo, y_hi))
                 if writer is None:
                     writer = _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit)
-                t = rec.time if rec.time is not None else \
-                    np.arange(rec.start, rec.start + len(rec), dtype=float)
-                out = {"time_s": t, "voltage_V": result.voltage,
-                       "displacement_um": result.displacement,
-                       "saturated": result.saturated.astype(float)}
-                if max_step is not None:
-                    out["slew_limited"] = result.slew_limited.astype(float)
-                writer.write(out)
-                stats.add(result, y_d)
+                _write(writer, t, result, max_step)
+                stats.add(result, result.desired)
+            if preview is not None and writer is not None:
+                result = preview.feed([], last=True)
+                _write(writer, times, result, max_step)
+                stats.add(result, result.desired)
         except BaseException:
             if writer is not None:
                 writer.abort()
@@ -183,6 +193,14 @@ def run(args):
         print(f"reached samples: largest |predicted - desired| {stats.err_max:.3g} {unit}")
 
 
+def _write(writer, t, result, max_step):
+    out = {"time_s": t, "voltage_V": result.voltage, "displacement_um": result.displacement,
+           "saturated": result.saturated.astype(float)}
+    if max_step is not None:
+        out["slew_limited"] = result.slew_limited.astype(float)
+    writer.write(out)
+
+
 def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit):
     names = ["time_s", "voltage_V", "displacement_um", "saturated"]
     if max_step is not None:
@@ -199,13 +217,17 @@ def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit):
 class _Stats:
     """What compensate prints, accumulated block by block."""
 
-    def __init__(self):
+    def __init__(self, delay=0):
         self.n = self.saturated = self.low = self.high = self.slew = self.outside = 0
         self.u_lo = self.d_lo = np.inf
         self.u_hi = self.d_hi = -np.inf
         self.err_max = None
+        self.delay = delay
 
     def add(self, result, y_d):
+        if not len(y_d):
+            return
+        first = self.n             # samples before d of a delayed model: not reachable
         self.n += len(y_d)
         self.saturated += result.n_saturated
         self.low += int(result.saturated_low.sum())
@@ -216,7 +238,7 @@ class _Stats:
         self.u_hi = max(self.u_hi, float(result.voltage.max()))
         self.d_lo = min(self.d_lo, float(y_d.min()))
         self.d_hi = max(self.d_hi, float(y_d.max()))
-        reached = result.reached
+        reached = result.reached & (np.arange(first, self.n) >= self.delay)
         if reached.any():
             e = float(np.abs(result.displacement - y_d)[reached].max())
             self.err_max = e if self.err_max is None else max(self.err_max, e)

@@ -11,7 +11,7 @@ import numpy as np
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, count
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
-from pihyst.exceptions import FitError, InvalidModelError, PihystWarning
+from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, RecordError
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
 
@@ -66,10 +66,11 @@ def register(sub):
                    help="a second record (read with the same record options), judged but "
                         "not fitted: every family's error on it is reported and counts in "
                         "the choice")
-    p.add_argument("--delay", metavar="N", default="0",
+    p.add_argument("--delay", metavar="N", default="auto",
                    help="samples by which the displacement lags the voltage (the model "
-                        "maps u[k] to y[k+N]), or 'auto' to choose it on held-back cycles "
-                        "(default 0; the report says which delay the record favours)")
+                        "maps u[k] to y[k+N] and carries the delay), or 'auto' (default): "
+                        "chosen on held-back cycles, adopted only when clearly better "
+                        "(else 0); the report says which delay was used and why")
     p.add_argument("--max-operators", metavar="N", type=int,
                    help="choose only among models with at most N operators")
     p.add_argument("--max-latency", metavar="US", type=float,
@@ -206,6 +207,8 @@ def run(args):
                 raise _error(err, other) from None
             raise _error(err, record) from None
     model = result.model
+    if model.delay:
+        model = model.replace(sample_period=_sample_period(args))
     if input_range is not None:
         model = _with_input_range(model, input_range, record)
     model = model.replace(metadata={
@@ -218,8 +221,22 @@ def run(args):
         print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)
     print(result.report.to_json() if args.json else result.report)
     if not args.json:
+        lag = f", input delay {model.delay} samples" if model.delay else ""
         print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
-              f"operators (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+              f"operators{lag} (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+
+
+def _sample_period(args):
+    """The record's sample period (s), which a fitted delay holds at: the median step of
+    its time (read only now, and only the time: a fit without a delay needs none); None
+    when the record has no usable time."""
+    try:
+        times = read_from_args(args, args.data, need=("time",), say=False, optional=())
+    except (RecordError, UsageError):
+        return None
+    steps = np.diff(times.time) if times.time is not None else np.empty(0)
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    return float(np.median(steps)) if steps.size else None
 
 
 def _plain(meta):

@@ -11,7 +11,7 @@ import sys
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
-from pihyst.cli.fit import _holdout, _thresholds
+from pihyst.cli.fit import _delay, _holdout, _thresholds
 from pihyst.fleet import fit_many, summary_csv, summary_json
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES
 from pihyst.io import save_model
@@ -65,6 +65,10 @@ def register(sub):
                    help="pass exactly through the measured point at the highest input")
     p.add_argument("--no-offset", action="store_true",
                    help="do not fit an output offset")
+    p.add_argument("--delay", metavar="N", default="auto",
+                   help="samples by which the displacement lags the voltage, or 'auto' "
+                        "(default: per record, adopted only when clearly better); each "
+                        "model carries its delay")
     p.set_defaults(run=run)
 
 
@@ -106,7 +110,8 @@ def _options(args):
     return dict(family=args.model, thresholds=thresholds, n_operators=args.n_operators,
                 n_candidates=args.candidates, holdout=holdout,
                 initial_state=args.initial_state,
-                through="top" if args.through_top else None, offset=not args.no_offset)
+                through="top" if args.through_top else None, offset=not args.no_offset,
+                delay=_delay(args.delay))
 
 
 class _Dask:

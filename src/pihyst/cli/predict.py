@@ -44,11 +44,16 @@ def run(args):
         if args.initial_state == "settle":
             chunks = [reader.read(progress=bar)]
             end = settle_end(chunks[0].voltage)
+        pending = None            # a delayed model's inputs carried to the next chunk
+        run_model = limits.run_model
         try:
             for rec in chunks:
                 u = limits.check(rec.voltage, rec)
-                response = limits.run_model.simulate(u, initial_state=state)
-                state = response.final_state
+                if rec.time is not None and pending is None and run_model.delay:
+                    # the delay at the record's sample period: converted or refused
+                    run_model = run_model.replace(delay=run_model.delay_at(t=rec.time))
+                response = run_model.simulate(u, initial_state=state, pending_input=pending)
+                state, pending = response.final_state, response.pending_input
                 t = rec.time if rec.time is not None else \
                     np.arange(rec.start, rec.start + len(rec), dtype=float)
                 if writer is None:

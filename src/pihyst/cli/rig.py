@@ -272,6 +272,9 @@ def run_track(args):
     config = _config(args)
     r = config.rig
     model = load_model(args.model)
+    if model.delay:
+        # the delay in the rig's ticks: converted when exact, else a one-line error
+        model = model.replace(delay=model.delay_at(1.0 / r.rate_hz))
     gains = _gains(args.feedback) if args.feedback is not None else None
     desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
     max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz

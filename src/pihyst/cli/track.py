@@ -16,7 +16,7 @@ from pihyst.cli.compensate import (
 from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.cli.record_options import add_record_options, read_from_args
-from pihyst.inverse import compensator_for
+from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import load_model, write_columns
 from pihyst.sim.signals import MAX_SAMPLES
 
@@ -79,7 +79,9 @@ def run(args):
         compensator = compensator_for(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
-    result = compensator.run(y_d)
+    # a delayed model: with preview, as pihyst.compensate
+    result = (PreviewRun(compensator, compensator.delay).feed(y_d, last=True)
+              if compensator.delay else compensator.run(y_d))
     measured = plant.run(result.voltage, t)
     error = measured - y_d
     write_columns(args.output, {

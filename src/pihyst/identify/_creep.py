@@ -168,33 +168,55 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, **kwargs):
     t = np.asarray(t, dtype=np.float64)
 
     first = fit(u, y, **kwargs)
+    # the delay the first fit chose (or was given) holds for the second; the creep QPs
+    # run on the aligned record u[k] -> y[k + d], its lags at the output's times
+    d = first.model.delay
+    kwargs["delay"] = d
+    ua, ya, dta = u[:u.size - d], y[d:], np.r_[dt[0], dt[d + 1:]]
     start = first.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     # first creep estimate: every weight free (a kp basis may overfit here; only the
     # creep estimate is kept, the structure and weights are fitted again below)
-    hyst, gains, _ = _joint_qp(first.model, u, y, dt, tau, start=start, offset=offset,
-                               nonnegative=nonnegative, duration=duration)
+    hyst, gains, _ = _joint_qp(first.model.replace(delay=0), ua, ya, dta, tau, start=start,
+                               offset=offset, nonnegative=nonnegative, duration=duration)
     # the record without its creep: the settled displacement the structure is chosen on
-    psi = _lag_deficits(hyst, hyst.predict(u), dt, tau, hyst.initial_state)
-    second = fit(u, y + psi @ gains, **kwargs)
+    psi = _lag_deficits(hyst, hyst.predict(ua), dta, tau, hyst.initial_state)
+    second = fit(u, np.r_[y[:d], ya + psi @ gains], **kwargs)
     start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
-    hyst, gains, passes = _joint_qp(second.model, u, y, dt, tau, start=start, offset=offset,
-                                    nonnegative=nonnegative, duration=duration,
-                                    free_weights=_free(second.model))
-    model = hyst.replace(creep=Creep(tau, gains, dt_fixed))
+    hyst, gains, passes = _joint_qp(second.model.replace(delay=0), ua, ya, dta, tau,
+                                    start=start, offset=offset, nonnegative=nonnegative,
+                                    duration=duration, free_weights=_free(second.model))
+    aligned = hyst.replace(creep=Creep(tau, gains, dt_fixed))
+    model = aligned.replace(delay=d, sample_period=dt_fixed if d else None)
     meta = dict(second.model.metadata)
     summary = dict(meta.get("fit", {}))
     summary["creep"] = {
         "tau_s": tau.tolist(), "gain": gains.tolist(), "dt_s": dt_fixed,
         "creep_total": float(gains.sum()), "qp_passes": passes,
-        "rms_without_creep": _rms(first.model, u, y, None, start),
-        "rms_with_creep": _rms(model, u, y, t, start),
+        "rms_without_creep": _rms(first.model.replace(delay=0), ua, ya, None, start),
+        "rms_with_creep": _rms(aligned, ua, ya, t[d:], start),
         "weights": "free" if _free(second.model) else "one scale (regularized kp shape)",
         "note": ("family and thresholds chosen on the record with the estimated creep "
                  "removed; weights, offset and creep gains fitted together on every "
                  "sample after the settling sweep"),
     }
     meta["fit"] = summary
+    report = second.report
+    if d and "delay" in summary.get("data", {}):
+        # the delay was chosen by the first fit (the second was given it): its report
+        report = _with_delay_of(second.report, first.report)
+        summary["data"] = report.to_dict()["data"]
+        summary["undetermined"] = report.to_dict()["undetermined"]
     model = model.replace(metadata=meta)
     models = dict(second.models)
     models[summary.get("family", model.family)] = model
-    return type(second)(model=model, report=second.report, models=models)
+    return type(second)(model=model, report=report, models=models)
+
+
+def _with_delay_of(report, chooser):
+    """``report`` with the delay entry and the delay's note of the report ``chooser``."""
+    data, other = report.to_dict(), chooser.to_dict()
+    data["data"]["delay"] = other["data"]["delay"]
+    note = "the input-output delay:"
+    data["undetermined"] = ([t for t in data["undetermined"] if not t.startswith(note)]
+                            + [t for t in other["undetermined"] if t.startswith(note)])
+    return type(report)(data)

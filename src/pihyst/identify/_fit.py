@@ -54,7 +54,7 @@ DELAY_NOTE_GAIN = 0.02   # a delay is worth a note when it lowers the probe's RM
 def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
         n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
         through=None, initial_state="auto", holdout="alternate", refit=True,
-        input_range=None, validate=None, delay=0, max_operators=None, max_latency=None,
+        input_range=None, validate=None, delay="auto", max_operators=None, max_latency=None,
         max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep=False):
     """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
     one of those that generalize best.
@@ -121,10 +121,14 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         held-back cycles). Its mean error is removed (the sensor's zero differs between
         records); it is judged once its input has swept its own range.
     delay : int or "auto"
-        Samples by which the output lags the input: the model maps u[k] to y[k + delay]
-        (predict with ``model.predict(u)[:-delay]`` against ``y[delay:]``). "auto": the
-        delay with the lowest held-back RMS of a probe model, 0 to 5 % of a cycle. With
-        0 (default) the report still says which delay the record favours.
+        Samples by which the output lags the input (a dead time): the models are fitted
+        to u[k] -> y[k + delay] and carry it (``model.delay``: ``model.predict(u)`` is
+        the delayed output, ``pihyst.compensate`` previews the trajectory). "auto"
+        (default): the delay with the lowest held-back RMS of a probe model, 0 to 5 % of
+        a cycle, adopted only when it lowers the held-back RMS of that probe and of the
+        fitted structure by more than 5 % (docs/theory/identification.md), else 0. The
+        report states the delay used and why; with 0 it still says which delay the
+        record favours.
     max_operators : int, optional
         Choose only among models with at most this many operators.
     max_latency : float, optional
@@ -216,7 +220,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     if rec.state_mode == "explicit" and thresholds is None:
         raise FitError("an explicit initial_state needs explicit thresholds (one value "
                        "per operator)")
-    delay_info = _delay_choice(rec, fitter_of, delay)
+    delay_info = _delay_choice(rec, fitter_of, delay, _delay.confirming_family(families))
     if delay_info["samples"]:
         rec = rec.shifted(delay_info["samples"])
     validation = (None if validate is None else
@@ -290,14 +294,36 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     fit_summary = report.model_summary()
     if rec.layout.settle_end:
         # the operator state once the first sweep has settled it: predictions of the same
-        # record continue from it (model.predict(u[sample:], initial_state=state))
+        # record continue from it (model.predict(u[sample:], initial_state=state,
+        # pending_input=pending_input) with a delay)
         end = rec.layout.settle_end
         fit_summary["settled"] = {
             "sample": end, "state": model.simulate(rec.u[:end]).final_state.tolist()}
-    model = model.replace(metadata={"fit": fit_summary, "pihyst_version": __version__})
-    models = {r.name: r.model for r in results}
+    # the models carry the delay they were fitted with (u[k] -> y[k + d]), and the
+    # sample period it holds at when the sample times are known
+    lag = _carried_delay(delay_info["samples"], t, rec.u.size + delay_info["samples"])
+    if delay_info["samples"] and "settled" in fit_summary and end >= delay_info["samples"]:
+        # the inputs the settled state has not yet shown at the output
+        fit_summary["settled"]["pending_input"] = \
+            rec.u[end - delay_info["samples"]:end].tolist()
+    model = model.replace(metadata={"fit": fit_summary, "pihyst_version": __version__},
+                          **lag)
+    models = {r.name: r.model.replace(**lag) if lag else r.model for r in results}
     models[best.name] = model
     return FitResult(model=model, report=report, models=models)
+
+
+def _carried_delay(d, t, n):
+    """The delay arguments of the fitted models: {} without a delay, else the delay and,
+    with sample times ``t``, their median interval as the sample period."""
+    if not d:
+        return {}
+    if t is None:
+        return {"delay": d}
+    t = np.asarray(t, dtype=np.float64)
+    steps = np.diff(t) if t.ndim == 1 and t.size == n else np.empty(0)
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    return {"delay": d, "sample_period": float(np.median(steps)) if steps.size else None}
 
 
 def _is_sequence(x):
@@ -315,8 +341,9 @@ def _check_bounds(max_operators, max_latency, delay):
         raise FitError(f"delay must be a number of samples >= 0 or 'auto', got {delay!r}")
 
 
-def _delay_choice(rec, fitter_of, delay):
-    """The delay used (given, or the best of the scan) and the scan of the record."""
+def _delay_choice(rec, fitter_of, delay, family):
+    """The delay used (given, or by the rule of :mod:`pihyst.identify._delay`) and the
+    scan of the record."""
     if rec.state_mode == "explicit":     # a state of other operators than the probe's
         tried = []
     else:
@@ -325,17 +352,18 @@ def _delay_choice(rec, fitter_of, delay):
             tried = _delay.scan(rec, fitter_of, _delay.max_delay(rec))
     finite = [t for t in tried if np.isfinite(t["rms"])]
     best = min(finite, key=lambda t: t["rms"]) if finite else None
-    if delay == "auto" and best is None:
-        raise FitError("delay='auto': no delay could be judged (the probe model cannot be "
-                       "fitted to this record, e.g. with an explicit initial_state); give "
-                       "the delay as a number of samples")
-    if delay == "auto":
-        used, rule = best["samples"], ("lowest judged RMS of the probe model (classical PI, "
-                                       f"{_delay.PROBE_PLAYS} plays)")
+    confirm = None
+    if delay == "auto" and not tried:
+        used, rule = 0, ("not probed (an explicit initial state is not the probe's): none "
+                         "assumed; give the delay as a number of samples")
+    elif delay == "auto":
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            used, rule, confirm = _delay.adopted(rec, fitter_of, tried, family)
     else:
         used, rule = int(delay), "given" if delay else "none assumed (delay=0)"
     return {"samples": used, "rule": rule, "best": None if best is None else best["samples"],
-            "tried": tried,
+            "tried": tried, "confirmation": confirm, "auto": delay == "auto",
             "probe": f"classical PI, {_delay.PROBE_PLAYS} equally spaced plays"}
 
 
@@ -361,10 +389,14 @@ def _undetermined(rec, validation, known, unknown_reason, delay_info, cands):
                      "would tell")
     tried = {t["samples"]: t["rms"] for t in delay_info["tried"]}
     used, best = delay_info["samples"], delay_info["best"]
-    if best is not None and best != used and \
+    adopted = delay_info["auto"] and used     # the rule's sentence says why
+    if best is not None and best != used and not adopted and \
             tried[best] < (1 - DELAY_NOTE_GAIN) * tried.get(used, np.inf):
+        hint = (f"not adopted, {delay_info['rule']}" if delay_info["auto"] else
+                "align the record, or fit with delay='auto'")
+        at_used = (f"{tried[used]:.4g} at {used}" if used in tried else
+                   f"{used} not probed")
         out.append(f"the input-output delay: the record fits best with the output lagging "
-                   f"by {best} samples (probe RMS {tried[best]:.4g} against "
-                   f"{tried[used]:.4g} at {used}); the models assume {used}. A delay is not "
-                   f"hysteresis: align the record, or fit with delay='auto'")
+                   f"by {best} samples (probe RMS {tried[best]:.4g} against {at_used}); "
+                   f"the models assume {used}. A delay is not hysteresis: {hint}")
     return out

@@ -219,7 +219,10 @@ class FitReport:
         delay = d.get("delay")
         if delay and delay["samples"]:
             lines.append(f"delay: the output follows the input by {delay['samples']} samples "
-                         f"({delay['rule']}); the model maps u[k] to y[k + {delay['samples']}]")
+                         f"({delay['rule']}); the model maps u[k] to y[k + {delay['samples']}] "
+                         f"and carries it (model.delay)")
+        elif delay and delay.get("auto"):
+            lines.append(f"delay: none ({delay['rule']})")
         if self._data["undetermined"]:
             lines.append("what the data could not determine:")
             lines += [f"  - {t}" for t in self._data["undetermined"]]

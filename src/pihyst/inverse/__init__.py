@@ -15,10 +15,11 @@ from pihyst.inverse._compensator import (
     FLAG_SLEW,
     CompensationResult,
     Compensator,
+    PreviewRun,
     compensate,
 )
 from pihyst.model import classical_inverse, reachable_output_range
 
 __all__ = ["BoucWenCompensator", "FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW",
-           "FLAG_SLEW", "CompensationResult", "Compensator", "CompensatorBank",
+           "FLAG_SLEW", "CompensationResult", "Compensator", "CompensatorBank", "PreviewRun",
            "classical_inverse", "compensate", "compensator_for", "reachable_output_range"]

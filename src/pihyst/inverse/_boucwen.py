@@ -105,6 +105,12 @@ class BoucWenCompensatorTwin:
         self.reset()
 
     @property
+    def delay(self):
+        """The model's input delay in samples: ``step`` takes the target that many
+        samples ahead (as :class:`pihyst.Compensator`)."""
+        return self.model.delay
+
+    @property
     def state(self):
         """(u, z) after the last voltage."""
         return np.array([self._u, self._z])

@@ -19,9 +19,18 @@ voltage and is flagged.
 
 :func:`compensate` does a whole trajectory; :class:`Compensator` does it sample by sample
 with explicit state, like the models' ``step``/``reset``/``state``.
+
+A model with an input delay of d samples (``model.delay``) answers a voltage d samples
+later: y[k] = P[v](k - d). A trajectory known in advance is compensated with preview,
+
+    v[k] = P^-1[y_d](k + d)   for k < N - d,   v[k] = v[N - d - 1] (held) after,
+
+so that the model's output meets y_d[k] on every sample k >= d (the first d samples show
+the voltage held before the run, the initial voltage). :func:`compensate` does that shift; the
+streaming :class:`Compensator` takes, at each tick, the target d samples ahead.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,7 +40,7 @@ from pihyst.model import InvalidModelError, PIModel
 from pihyst.model._creep import sample_intervals
 from pihyst.model._models import _finite_vector
 
-__all__ = ["CompensationResult", "Compensator", "compensate", "FLAG_SATURATED_LOW",
+__all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLAG_SATURATED_LOW",
            "FLAG_SATURATED_HIGH", "FLAG_NAN", "FLAG_SLEW"]
 
 #: Compensators of the models that are not PI models (family -> class), registered by
@@ -135,6 +144,11 @@ class Compensator:
         For a model with creep: the lag states before the first sample (default:
         settled at the model's output at the initial voltage).
 
+    A model with a delay of d samples (:attr:`delay`) makes the voltage of tick k act
+    at tick k + d: ``step`` and ``run`` take the target d samples ahead (y_d[k + d] at
+    tick k; :func:`compensate` shifts a whole trajectory so), and their displacement is
+    the model's output d samples later.
+
     Examples
     --------
     >>> import pihyst
@@ -195,6 +209,11 @@ class Compensator:
         self._lags = None
         self._start_lags(creep_state)
 
+    @property
+    def delay(self):
+        """The model's input delay in samples: how far ahead the targets are taken."""
+        return self.model.delay
+
     def _start_lags(self, creep_state):
         """With creep: the lags from ``creep_state``, or settled at the output now."""
         if self.model.creep is None:
@@ -251,7 +270,8 @@ class Compensator:
     # ---------------------------------------------------------------- compensation
     def step(self, y_desired, dt=None):
         """The voltage for one desired displacement (applied to the state). With creep,
-        ``dt`` is the time since the previous sample (default ``model.creep.dt``)."""
+        ``dt`` is the time since the previous sample (default ``model.creep.dt``). With a
+        delay of d samples, ``y_desired`` is the target d samples ahead."""
         y_desired = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
         if self._lags is None:
             return self._core.step(y_desired)
@@ -264,10 +284,11 @@ class Compensator:
         self._output = float(y[0])
         return float(u[0])
 
-    def run(self, y_desired, t=None):
+    def run(self, y_desired, t=None, t_previous=None):
         """Compensate a block of desired displacements, continuing from the current state.
         With creep, ``t`` are the sample times (s; default: every ``model.creep.dt``,
-        the first one ``creep.dt`` after the previous sample).
+        the first one ``creep.dt`` after the previous sample, or at ``t[0] - t_previous``
+        when the previous sample's time is given).
 
         Returns a :class:`CompensationResult`."""
         y_desired = _desired(y_desired)
@@ -276,8 +297,10 @@ class Compensator:
         if self._lags is None:
             u, y, flags = self._core.run(y_desired)
         else:
-            dt = (None if t is None else
-                  sample_intervals(t, y_desired.size, self.model.creep.dt))
+            first = self.model.creep.dt
+            if t is not None and t_previous is not None and y_desired.size:
+                first = float(np.asarray(t, dtype=np.float64)[0]) - float(t_previous)
+            dt = None if t is None else sample_intervals(t, y_desired.size, first)
             u, y, flags = self._lags.compensate(self._core, y_desired, dt)
             if y.size:
                 self._output = float(y[-1])
@@ -304,6 +327,16 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     Exact inverse sample by sample (see the module notes), within the voltage limits
     and the slew limit. Any values are accepted: out of reach saturates at a limit and
     is flagged, NaN holds the last voltage and is flagged.
+
+    A model with a delay of d samples is compensated with preview (module notes):
+    ``voltage[k]`` aims at ``desired[k + d]``, the last d voltages hold, and
+    ``displacement[k]`` is the model's output at sample k, equal to ``desired`` on
+    samples d.. wherever it was reached. The first d samples show the voltage held
+    before the run and carry no flags (no voltage of this run reaches them):
+    ``displacement`` is ``model.predict(voltage, initial_state=initial_state,
+    pending_input=[initial_voltage] * d)`` (with creep: the same ``t``). With sample
+    times ``t`` at another period than the model's, the delay is converted when exact
+    (``model.delay_at``).
 
     Parameters
     ----------
@@ -337,14 +370,105 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     """
     cls = OTHER_COMPENSATORS.get(getattr(model, "family", None))
     if cls is not None:
-        if t is not None or creep_state is not None:
-            raise InvalidArgumentError(f"a {model.family} model has no creep: t and "
-                                       f"creep_state do not apply")
-        return cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                   initial_voltage=initial_voltage, initial_state=initial_state).run(y_desired)
-    return Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                       initial_voltage=initial_voltage, initial_state=initial_state,
-                       creep_state=creep_state).run(y_desired, t=t)
+        if creep_state is not None:
+            raise InvalidArgumentError(f"a {model.family} model has no creep: "
+                                       f"creep_state does not apply")
+        comp = cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                   initial_voltage=initial_voltage, initial_state=initial_state)
+
+        def run(y, t):           # no creep: t only sets the delay's sample period
+            return comp.run(y)
+    else:
+        comp = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                           initial_voltage=initial_voltage, initial_state=initial_state,
+                           creep_state=creep_state)
+        run = comp.run
+    d = model.delay_at(t=t)
+    if d == 0:
+        return run(y_desired, t)
+    y = _desired(y_desired)
+    if t is not None:
+        t = np.asarray(t, dtype=np.float64)
+        if t.shape != y.shape:
+            raise InvalidArgumentError(f"t must have one time per desired value "
+                                       f"({y.size}), got shape {t.shape}")
+    return PreviewRun(comp, d).feed(y, t, last=True)
+
+
+class PreviewRun:
+    """Compensation with preview for a model delayed by d samples, of a trajectory given
+    whole or block by block (module notes): ``feed(block)`` returns the samples whose
+    voltage is known so far, d behind the targets fed; ``feed(block, last=True)`` also
+    the last d, whose voltage holds. Sample k gets ``voltage[k]`` aiming at
+    ``desired[k + d]``, the displacement the model has at k (the compensator's at
+    ``desired[k]``; before sample d the one at the initial voltage, which the actuator
+    held before the run) and the flags of ``desired[k]`` (none before sample d)."""
+
+    def __init__(self, compensator, delay):
+        self.comp, self.d = compensator, int(delay)
+        self._seen = 0                   # targets fed
+        self._desired = np.empty(0)      # targets of the samples not yet returned
+        self._voltage = np.empty(0)      # voltages of those samples, as far as known
+        # the compensator's (displacement, flags) of desired[k - d], sample k on; None:
+        # before sample d (the displacement at the initial voltage)
+        self._reached = [None] * self.d
+        self._start = None
+        self._t_last = None
+
+    def _run(self, y, t, t_previous):
+        if isinstance(self.comp, Compensator):
+            return self.comp.run(y, t=t, t_previous=t_previous)
+        return self.comp.run(y)
+
+    def feed(self, y_desired, t=None, *, last=False):
+        """The samples completed by the targets ``y_desired`` (sample times ``t`` for
+        a model with creep), as a :class:`CompensationResult`; with ``last``, every
+        remaining sample."""
+        y = _desired(y_desired)
+        if self._start is None:
+            self._start = (self.comp.state, self.comp.voltage, self.comp.displacement,
+                           getattr(self.comp, "creep_state", None))
+        skip = max(0, min(self.d - self._seen, y.size))      # the first d: no voltage
+        self._seen += y.size
+        self._desired = np.concatenate([self._desired, y])
+        t_previous = None
+        if t is not None:
+            # the first target fed comes one sample interval after the sample before it
+            t = np.asarray(t, dtype=np.float64)
+            t_previous = t[skip - 1] if skip > 0 else self._t_last
+            self._t_last = t[-1] if t.size else self._t_last
+        ahead = self._run(y[skip:], None if t is None else t[skip:], t_previous)
+        #: the compensator's run on this block's targets (``block[skip:]``)
+        self.ahead, self.skip = ahead, skip
+        self._voltage = np.concatenate([self._voltage, ahead.voltage])
+        self._reached += list(zip(ahead.displacement.tolist(), ahead.flags.tolist()))
+        n = self._desired.size if last else self._voltage.size
+        held = n - self._voltage.size
+        voltage = np.concatenate([self._voltage, np.full(held, self.comp.voltage)])
+        before = self._start[2]          # the displacement at the initial voltage
+        reached = [(before, 0) if r is None else r for r in self._reached[:n]]
+        out = CompensationResult(
+            desired=self._desired[:n], voltage=voltage[:n],
+            displacement=np.array([r[0] for r in reached], dtype=np.float64),
+            flags=np.array([r[1] for r in reached], dtype=np.uint8),
+            saturated=None, saturated_low=None, saturated_high=None, slew_limited=None,
+            nan_held=None, initial_state=self._start[0], initial_voltage=self._start[1],
+            final_state=self.comp.state, final_voltage=self.comp.voltage,
+            limits=self.comp.limits, slew_rate=self.comp.slew_rate,
+            initial_creep_state=self._start[3],
+            final_creep_state=getattr(self.comp, "creep_state", None))
+        self._desired, self._voltage = self._desired[n:], voltage[n:]
+        self._reached = self._reached[n:]
+        return _with_flag_arrays(out)
+
+
+def _with_flag_arrays(result):
+    """``result`` with its per-sample booleans derived from its flags."""
+    flags = result.flags
+    low = (flags & FLAG_SATURATED_LOW) != 0
+    high = (flags & FLAG_SATURATED_HIGH) != 0
+    return replace(result, saturated=low | high, saturated_low=low, saturated_high=high,
+                   slew_limited=(flags & FLAG_SLEW) != 0, nan_held=(flags & FLAG_NAN) != 0)
 
 
 def _number(value, name, allow_inf=False, allow_nan=False):

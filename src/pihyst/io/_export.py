@@ -6,6 +6,11 @@
   to be read back exactly (17 significant digits for double, 9 for float).
 - :func:`flat_text`: the model as lines of numbers that ``pihyst_lib_load`` of the shared
   library reads (docs/export.md gives the format), for LabVIEW, MATLAB or Simulink.
+
+A model's input delay of d samples (``model.delay``) is not inside the C core's step: the
+header defines ``<NAME>_DELAY_SAMPLES`` and the flat file ends with a line ``delay d``
+(only when d > 0); firmware feeds the compensator the target d ticks ahead, and
+predictions come d ticks late (docs/export.md).
 """
 
 import re
@@ -59,8 +64,9 @@ def c_header(model, name, *, precision="double", source=""):
     if precision not in ("double", "float"):
         raise InvalidModelError(f"precision must be 'double' or 'float', got {precision!r}")
     if model.family == "bouc-wen":
-        return boucwen_header(model, c_identifier(name), lambda v: _literal(v, precision),
-                              precision, source)
+        name = c_identifier(name)
+        return boucwen_header(model, name, lambda v: _literal(v, precision), precision,
+                              source, _delay_comment(model, name))
     if model.family not in _FAMILY_ENUM:
         raise InvalidModelError(f"no C form for a {model.family!r} model")
     name = c_identifier(name)
@@ -79,9 +85,11 @@ def c_header(model, name, *, precision="double", source=""):
            f" *     {name}_compensator_init(&c, &m, u_min, u_max, max_step, u_initial);\n",
            f" *     {real} volts = pihyst_compensator_step{sfx}(&c, y_desired, &flags);\n",
            " * One model per header: the state and scratch below are this model's.\n",
+           *_delay_comment(model, name),
            " */\n",
            f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst.h\"\n\n",
-           f"#define {name.upper()}_N_OPS {k}\n"]
+           f"#define {name.upper()}_N_OPS {k}\n",
+           f"#define {name.upper()}_DELAY_SAMPLES {model.delay}\n"]
     n_points = 0
     if model.family in ("classical", "multislope"):
         out.append(_array(real, f"{name}_thresholds", model.thresholds, precision))
@@ -137,6 +145,22 @@ def c_header(model, name, *, precision="double", source=""):
     return "".join(out)
 
 
+def _delay_comment(model, name):
+    """The header's lines on the model's input delay (none without one)."""
+    if not model.delay:
+        return []
+    period = ("" if model.sample_period is None else
+              f" at {model.sample_period:g} s per tick")
+    return [" *\n",
+            f" * The output lags the input by {name.upper()}_DELAY_SAMPLES = {model.delay} "
+            f"ticks{period}:\n",
+            f" * at tick k feed the compensator the desired displacement of tick k + "
+            f"{model.delay}\n",
+            " * (the trajectory's preview; hold the last voltage for the final ticks), and\n",
+            f" * read pihyst_model_step's output as the displacement {model.delay} ticks "
+            f"later.\n"]
+
+
 def flat_text(model):
     """The model as the shared library's flat model file (docs/export.md).
 
@@ -144,12 +168,16 @@ def flat_text(model):
     3 Bouc-Wen, whose lines follow :func:`pihyst.io._export_boucwen.boucwen_flat_lines`);
     ``offset u_min u_max``; ``U a b h`` (multislope, else the paper's defaults); the K
     thresholds (classical, multislope) or, for pwl, K lines ``n x_1..x_n y_1..y_n`` of
-    rising then K of falling polylines; the K weights; the K initial states. Numbers in
-    17 significant digits, so the library reads back exactly the model's doubles.
+    rising then K of falling polylines; the K weights; the K initial states; for a
+    delayed model, ``delay d``. Numbers in 17 significant digits, so the library reads
+    back exactly the model's doubles.
     """
     num = lambda values: " ".join(repr(float(v)) for v in values)  # noqa: E731
     if model.family == "bouc-wen":
-        return "\n".join([FLAT_MAGIC, *boucwen_flat_lines(model, num)]) + "\n"
+        lines = [FLAT_MAGIC, *boucwen_flat_lines(model, num)]
+        if model.delay:      # as below: the library ignores it, the caller applies it
+            lines.append(f"delay {model.delay}")
+        return "\n".join(lines) + "\n"
     if model.family not in _FAMILY_CODE:
         raise InvalidModelError(f"no flat form for a {model.family!r} model")
     lines = [FLAT_MAGIC, f"{_FAMILY_CODE[model.family]} {model.n_operators}",
@@ -164,4 +192,8 @@ def flat_text(model):
     else:
         lines.append(num(model.thresholds))
     lines += [num(model.weights), num(model.initial_state)]
+    if model.delay:
+        # after the numbers the library reads: it loads the model as before, the caller
+        # applies the delay (docs/export.md)
+        lines.append(f"delay {model.delay}")
     return "\n".join(lines) + "\n"

@@ -7,10 +7,12 @@ from pihyst._version import __version__
 FLAT_FAMILY = 3      # the shared library's family code for Bouc-Wen (csrc/lib/pihyst_lib.h)
 
 
-def boucwen_header(model, name, literal, precision, source=""):
+def boucwen_header(model, name, literal, precision, source="", delay_comment=()):
     """The text of a C header holding the Bouc-Wen ``model``: ``<name>_params`` (a
-    ``pihyst_bw_params``), ``<name>_init(pihyst_bw_model *m)`` and
-    ``<name>_compensator_init(...)``; ``literal`` writes one number of ``precision``."""
+    ``pihyst_bw_params``), ``<name>_init(pihyst_bw_model *m)``,
+    ``<name>_compensator_init(...)`` and ``<NAME>_DELAY_SAMPLES``; ``literal`` writes one
+    number of ``precision``, ``delay_comment`` are the comment lines on the model's input
+    delay (those of the PI headers)."""
     real, sfx = ("double", "") if precision == "double" else ("float", "_f32")
     guard = f"PIHYST_MODEL_{name.upper()}_H"
     lit = literal
@@ -34,8 +36,10 @@ def boucwen_header(model, name, literal, precision, source=""):
            f" *     {name}_compensator_init(&c, &m, u_min, u_max, max_step, u_initial);\n",
            f" *     {real} volts = pihyst_bw_compensator_step{sfx}(&c, y_desired, &flags);\n",
            " * The model struct holds its state (u, z); it needs no other storage.\n",
+           *delay_comment,
            " */\n",
            f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst_boucwen.h\"\n\n",
+           f"#define {name.upper()}_DELAY_SAMPLES {model.delay}\n\n",
            f"static const pihyst_bw_params{sfx} {name}_params = {{\n", "\n".join(fields),
            "\n};\n\n",
            "/* Set m to this model at its initial state. */\n",

@@ -1,12 +1,14 @@
 """Many models stepped together: one input vector per tick (deformable mirrors,
 multi-axis stages). Each channel is its own model with its own running state; the bank
 steps them all in one call of the C core (pihyst_bank_step), with bit for bit the
-outputs of the channels' own steppers."""
+outputs of the channels' own steppers. With ``fast=True`` it steps them from a
+structure-of-arrays copy of their states (pihyst_modelbank, docs/c-core.md): classical
+channels of up to 16 operators several at a time, with the same bits."""
 
 import numpy as np
 
 from pihyst import _core
-from pihyst.exceptions import InputRangeError
+from pihyst.exceptions import InputRangeError, InvalidModelError
 from pihyst.model._models import PIModel
 
 
@@ -21,6 +23,11 @@ class ModelBank:
         One model per channel; the same model may drive several channels.
     initial_states : sequence, optional
         One initial operator state per channel (None entries: that model's own).
+    fast : bool
+        Step classical channels (K <= 16) several at a time from a structure-of-arrays
+        copy of the states: the same outputs, bit for bit, in less time per channel.
+        ``channels`` (and ``states``) are brought up to date when read; reset them
+        through :meth:`reset` (a fast bank does not see a channel reset on its own).
 
     Examples
     --------
@@ -35,11 +42,12 @@ class ModelBank:
     True
     """
 
-    def __init__(self, models, initial_states=None):
+    def __init__(self, models, initial_states=None, *, fast=False):
         models = tuple(models)
         for i, m in enumerate(models):
             if not isinstance(m, PIModel):
                 raise TypeError(f"models[{i}] must be a pihyst model, not {type(m).__name__}")
+        refuse_delayed(models)
         if initial_states is None:
             initial_states = [None] * len(models)
         initial_states = list(initial_states)
@@ -47,13 +55,28 @@ class ModelBank:
             raise ValueError(f"initial_states must have {len(models)} entries, got "
                              f"{len(initial_states)}")
         self.models = models
-        self.channels = tuple(m.stepper(s) for m, s in zip(models, initial_states, strict=True))
-        self._array = _core.BankArray([s._bank for s in self.channels])
+        self._channels = tuple(m.stepper(s) for m, s in zip(models, initial_states, strict=True))
+        banks = [s._bank for s in self._channels]
+        self._array = _core.BankSoA(banks) if fast else _core.BankArray(banks)
+        self._stale = False
         self._lo = np.array([m.input_range[0] for m in models], dtype=np.float64)
         self._hi = np.array([m.input_range[1] for m in models], dtype=np.float64)
 
     def __len__(self):
         return len(self.models)
+
+    @property
+    def fast(self):
+        """True if the bank steps from a structure-of-arrays copy of the states."""
+        return isinstance(self._array, _core.BankSoA)
+
+    @property
+    def channels(self):
+        """The N :class:`Stepper` objects, brought up to date."""
+        if self._stale:
+            self._array.sync()
+            self._stale = False
+        return self._channels
 
     @property
     def states(self):
@@ -66,8 +89,11 @@ class ModelBank:
         states = [None] * len(self) if states is None else list(states)
         if len(states) != len(self):
             raise ValueError(f"states must have {len(self)} entries, got {len(states)}")
-        for s, state in zip(self.channels, states, strict=True):
+        for s, state in zip(self._channels, states, strict=True):
             s.reset(state)
+        if self.fast:
+            self._array.reload()
+        self._stale = False
 
     def _checked(self, u):
         u = np.ascontiguousarray(u, dtype=np.float64)
@@ -85,11 +111,26 @@ class ModelBank:
         u = np.asarray(u, dtype=np.float64)
         if u.shape != (len(self),):
             raise ValueError(f"input must have {len(self)} values, got shape {u.shape}")
-        return self._array.run(self._checked(u[None, :]))[0]
+        y = self._array.run(self._checked(u[None, :]))[0]
+        self._stale = self.fast
+        return y
 
     def run(self, u):
         """T ticks: u has shape (T, N), row t one tick; returns the outputs (T, N)."""
-        return self._array.run(self._checked(u))
+        y = self._array.run(self._checked(u))
+        self._stale = self.fast
+        return y
 
     def __repr__(self):
         return f"ModelBank({len(self)} channels)"
+
+
+def refuse_delayed(models):
+    """InvalidModelError for the first model with an input delay: a bank steps every
+    channel by the same tick and has no delay line (docs/fleets.md)."""
+    for i, m in enumerate(models):
+        if getattr(m, "delay", 0):
+            raise InvalidModelError(f"models[{i}] has an input delay of {m.delay} samples: "
+                                    f"a bank does not delay its channels (use "
+                                    f"model.replace(delay=0) and shift the inputs, or "
+                                    f"run the channel on its own)")

@@ -37,13 +37,24 @@ import numpy as np
 from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.model._delay import (
+    DelayLine,
+    checked_delay,
+    checked_sample_period,
+    delay_at,
+    delayed_input,
+    pending_after,
+)
 from pihyst.model._models import (
+    DELAY_KEYS,
     OTHER_FAMILIES,
     Immutable,
     Response,
     checked_input,
     checked_metadata,
     checked_units,
+    delay_dict,
+    delay_from_dict,
 )
 
 FAMILY = "bouc-wen"
@@ -173,6 +184,10 @@ class BoucWenModel(Immutable):
         (u_lo, u_hi), default (0, 150).
     initial_state : (u, z), optional
         Default: at rest at u_lo after a full u_lo -> u_hi -> u_lo cycle.
+    delay : int
+        Input dead time in samples (as for the PI models: y[k] = P[u](k - d)).
+    sample_period : float, optional
+        The sample period (s) the delay holds at.
 
     Examples
     --------
@@ -188,7 +203,8 @@ class BoucWenModel(Immutable):
              "input_range", "initial_state", "units", "metadata")
 
     def __init__(self, *, beta, gamma, hysteretic, linear, n=1.0, quadratic=0.0, offset=0.0,
-                 input_range=None, initial_state=None, units=None, metadata=None):
+                 input_range=None, initial_state=None, units=None, metadata=None, delay=0,
+                 sample_period=None):
         set_ = object.__setattr__
         for name, value in (("beta", beta), ("gamma", gamma), ("n", n),
                             ("hysteretic", hysteretic), ("linear", linear),
@@ -232,6 +248,8 @@ class BoucWenModel(Immutable):
         set_(self, "initial_state", state)
         set_(self, "units", checked_units(units))
         set_(self, "metadata", checked_metadata(metadata))
+        set_(self, "delay", checked_delay(delay))
+        set_(self, "sample_period", checked_sample_period(sample_period))
 
     # ---------------------------------------------------------------- properties
     @property
@@ -281,30 +299,50 @@ class BoucWenModel(Immutable):
             return self.initial_state
         return self.replace(initial_state=state).initial_state
 
-    def simulate(self, u, *, initial_state=None):
+    def simulate(self, u, *, initial_state=None, t=None, pending_input=None):
         """Run over the input ``u`` from ``initial_state`` (default: the model's own);
-        returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z)."""
+        returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z). With a
+        :attr:`delay` the input is delayed as for the PI models
+        (:meth:`pihyst.model.PIModel.simulate`; ``t`` only checks the sample period)."""
         u = self._checked_input(u)
+        d = self.delay_at(t=t)
+        if d and pending_input is not None:
+            pending_input = self._checked_input(pending_input)
+        run = delayed_input(u, d, pending_input)
         core = self._core(self._state(initial_state))
-        y = core.run(u)
-        return Response(input=u, output=y, final_state=np.array(core.state))
+        y = core.run(run)
+        return Response(input=u, output=y, final_state=np.array(core.state),
+                        pending_input=pending_after(u, d, pending_input) if d else None)
 
-    def twin_simulation(self, u, *, initial_state=None):
+    def twin_simulation(self, u, *, initial_state=None, t=None, pending_input=None):
         """:meth:`simulate` by the Python twin of the C core (this module's functions):
         the reference the tests compare the C core against; slow."""
         u = self._checked_input(u)
+        d = self.delay_at(t=t)
+        if d and pending_input is not None:
+            pending_input = self._checked_input(pending_input)
+        run = delayed_input(u, d, pending_input)
         u0, z0 = self._state(initial_state)
-        z = trajectory(self._x(u), self._x(u0), z0, self.beta, self.gamma, self.n)
-        final = (float(u[-1]), float(z[-1])) if u.size else (u0, z0)
-        return Response(input=u, output=self.output(u, z), final_state=np.array(final))
+        z = trajectory(self._x(run), self._x(u0), z0, self.beta, self.gamma, self.n)
+        final = (float(run[-1]), float(z[-1])) if u.size else (u0, z0)
+        return Response(input=u, output=self.output(run, z), final_state=np.array(final),
+                        pending_input=pending_after(u, d, pending_input) if d else None)
 
-    def predict(self, u, *, initial_state=None):
+    def predict(self, u, *, initial_state=None, t=None, pending_input=None):
         """Displacements for the inputs ``u``."""
-        return self.simulate(u, initial_state=initial_state).output
+        return self.simulate(u, initial_state=initial_state, t=t,
+                             pending_input=pending_input).output
 
-    def stepper(self, initial_state=None):
-        """A :class:`BoucWenStepper`: the model sample by sample."""
-        return BoucWenStepper(self, initial_state)
+    def delay_at(self, sample_period=None, *, t=None):
+        """The delay in samples at another sample period (see
+        :meth:`pihyst.model.PIModel.delay_at`)."""
+        return delay_at(self.delay, self.sample_period, sample_period, t)
+
+    def stepper(self, initial_state=None, *, pending_input=None, sample_period=None):
+        """A :class:`BoucWenStepper`: the model sample by sample (with a delay, through
+        a FIFO of d inputs)."""
+        return BoucWenStepper(self, initial_state, pending_input=pending_input,
+                              sample_period=sample_period)
 
     # ---------------------------------------------------------------- values
     def _params(self):
@@ -312,7 +350,8 @@ class BoucWenModel(Immutable):
                 "hysteretic": self.hysteretic, "linear": self.linear,
                 "quadratic": self.quadratic, "offset": self.offset,
                 "input_range": self.input_range, "initial_state": self.initial_state,
-                "units": dict(self.units), "metadata": dict(self.metadata)}
+                "units": dict(self.units), "metadata": dict(self.metadata),
+                "delay": self.delay, "sample_period": self.sample_period}
 
     def replace(self, **changes):
         """A copy with some constructor arguments changed."""
@@ -347,6 +386,10 @@ class BoucWenModel(Immutable):
                  ("beta", "gamma", "n", "hysteretic", "linear", "quadratic", "offset")]
         if self.input_range != (0.0, 150.0):
             parts.append(f"input_range={self.input_range!r}")
+        if self.delay:
+            parts.append(f"delay={self.delay}")
+        if self.sample_period is not None:
+            parts.append(f"sample_period={self.sample_period:.6g}")
         return f"BoucWenModel({', '.join(parts)})"
 
     def to_dict(self):
@@ -355,7 +398,8 @@ class BoucWenModel(Immutable):
              **{k: getattr(self, k) for k in ("beta", "gamma", "n", "hysteretic", "linear",
                                                 "quadratic", "offset")},
              "input_range": list(self.input_range),
-             "initial_state": list(self.initial_state), "units": dict(self.units)}
+             "initial_state": list(self.initial_state), "units": dict(self.units),
+             **delay_dict(self)}
         if self.metadata:
             d["metadata"] = dict(self.metadata)
         return d
@@ -375,12 +419,13 @@ class BoucWenModel(Immutable):
         for key in ("beta", "gamma", "hysteretic", "linear"):
             if key not in d:
                 raise InvalidModelError(f"{source}: missing required key {key!r}")
-        unknown = sorted(set(d) - set(cls._KEYS) - {"family", "schema_version"})
+        allowed = {*cls._KEYS, *DELAY_KEYS}
+        unknown = sorted(set(d) - allowed - {"family", "schema_version"})
         if unknown:
             raise InvalidModelError(f"{source}: unknown key {unknown[0]!r} for family "
-                                    f"{FAMILY!r} (allowed: {', '.join(sorted(cls._KEYS))})")
+                                    f"{FAMILY!r} (allowed: {', '.join(sorted(allowed))})")
         try:
-            return cls(**{k: d[k] for k in cls._KEYS if k in d})
+            return cls(**{k: d[k] for k in cls._KEYS if k in d}, **delay_from_dict(d))
         except InvalidModelError as err:
             raise InvalidModelError(f"{source}: {err}") from None
         except (TypeError, ValueError, OverflowError) as err:
@@ -405,31 +450,39 @@ class BoucWenStepper:
     True
     """
 
-    def __init__(self, model, initial_state=None):
+    def __init__(self, model, initial_state=None, *, pending_input=None, sample_period=None):
         self.model = model
         self._initial = model._state(initial_state)
         self._core = model._core(self._initial)
+        #: the input dead time in samples (a FIFO of that many inputs)
+        self.delay = model.delay_at(sample_period)
+        if self.delay and pending_input is not None:
+            pending_input = model._checked_input(pending_input)
+        self._line = DelayLine(self.delay, pending_input)
 
     @property
     def state(self):
-        """(u, z) after the last sample."""
+        """(u, z) after the last sample applied (with a delay: d samples back)."""
         return np.array(self._core.state)
 
     def reset(self, state=None):
-        """Back to ``state`` (default: the initial state)."""
+        """Back to ``state`` (default: the initial state), the delay FIFO to its start."""
         self._core.state = self._initial if state is None else self.model._state(state)
+        self._line.reset()
 
     def output_at(self, u):
-        """The output if the next sample were ``u`` (the state is not changed)."""
+        """The output if the next sample applied were ``u`` (the state is not changed;
+        with a delay, ``u`` is the input leaving the FIFO)."""
         m = self.model
         u_p, z_p = self._core.state
         z = self._core.advance(z_p, m._x(u) - m._x(u_p))
         return m.output(u, z)
 
     def step(self, u):
-        """One sample: advance the state by the input ``u``, return y."""
+        """One sample: advance the state by the input ``u`` (with a delay of d samples,
+        by the input of d steps ago), return y."""
         u = float(u)
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
-        return self._core.step(u)
+        return self._core.step(self._line.push(u))

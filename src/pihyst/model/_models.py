@@ -28,6 +28,14 @@ from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
 from pihyst.model._creep import Creep, sample_intervals
+from pihyst.model._delay import (
+    DelayLine,
+    checked_delay,
+    checked_sample_period,
+    delay_at,
+    delayed_input,
+    pending_after,
+)
 
 PAPER_SHAPE = paper.SHAPE
 DEFAULT_INPUT_RANGE = (0.0, 150.0)
@@ -37,6 +45,8 @@ _SHORT_VECTOR = 6   # repr shows at most this many values of a vector
 #: Model classes that are not PI models (family -> class with from_dict), registered by
 #: their modules; PIModel.from_dict dispatches to them
 OTHER_FAMILIES = {}
+#: the JSON keys of the delay (docs/interfaces.md), omitted at their defaults
+DELAY_KEYS = ("delay_samples", "sample_period_s")
 
 
 @dataclass(frozen=True)
@@ -48,6 +58,9 @@ class Response:
     final_state: np.ndarray
     #: with creep: the lag states z_i after the last sample (None without creep)
     final_creep_state: np.ndarray = None
+    #: with a delay of d samples: the last d inputs, not yet seen at the output (the
+    #: ``pending_input`` of a following chunk); None without a delay
+    pending_input: np.ndarray = None
 
 
 def _finite_vector(values, name, length=None):
@@ -168,7 +181,7 @@ class PIModel(Immutable, ABC):
             PIModel._registry[cls.family] = cls
 
     def __init__(self, weights, *, offset=0.0, input_range=None, initial_state=None,
-                 units=None, metadata=None, creep=None):
+                 units=None, metadata=None, creep=None, delay=0, sample_period=None):
         set_ = object.__setattr__
         set_(self, "weights", _finite_vector(weights, "weights"))
         if self.weights.size == 0:
@@ -197,6 +210,9 @@ class PIModel(Immutable, ABC):
         set_(self, "_bank", self._new_bank(self.initial_state))
         # creep lags (docs/theory/creep.md): None for a rate-independent model
         set_(self, "creep", None if creep is None else Creep.from_dict(creep))
+        # input dead time in samples, at the sample period (s) it was identified at
+        set_(self, "delay", checked_delay(delay))
+        set_(self, "sample_period", checked_sample_period(sample_period))
         self._check_output_bound()
 
     def _check_output_bound(self):
@@ -238,7 +254,8 @@ class PIModel(Immutable, ABC):
             return self.initial_state
         return _finite_vector(initial_state, "initial_state", self.n_operators)
 
-    def simulate(self, u, *, initial_state=None, t=None, creep_state=None):
+    def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
+                 pending_input=None):
         """Run the model over the input ``u`` from ``initial_state`` (default: the
         model's own). Returns a :class:`Response` with the final operator state,
         from which a following chunk continues exactly.
@@ -246,24 +263,44 @@ class PIModel(Immutable, ABC):
         A model with :attr:`creep` also uses the sample times ``t`` (s; default: every
         ``creep.dt``; the first sample comes ``creep.dt`` after the initial state) and
         the lag state ``creep_state`` (default: settled at the initial output); the
-        response then carries ``final_creep_state``. Without creep ``t`` is ignored.
+        response then carries ``final_creep_state``. Without creep ``t`` is ignored,
+        except to check the sample period of a delayed model.
+
+        A model with a :attr:`delay` of d samples runs on the input delayed by d:
+        y[k] = P[u](k - d), the first d outputs those of the initial state at
+        ``pending_input`` (the d inputs before ``u``; default u[0] held). The response's
+        ``pending_input`` continues a following chunk. Sample times ``t`` at another
+        period than the model's ``sample_period`` convert the delay when exact, else
+        InvalidArgumentError (:meth:`delay_at`).
         """
         u = self._checked_input(u)
+        d = self.delay_at(t=t)
+        if d and pending_input is not None:
+            pending_input = self._checked_input(pending_input)
+        run = delayed_input(u, d, pending_input)
         state = self._state_or_initial(initial_state)
         bank = self._new_bank(state)
-        h = bank.run(u)
+        h = bank.run(run)
+        pending = pending_after(u, d, pending_input) if d else None
         if self.creep is None:
-            return Response(input=u, output=h, final_state=bank.state)
+            return Response(input=u, output=h, final_state=bank.state, pending_input=pending)
         lags = self._lags(state, creep_state)
         dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
         return Response(input=u, output=lags.run(h, dt), final_state=bank.state,
-                        final_creep_state=lags.state)
+                        final_creep_state=lags.state, pending_input=pending)
 
-    def predict(self, u, *, initial_state=None, t=None, creep_state=None):
+    def predict(self, u, *, initial_state=None, t=None, creep_state=None,
+                pending_input=None):
         """Displacements for the voltages ``u`` (a NumPy array of the same length);
-        ``t``, ``creep_state``: see :meth:`simulate`."""
-        return self.simulate(u, initial_state=initial_state, t=t,
-                             creep_state=creep_state).output
+        ``t``, ``creep_state``, ``pending_input``: see :meth:`simulate`."""
+        return self.simulate(u, initial_state=initial_state, t=t, creep_state=creep_state,
+                             pending_input=pending_input).output
+
+    def delay_at(self, sample_period=None, *, t=None):
+        """The delay in samples at ``sample_period`` (s) or at the uniform sample times
+        ``t``: :attr:`delay` when either period is unknown, d T / period when that is a
+        whole number; InvalidArgumentError otherwise (docs/theory/identification.md)."""
+        return delay_at(self.delay, self.sample_period, sample_period, t)
 
     def hysteresis_output(self, state):
         """offset + sum_k w_k f_k for an operator state: the settled displacement."""
@@ -279,7 +316,8 @@ class PIModel(Immutable, ABC):
         return self.creep.lags(creep_state)
 
     def operators(self, u, *, initial_state=None):
-        """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8)."""
+        """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8), of the input as
+        given (a delay is not applied: Phi pairs with the output d samples later)."""
         u = self._checked_input(u)
         return self._new_bank(self._state_or_initial(initial_state)).operators(u)
 
@@ -287,10 +325,14 @@ class PIModel(Immutable, ABC):
         """(R_k(u), F_k(u)) of every operator at one input value."""
         return self._bank.envelopes(float(u))
 
-    def stepper(self, initial_state=None):
+    def stepper(self, initial_state=None, *, creep_state=None, pending_input=None,
+                sample_period=None):
         """A :class:`Stepper`: this model run sample by sample from ``initial_state``
-        (default: the model's own)."""
-        return Stepper(self, initial_state)
+        (default: the model's own); a delayed model's stepper holds a FIFO of its d
+        ``pending_input`` (default: the first input, d times), d converted to
+        ``sample_period`` (s) if given."""
+        return Stepper(self, initial_state, creep_state, pending_input=pending_input,
+                       sample_period=sample_period)
 
     # ---------------------------------------------------------------- values
     def _params(self):
@@ -298,7 +340,8 @@ class PIModel(Immutable, ABC):
         return {**self._own_params(), "weights": self.weights, "offset": self.offset,
                 "input_range": self.input_range, "initial_state": self.initial_state,
                 "units": dict(self.units), "metadata": dict(self.metadata),
-                "creep": self.creep}
+                "creep": self.creep, "delay": self.delay,
+                "sample_period": self.sample_period}
 
     def _own_params(self):
         return {}
@@ -367,7 +410,7 @@ class PIModel(Immutable, ABC):
     def _defaults(model):
         return {"offset": 0.0, "input_range": DEFAULT_INPUT_RANGE,
                 "initial_state": np.zeros(model.n_operators), "units": dict(DEFAULT_UNITS),
-                "creep": None}
+                "creep": None, "delay": 0, "sample_period": None}
 
     # ---------------------------------------------------------------- persistence
     def to_dict(self):
@@ -378,6 +421,7 @@ class PIModel(Immutable, ABC):
              "initial_state": self.initial_state.tolist(), "units": dict(self.units)}
         if self.creep is not None:
             d["creep"] = self.creep.to_dict()
+        d.update(delay_dict(self))
         if self.metadata:
             d["metadata"] = dict(self.metadata)
         return d
@@ -386,7 +430,8 @@ class PIModel(Immutable, ABC):
         return {}
 
     _COMMON_KEYS = frozenset({"family", "weights", "offset", "input_range", "initial_state",
-                              "units", "metadata", "schema_version", "creep"})
+                              "units", "metadata", "schema_version", "creep",
+                              *DELAY_KEYS})
     _OWN_KEYS = frozenset()
     _REQUIRED_KEYS = ("weights",)
 
@@ -425,6 +470,7 @@ class PIModel(Immutable, ABC):
                                     f"{SCHEMA_VERSION} (written by another pihyst version)")
         common = {k: d[k] for k in ("weights", "offset", "input_range", "initial_state",
                                     "units", "metadata", "creep") if k in d}
+        common.update(delay_from_dict(d))
         try:
             return target(**target._own_from_dict(d), **common)
         except InvalidModelError as err:
@@ -439,6 +485,26 @@ class PIModel(Immutable, ABC):
     def save(self, path):
         """Write the model as JSON to ``path`` (the file appears only once complete)."""
         write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
+
+
+def delay_dict(model):
+    """The delay's JSON keys of ``model``: none for no delay and no known period."""
+    d = {}
+    if model.delay:
+        d["delay_samples"] = model.delay
+    if model.sample_period is not None:
+        d["sample_period_s"] = model.sample_period
+    return d
+
+
+def delay_from_dict(d):
+    """Constructor arguments from the delay's JSON keys."""
+    out = {}
+    if "delay_samples" in d:
+        out["delay"] = d["delay_samples"]
+    if "sample_period_s" in d:
+        out["sample_period"] = d["sample_period_s"]
+    return out
 
 
 def _same(a, b):
@@ -461,12 +527,18 @@ class Stepper:
     [0.0, 25.0, 20.0]
     """
 
-    def __init__(self, model, initial_state=None, creep_state=None):
+    def __init__(self, model, initial_state=None, creep_state=None, *, pending_input=None,
+                 sample_period=None):
         self.model = model
         self._initial = model._state_or_initial(initial_state)
         self._bank = model._new_bank(self._initial)
         # with creep: the lags, settled at the initial output unless given
         self._lags = None if model.creep is None else model._lags(self._initial, creep_state)
+        #: the input dead time in samples (a FIFO of that many inputs)
+        self.delay = model.delay_at(sample_period)
+        if self.delay and pending_input is not None:
+            pending_input = model._checked_input(pending_input)
+        self._line = DelayLine(self.delay, pending_input)
 
     @property
     def state(self):
@@ -478,17 +550,26 @@ class Stepper:
         """The creep lag states z_i (a copy; None for a model without creep)."""
         return None if self._lags is None else self._lags.state
 
+    @property
+    def pending_input(self):
+        """The inputs in the delay FIFO, oldest first (None before the first step of a
+        delayed model without given ``pending_input``; empty without a delay)."""
+        return self._line.contents if self.delay else np.empty(0)
+
     def reset(self, state=None, creep_state=None):
         """Set the running state to ``state`` (default: the initial state); with
-        creep, the lags to ``creep_state`` (default: settled at that state's output)."""
+        creep, the lags to ``creep_state`` (default: settled at that state's output);
+        the delay FIFO back to its start."""
         self._bank.state = self._initial if state is None else \
             self.model._state_or_initial(state)
         if self._lags is not None:
             self._lags = self.model._lags(self._bank.state, creep_state)
+        self._line.reset()
 
     def step(self, u, dt=None):
-        """One sample: advance the running state by the input ``u``, return y. With
-        creep, ``dt`` is the time since the previous sample (default ``creep.dt``)."""
+        """One sample: advance the running state by the input ``u`` (with a delay of d
+        samples, by the input of d steps ago), return y. With creep, ``dt`` is the time
+        since the previous sample (default ``creep.dt``)."""
         try:
             u = float(u)
         except (TypeError, ValueError, OverflowError):
@@ -496,7 +577,7 @@ class Stepper:
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
-        h = self._bank.step(u)
+        h = self._bank.step(self._line.push(u))
         if self._lags is None:
             return h
         if dt is not None:

@@ -43,8 +43,12 @@ class VoltageProgram:
 
 class FeedforwardProgram:
     """Track ``desired`` (um, one per tick) open loop: u = H^-1(y_desired), the exact
-    inverse of ``model`` (:func:`pihyst.inverse.compensator_for`) within the voltage limits and the
-    slew limit per tick."""
+    inverse of ``model`` (:func:`pihyst.inverse.compensator_for`: the family's compensator)
+    within the voltage limits and the slew limit per tick.
+
+    A model with an input delay of d ticks is driven with preview: the voltage of tick k
+    aims at ``desired[k + d]`` (the trajectory is known in advance), and the last d
+    ticks hold the last voltage; the reference logged at tick k stays ``desired[k]``."""
 
     reference_unit = "um"
 
@@ -76,12 +80,15 @@ class FeedforwardProgram:
         if self._start is not None:
             self.compensator.reset(*self._start)
 
-    def _feedforward(self, target):
-        return self.compensator.step(target)
+    def _feedforward(self, k):
+        """The compensator's voltage for tick k: for desired[k + d], held past the end."""
+        ahead = k + self.compensator.delay
+        if ahead >= self.n_ticks:
+            return self.compensator.voltage
+        return self.compensator.step(float(self.desired[ahead]))
 
     def command(self, k, measured_um):
-        y_d = float(self.desired[k])
-        return y_d, self._feedforward(y_d)
+        return float(self.desired[k]), self._feedforward(k)
 
     def describe(self):
         return (f"track open loop: {self.description} ({self.n_ticks} ticks) through the "
@@ -94,11 +101,14 @@ class FeedbackProgram(FeedforwardProgram):
     small voltage on top:
 
         e_k = y_d[k] - y_k,
-        u_k = H^-1(y_d[k]) + Kp e_k + Ki sum_j e_j dt + Kd (e_k - e_{k-1}) / dt
+        u_k = H^-1(y_d[k + d]) + Kp e_k + Ki sum_j e_j dt + Kd (e_k - e_{k-1}) / dt
 
     (gains in V/um, V/(um s) and V s/um), then clipped to the limits and the slew limit.
-    The feedforward path runs on its own (the compensator's state follows H^-1(y_d), not
-    the corrected voltage): the correction is a small voltage added in parallel. Feeding
+    With a model delay of d ticks the feedforward takes the target d ticks ahead (as
+    :class:`FeedforwardProgram`) while the PID compares the measurement with the target
+    of its own tick. The feedforward path runs on its own (the compensator's state
+    follows H^-1(y_d), not the corrected voltage): the correction is a small voltage
+    added in parallel. Feeding
     the correction through the inverse instead (a corrected desired value, or an
     operator state that follows every correction) makes small reversals at which the
     model is flat, and the voltage jumps across them.
@@ -124,7 +134,7 @@ class FeedbackProgram(FeedforwardProgram):
 
     def command(self, k, measured_um):
         y_d = float(self.desired[k])
-        u_ff = self.compensator.step(y_d)
+        u_ff = self._feedforward(k)
         integral = self.integral
         correction = integral
         e = None

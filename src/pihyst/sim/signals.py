@@ -158,7 +158,8 @@ def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_
     _check_samples(2.0 * n_triangles + 1, f"{n_triangles} triangles")
     span = u_max - u_min
     peaks = span * ratio ** np.arange(n_triangles)
-    halves = np.maximum(dt, dt * np.round(peaks / span * period_s / 2 / dt))
+    with np.errstate(over="ignore"):     # a huge count is refused just below
+        halves = np.maximum(dt, dt * np.round(peaks / span * period_s / 2 / dt))
     _check_samples(2 * halves.sum() / dt + 1, f"{n_triangles} triangles of period "
                    f"{period_s:g} s at dt = {dt:g} s")
     ends = np.cumsum(np.repeat(halves, 2))

@@ -1,0 +1,102 @@
+"""The input delay on the command line: fit adopts it by default (--delay auto) and the
+model file carries it; predict and compensate honour it block by block (the pending
+inputs and the preview cross block boundaries); another sample period is a one-line
+error with exit status 2."""
+
+import numpy as np
+import pytest
+
+import pihyst
+from pihyst.cli import main
+from pihyst.io import _records, read_columns, write_columns
+
+TRUE = pihyst.ClassicalPI([0, 20, 45], [0.3, 0.2, 0.1])
+D = 3
+
+
+def ramps(levels, n=40):
+    levels = np.asarray(levels, dtype=float)
+    return np.concatenate([np.linspace(a, b, n, endpoint=False) for a, b in
+                           zip(levels[:-1], levels[1:])] + [levels[-1:]])
+
+
+def lagged_record(tmp_path, period=1e-3):
+    u = ramps([0, 150, 0, 110, 40, 150, 0, 90, 20, 150, 0, 130, 60, 150, 0])
+    y = TRUE.replace(delay=D).predict(u)                 # y[k + D] = H[u](k)
+    path = tmp_path / "lagged.csv"
+    write_columns(path, {"time_s": period * np.arange(u.size), "voltage_V": u,
+                         "displacement_um": y})
+    return path, u, y
+
+
+def test_fit_adopts_the_lag_by_default_and_the_file_carries_it(tmp_path, capsys):
+    data, u, y = lagged_record(tmp_path)
+    out = tmp_path / "m.json"
+    assert main(["fit", str(data), "-o", str(out), "--model", "classical"]) == 0
+    text = capsys.readouterr().out
+    assert f"input delay {D} samples" in text and f"y[k + {D}]" in text
+    model = pihyst.load_model(out)
+    assert model.delay == D and model.sample_period == pytest.approx(1e-3)
+    half = u.size // 2                   # after the first cycles (the state is cycled)
+    e = model.predict(u)[half:] - y[half:]
+    assert np.sqrt(np.mean(e ** 2)) < 0.01 * np.ptp(y)
+    assert main(["fit", str(data), "-o", str(out), "--model", "classical", "--delay",
+                 "0"]) == 0
+    assert pihyst.load_model(out).delay == 0
+    assert "delay='auto'" in capsys.readouterr().out     # the note on the lag it ignored
+
+
+def test_predict_carries_the_pending_inputs_across_blocks(tmp_path, monkeypatch):
+    data, u, y = lagged_record(tmp_path)
+    model_path = tmp_path / "m.json"
+    TRUE.replace(delay=D, sample_period=1e-3).save(model_path)
+    monkeypatch.setattr(_records, "BLOCK_ROWS", 7)
+    out = tmp_path / "p.csv"
+    assert main(["predict", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["displacement_um"])
+    np.testing.assert_allclose(cols["displacement_um"], y, rtol=0, atol=1e-12)
+
+
+def test_predict_at_another_sample_period(tmp_path, capsys):
+    model_path = tmp_path / "m.json"
+    TRUE.replace(delay=D, sample_period=1e-3).save(model_path)
+    data, u, _ = lagged_record(tmp_path, period=5e-4)       # twice the rate: 2 D samples
+    out = tmp_path / "p.csv"
+    assert main(["predict", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["displacement_um"])
+    np.testing.assert_allclose(cols["displacement_um"], TRUE.replace(delay=2 * D).predict(u),
+                               rtol=0, atol=1e-12)
+    data, _, _ = lagged_record(tmp_path, period=7e-4)
+    assert main(["predict", str(model_path), str(data), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "not a whole number of samples at 0.0007 s" in err and len(err.splitlines()) == 1
+
+
+def test_compensate_previews_across_blocks(tmp_path, monkeypatch, capsys):
+    data, u, y = lagged_record(tmp_path)
+    model = TRUE.replace(delay=D)
+    model_path = tmp_path / "m.json"
+    model.save(model_path)
+    monkeypatch.setattr(_records, "BLOCK_ROWS", 5)
+    out = tmp_path / "c.csv"
+    assert main(["compensate", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["time_s", "voltage_V", "displacement_um", "saturated"])
+    ref = pihyst.compensate(model, y)
+    np.testing.assert_array_equal(cols["time_s"], 1e-3 * np.arange(u.size))
+    np.testing.assert_allclose(cols["voltage_V"], ref.voltage, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(cols["displacement_um"], ref.displacement, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(model.predict(cols["voltage_V"])[D:], y[D:], atol=1e-9)
+    assert f"wrote {u.size} samples" in capsys.readouterr().out
+
+
+def test_fit_many_takes_the_delay_option(tmp_path, capsys):
+    folder = tmp_path / "records"
+    folder.mkdir()
+    data, _, _ = lagged_record(folder)
+    models = tmp_path / "models"
+    assert main(["fit-many", str(folder), "-o", str(models), "--model", "classical"]) == 0
+    assert pihyst.load_model(models / "lagged.json").delay == D
+    assert main(["fit-many", str(folder), "-o", str(models), "--model", "classical",
+                 "--delay", "0"]) == 0
+    assert pihyst.load_model(models / "lagged.json").delay == 0
+    assert main(["fit-many", str(folder), "-o", str(models), "--delay", "-1"]) == 2
