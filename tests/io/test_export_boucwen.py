@@ -242,3 +242,11 @@ def test_export_command_writes_bouc_wen_header_and_flat_file(tmp_path, capsys):
     assert main(["export", str(model_path), "--flat", "-o", str(tmp_path / "m.pihyst")]) == 0
     assert (tmp_path / "m.pihyst").read_text() == flat_text(model)
     assert "bouc-wen model, state (u, z)" in capsys.readouterr().out
+
+
+def test_a_delayed_bouc_wen_model_exports_its_delay():
+    model = MODELS["remanent"].replace(delay=4)
+    text = c_header(model, "ax")
+    assert "#define AX_DELAY_SAMPLES 4" in text and "tick k + 4" in text
+    assert flat_text(model).endswith("delay 4\n")
+    assert "#define AX_DELAY_SAMPLES 0" in c_header(MODELS["remanent"], "ax")

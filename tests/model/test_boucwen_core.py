@@ -117,3 +117,14 @@ def test_the_core_refuses_what_the_model_refuses():
         _boucwen_core.BoucWen(5e-324, 0.0, 4.8, 1.0, 1.0, 0.0, 0.0, (0.0, 1.0), (0.0, 0.0))
     with pytest.raises(InvalidModelError, match="beta \\+ gamma >= 1e-09"):
         BoucWenModel(beta=5e-324, gamma=0.0, n=4.8, hysteretic=1.0, linear=1.0)
+
+
+def test_a_delayed_model_runs_the_delayed_input_in_c():
+    m = BoucWenModel(beta=5.0, gamma=1.0, n=1.5, hysteretic=-8.0, linear=40.0).replace(delay=3)
+    u = signals(m, "walk", 5)
+    c, twin = m.simulate(u), m.twin_simulation(u)
+    assert np.array_equal(c.output, twin.output)
+    assert np.array_equal(c.final_state, twin.final_state)
+    assert np.array_equal(c.pending_input, twin.pending_input)
+    stepper = m.stepper()
+    assert np.array_equal([stepper.step(v) for v in u], c.output)
