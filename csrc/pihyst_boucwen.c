@@ -367,6 +367,24 @@ real pihyst_bw_compensator_step(pihyst_bw_compensator *c, real yd, pihyst_flags 
     return u;
 }
 
+#ifndef PIHYST_BUILD_F32 /* one copy, shared by both precisions */
+const char *pihyst_bw_status_text(pihyst_status status)
+{
+    switch (status) {
+    case PIHYST_ESHAPE:
+        return "Bouc-Wen shape must have beta > |gamma|, beta + |gamma| <= 1000, "
+               "beta + gamma >= 1e-9 and 1 <= n <= 10";
+    case PIHYST_ERANGE:
+        return "Bouc-Wen input range must have u_min < u_max, and the state u inside it with "
+               "|z| <= z_max";
+    case PIHYST_ENEGATIVE_WEIGHT:
+        return "compensation needs a monotone Bouc-Wen model: min(c_1, c_1 + 2 c_2) + "
+               "min(a, 0) 2 beta / (beta + gamma) >= 0";
+    default: return pihyst_status_text(status);
+    }
+}
+#endif
+
 size_t pihyst_bw_compensator_run(pihyst_bw_compensator *c, const real *y_desired, real *u,
                                  real *y, pihyst_flags *flags, size_t n)
 {

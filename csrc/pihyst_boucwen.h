@@ -45,6 +45,10 @@ extern "C" {
 #define PIHYST_BW_MAX_EXPONENT 10.0
 #define PIHYST_BW_MIN_SPREAD 1e-9    /* beta + gamma below this: z_max beyond use, |z|^n overflows */
 
+/** Text of a status code as the pihyst_bw_* functions mean it (static storage): the shape,
+ *  range and monotonicity codes in Bouc-Wen terms, the others as pihyst_status_text. */
+const char *pihyst_bw_status_text(pihyst_status status);
+
 #define PIHYST_REAL double
 #define PIHYST_NAME(name) name
 #include "pihyst_boucwen_api.h"

@@ -8,6 +8,8 @@
 
 #include "pihyst_boucwen.h"
 
+#include <string.h>
+
 #ifdef PIHYST_TEST_F32
 #define BW(name) name##_f32
 #else
@@ -111,6 +113,10 @@ static void test_validation(void)
     CHECK(BW(pihyst_bw_reset)(&m, (real)200.0, (real)0.0) == PIHYST_ERANGE);
     CHECK(BW(pihyst_bw_reset)(&m, (real)20.0, (real)INFINITY) == PIHYST_ENONFINITE);
     CHECK(m.u == (real)10.0);
+    /* the texts in Bouc-Wen terms */
+    CHECK(strstr(pihyst_bw_status_text(PIHYST_ESHAPE), "beta > |gamma|") != NULL);
+    CHECK(strstr(pihyst_bw_status_text(PIHYST_ENEGATIVE_WEIGHT), "monotone") != NULL);
+    CHECK(pihyst_bw_status_text(PIHYST_ENULL) == pihyst_status_text(PIHYST_ENULL));
 }
 
 /* the compensator of one model on a random walk of desired outputs inside the model's

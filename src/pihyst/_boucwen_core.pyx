@@ -10,9 +10,9 @@ cdef extern from "pihyst.h" nogil:
     ctypedef enum pihyst_status:
         PIHYST_OK
     ctypedef unsigned char pihyst_flags
-    const char *pihyst_status_text(pihyst_status status)
 
 cdef extern from "pihyst_boucwen.h" nogil:
+    const char *pihyst_bw_status_text(pihyst_status status)
     ctypedef struct pihyst_bw_params:
         double beta, gamma, n, hysteretic, linear, quadratic, offset
         double u_min, u_max, initial_u, initial_z
@@ -45,7 +45,7 @@ class CoreError(ValueError):
 
 cdef _check(pihyst_status status):
     if status != PIHYST_OK:
-        raise CoreError(pihyst_status_text(status).decode())
+        raise CoreError(pihyst_bw_status_text(status).decode())
 
 
 def _vector(x, name):

@@ -103,7 +103,7 @@ def test_initial_rest_state_equals_the_c_rest_state():
 
 def test_the_core_refuses_what_the_model_refuses():
     core = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)._core((0.0, 0.0))
-    with pytest.raises(_boucwen_core.CoreError):
+    with pytest.raises(_boucwen_core.CoreError, match="z_max"):
         core.state = (0.0, 1.0)          # beyond z_max = 1/6
     with pytest.raises(_boucwen_core.CoreError):
         _boucwen_core.BoucWen(1.0, 2.0, 1.0, 1.0, 1.0, 0.0, 0.0, (0.0, 1.0), (0.0, 0.0))
