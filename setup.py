@@ -12,4 +12,13 @@ core = Extension(
     # -std=c99 turns off FMA contraction (ISO mode); -ffp-contract=fast turns it back on.
     extra_compile_args=["-std=c99", "-O3", "-ffp-contract=fast"],
 )
-setup(ext_modules=cythonize([core], language_level=3))
+# the Bouc-Wen model and compensator (csrc/pihyst_boucwen.h), bound on their own
+boucwen = Extension(
+    "pihyst._boucwen_core",
+    sources=["src/pihyst/_boucwen_core.pyx", "csrc/pihyst_boucwen.c",
+             "csrc/pihyst_boucwen_f32.c", "csrc/pihyst_model.c"],
+    include_dirs=["csrc"],
+    depends=sorted(glob.glob("csrc/pihyst*.h")),
+    extra_compile_args=["-std=c99", "-O3", "-ffp-contract=fast"],
+)
+setup(ext_modules=cythonize([core, boucwen], language_level=3))

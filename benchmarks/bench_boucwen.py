@@ -16,22 +16,34 @@ Bouc-Wen is not expected to win. Reference (accuracy issue, item 3): the default
 "remanent" measured 1.6 % validation, 0.9 % tracking with minor loops, by its own protocol;
 the project reaches <= 0.3 % on its Preisach beams.
 
-Run: python benchmarks/bench_boucwen.py
+Speed (``speed``): the C core's Bouc-Wen predict and compensate (csrc/pihyst_boucwen.c) in
+ns per sample against their Python twins measured in the same run (ratio twin / C), on a
+tracking trajectory (a sine, 400 samples per cycle: one Runge-Kutta substep per sample)
+and on random jumps (up to 256 substeps per sample for beta + |gamma| <= 8, more for
+stiffer shapes), with the multislope PI compensator (4 operators) as a yardstick.
+
+Run: python benchmarks/bench_boucwen.py [accuracy | speed]   (default: both)
 """
 
+import sys
 import time
 import warnings
 
 import numpy as np
 
-from pihyst import compensate, fit
+from pihyst import Compensator, MultislopePI, compensate, fit
 from pihyst.exceptions import PihystWarning
+from pihyst.inverse import BoucWenCompensator
+from pihyst.inverse._boucwen import BoucWenCompensatorTwin
 from pihyst.metrics import mean_abs_error
 from pihyst.model import BoucWenModel
 from pihyst.sim import make_plant
 from pihyst.sim._boucwen import BoucWen
 from pihyst.sim._plant import NOISE_UM, SUPPLY_STEP_V, Plant
 from pihyst.sim.signals import decaying_triangles, random_ramps
+
+sys.path.insert(0, __file__.rsplit("/", 1)[0])
+from timing import best_time  # noqa: E402
 
 U_MAX = 150.0
 
@@ -100,5 +112,45 @@ def main(n_valid=5):
               f"n {m.n:.3g}; held-back RMS {held:.4f} um")
 
 
+def _ns(fn, n, repeats):
+    return 1e9 * best_time(fn, repeats) / n
+
+
+def speed(repeats=5):
+    """ns per sample of the C core against the Python twin, same signals, same run."""
+    print("\nspeed: ns per sample, best of several runs (C core vs Python twin, same run)")
+    print(f"{'model':<30} {'signal':<9} {'op':<11} {'C':>9} {'twin':>11} {'twin/C':>7}")
+    models = (("n=1 (b=5, g=1)", BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0,
+                                              linear=40.0)),
+              ("n=2.5 (b=30, g=-10)", BoucWenModel(beta=30.0, gamma=-10.0, n=2.5,
+                                                   hysteretic=6.0, linear=30.0,
+                                                   quadratic=4.0)))
+    rng = np.random.default_rng(0)
+    for label, m in models:
+        lo, hi = m.input_range
+        n_c, n_py = 20000, 400
+        k = np.arange(n_c)
+        signals = {"tracking": lo + (hi - lo) * (0.5 - 0.45 * np.cos(2 * np.pi * k / 400)),
+                   "jumps": rng.uniform(lo, hi, n_c)}
+        for sig, u in signals.items():
+            y = m.predict(u)
+            yd = np.clip(y, *np.percentile(y, [5, 95]))
+            c = _ns(lambda u=u: m.predict(u), n_c, repeats)
+            py = _ns(lambda u=u: m.twin_simulation(u[:n_py]), n_py, 2)
+            print(f"{label:<30} {sig:<9} {'predict':<11} {c:9.0f} {py:11.0f} {py / c:7.0f}")
+            c = _ns(lambda yd=yd: BoucWenCompensator(m).run(yd), n_c, repeats)
+            py = _ns(lambda yd=yd: BoucWenCompensatorTwin(m).run(yd[:n_py]), n_py, 2)
+            print(f"{'':<30} {sig:<9} {'compensate':<11} {c:9.0f} {py:11.0f} {py / c:7.0f}")
+    pi = MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+    k = np.arange(20000)
+    yd = 20 - 15 * np.cos(2 * np.pi * k / 400)
+    c = _ns(lambda: Compensator(pi).run(yd), k.size, repeats)
+    print(f"{'yardstick: multislope PI, K=4':<30} {'tracking':<9} {'compensate':<11} {c:9.0f}")
+
+
 if __name__ == "__main__":
-    main()
+    what = sys.argv[1] if len(sys.argv) > 1 else "both"
+    if what in ("accuracy", "both"):
+        main()
+    if what in ("speed", "both"):
+        speed()

@@ -8,6 +8,7 @@ the fuzzer starts from inputs that reach the model loops and the compensator's w
 Run from csrc/: python3 fuzz/make_corpus.py
 """
 
+import math
 import pathlib
 import random
 import struct
@@ -162,9 +163,45 @@ def compensator_seeds(rng):
     return seeds
 
 
+def boucwen_seeds(rng):
+    """Programs of fuzz_boucwen.c: monotone Bouc-Wen models (n from 1 to 4, gamma of
+    either sign), a valid initial state, limits, a slew limit now and then, and desired
+    outputs (fractions of the harness's +-1.2 output scale) as triangles, walks and
+    special values."""
+    seeds = []
+    for i in range(16):
+        beta = rng.uniform(0.5, 50)
+        frac = rng.uniform(-0.9, 0.9)
+        d = 2 / (1 + frac)
+        a = rng.uniform(-10, 10)
+        c2 = rng.uniform(-5, 5)
+        c1 = min(59.0, max(0.0, -2 * c2) - min(a, 0.0) * d + rng.uniform(0.5, 20))
+        out = num(beta, 0, 60) + num(frac, -1.2, 1.2) + num(rng.choice([1, 1, 2, 3.5]), 0.5, 11)
+        out += num(a, -20, 20) + num(c1, -10, 60) + num(c2, -10, 10) + num(0.0, -10, 10)
+        out += num(rng.uniform(-50, 50), -200, 100) + num(rng.uniform(20, 200), 0, 300)
+        out += num(rng.uniform(0, 1), -0.1, 1.1) + num(rng.uniform(-0.9, 0.9), -1.1, 1.1)
+        out += num(rng.uniform(0, 0.2), -0.1, 0.6) + num(rng.uniform(0, 0.2), -0.1, 0.6)
+        if i % 3 == 0:
+            out += bytes([0]) + num(rng.uniform(1, 20), 0, 300)
+        else:
+            out += bytes([200])
+        out += num(rng.uniform(0, 1), -0.1, 1.1)
+        n = rng.randint(8, 63)
+        out += bytes([n - 1])
+        for t in range(n):
+            if rng.random() < 0.06:
+                out += special(rng.choice(["nan", "inf", "-inf", "big"]))
+            else:
+                q = 0.5 + 0.4 * math.sin(t / 5.0) if i % 2 else rng.uniform(0, 1)
+                out += num(q, 0, 1)
+        seeds.append(out)
+    return seeds
+
+
 def main():
     rng = random.Random(20261130)
-    for target, seeds in (("model", model_seeds(rng)), ("compensator", compensator_seeds(rng))):
+    for target, seeds in (("model", model_seeds(rng)), ("compensator", compensator_seeds(rng)),
+                          ("boucwen", boucwen_seeds(rng))):
         folder = HERE / "corpus" / target
         folder.mkdir(parents=True, exist_ok=True)
         for old in folder.glob("seed-*"):

@@ -4,6 +4,7 @@
 #include "pihyst_lib.h"
 
 #include "pihyst.h"
+#include "pihyst_boucwen.h"
 
 #include <locale.h>
 #include <math.h>
@@ -23,7 +24,14 @@ struct pihyst_lib_model {
     double *scratch;
     pihyst_compensator comp;
     int comp_started;
+    int boucwen;                /* a Bouc-Wen model: the members below, not those above */
+    pihyst_bw_model bw;
+    pihyst_bw_compensator bw_comp;
+    double bw_initial[2];       /* (u, z) */
 };
+
+#define BOUCWEN_FAMILY 3 /* the flat file's family code */
+#define BOUCWEN_STATE_LEN 2
 
 int32_t pihyst_lib_abi_version(void) { return PIHYST_LIB_ABI_VERSION; }
 
@@ -168,6 +176,45 @@ pihyst_lib_model *pihyst_lib_create(int32_t family, int32_t n_ops, const double 
     return h;
 }
 
+pihyst_lib_model *pihyst_lib_create_boucwen(const double *params, int32_t *status)
+{
+    pihyst_lib_model *h;
+    pihyst_bw_params p;
+    pihyst_status s;
+    if (!params) {
+        set_status(status, PIHYST_ENULL);
+        return NULL;
+    }
+    p.beta = params[0];
+    p.gamma = params[1];
+    p.n = params[2];
+    p.hysteretic = params[3];
+    p.linear = params[4];
+    p.quadratic = params[5];
+    p.offset = params[6];
+    p.u_min = params[7];
+    p.u_max = params[8];
+    p.initial_u = params[9];
+    p.initial_z = params[10];
+    h = calloc(1, sizeof *h);
+    if (!h) {
+        set_status(status, PIHYST_LIB_ENOMEM);
+        return NULL;
+    }
+    s = pihyst_bw_init(&h->bw, &p);
+    if (s != PIHYST_OK) {
+        pihyst_lib_free(h);
+        set_status(status, s);
+        return NULL;
+    }
+    h->boucwen = 1;
+    h->n_ops = 1;
+    h->bw_initial[0] = p.initial_u;
+    h->bw_initial[1] = p.initial_z;
+    set_status(status, PIHYST_OK);
+    return h;
+}
+
 /* ---------------------------------------------------------------- flat model files */
 
 /* One number of the file, read whatever the process's LC_NUMERIC: the file always has
@@ -223,7 +270,23 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
     }
     ok = fscanf(f, "%15s %d", magic, &version) == 2 && strcmp(magic, "pihyst-flat") == 0 &&
          version == 1 && fscanf(f, "%d", &family) == 1 && read_count(f, &k) &&
-         read_numbers(f, head, 3) && read_numbers(f, shape, 4);
+         read_numbers(f, head, 3);
+    if (ok && family == BOUCWEN_FAMILY) {
+        /* "offset u_min u_max", "beta gamma n", "hysteretic linear quadratic", "u z" */
+        double bw[11];
+        ok = k == 1 && read_numbers(f, bw, 3) && read_numbers(f, bw + 3, 3) &&
+             read_numbers(f, bw + 9, 2);
+        fclose(f);
+        if (!ok) {
+            set_status(status, PIHYST_LIB_EFORMAT);
+            return NULL;
+        }
+        bw[6] = head[0];
+        bw[7] = head[1];
+        bw[8] = head[2];
+        return pihyst_lib_create_boucwen(bw, status);
+    }
+    ok = ok && read_numbers(f, shape, 4);
     if (ok) {
         thr = malloc((size_t)k * sizeof *thr);
         w = malloc((size_t)k * sizeof *w);
@@ -308,6 +371,13 @@ int32_t pihyst_lib_predict(pihyst_lib_model *h, const double *u, double *y, int3
     int32_t t;
     if (!h || (n > 0 && (!u || !y))) return PIHYST_ENULL;
     if (n < 0) return PIHYST_LIB_ELENGTH;
+    if (h->boucwen) {
+        for (t = 0; t < n; ++t)
+            if (!(u[t] >= h->bw.u_min && u[t] <= h->bw.u_max)) return PIHYST_LIB_EINPUT;
+        h->comp_started = 0;
+        pihyst_bw_run(&h->bw, u, y, (size_t)n);
+        return PIHYST_OK;
+    }
     for (t = 0; t < n; ++t)
         if (!(u[t] >= h->model.u_min && u[t] <= h->model.u_max)) return PIHYST_LIB_EINPUT;
     h->comp_started = 0;
@@ -318,6 +388,12 @@ int32_t pihyst_lib_predict(pihyst_lib_model *h, const double *u, double *y, int3
 int32_t pihyst_lib_get_state(const pihyst_lib_model *h, double *state, int32_t n)
 {
     if (!h || !state) return PIHYST_ENULL;
+    if (h->boucwen) {
+        if (n != BOUCWEN_STATE_LEN) return PIHYST_LIB_ELENGTH;
+        state[0] = h->bw.u;
+        state[1] = h->bw.z;
+        return PIHYST_OK;
+    }
     if (n != (int32_t)h->n_ops) return PIHYST_LIB_ELENGTH;
     memcpy(state, h->state, h->n_ops * sizeof *state);
     return PIHYST_OK;
@@ -326,6 +402,14 @@ int32_t pihyst_lib_get_state(const pihyst_lib_model *h, double *state, int32_t n
 int32_t pihyst_lib_reset(pihyst_lib_model *h, const double *state, int32_t n)
 {
     if (!h) return PIHYST_ENULL;
+    if (h->boucwen) {
+        const double *s = state ? state : h->bw_initial;
+        pihyst_status status;
+        if (state && n != BOUCWEN_STATE_LEN) return PIHYST_LIB_ELENGTH;
+        status = pihyst_bw_reset(&h->bw, s[0], s[1]);
+        if (status == PIHYST_OK) h->comp_started = 0;
+        return status;
+    }
     if (state && n != (int32_t)h->n_ops) return PIHYST_LIB_ELENGTH;
     if (state && !all_finite(state, h->n_ops)) return PIHYST_ENONFINITE;
     h->comp_started = 0;
@@ -340,6 +424,13 @@ int32_t pihyst_lib_compensator_start(pihyst_lib_model *h, double u_min, double u
     pihyst_status s;
     if (!h) return PIHYST_ENULL;
     if (!(max_step > 0) || isinf(max_step)) max_step = INFINITY;
+    if (h->boucwen) {
+        h->comp_started = 0;
+        s = pihyst_bw_compensator_init(&h->bw_comp, &h->bw, u_min, u_max, max_step, u_initial);
+        if (s != PIHYST_OK) return s;
+        h->comp_started = 1;
+        return PIHYST_OK;
+    }
     len = pihyst_compensator_scratch_len(&h->model);
     free(h->scratch);
     h->scratch = malloc(len * sizeof *h->scratch);
@@ -358,5 +449,8 @@ int32_t pihyst_lib_compensate(pihyst_lib_model *h, const double *y_desired, doub
     if (!h || (n > 0 && (!y_desired || !u))) return PIHYST_ENULL;
     if (n < 0) return PIHYST_LIB_ELENGTH;
     if (!h->comp_started) return PIHYST_LIB_ENOCOMPENSATOR;
+    if (h->boucwen)
+        return (int32_t)pihyst_bw_compensator_run(&h->bw_comp, y_desired, u, NULL, flags,
+                                                  (size_t)n);
     return (int32_t)pihyst_compensator_run(&h->comp, y_desired, u, NULL, flags, (size_t)n);
 }

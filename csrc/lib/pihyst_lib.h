@@ -19,7 +19,8 @@
 extern "C" {
 #endif
 
-#define PIHYST_LIB_ABI_VERSION 1 /* bump on any change of a signature below */
+#define PIHYST_LIB_ABI_VERSION 2 /* bump on any change of a signature below
+                                    (2: Bouc-Wen models, pihyst_lib_create_boucwen) */
 
 typedef struct pihyst_lib_model pihyst_lib_model; /* opaque */
 
@@ -51,7 +52,14 @@ pihyst_lib_model *pihyst_lib_create(int32_t family, int32_t n_ops, const double 
                                     const double *fall_y, const double *initial_state,
                                     int32_t *status);
 
-/** A model from a flat model file (`pihyst export MODEL.json --flat -o FILE`). */
+/** A Bouc-Wen model (pihyst_boucwen.h) from its 11 parameters, in this order: beta,
+ *  gamma, n, hysteretic, linear, quadratic, offset, u_min, u_max, initial u, initial z.
+ *  Its state is (u, z): pihyst_lib_get_state and pihyst_lib_reset take n = 2, and
+ *  pihyst_lib_n_operators gives 1. */
+pihyst_lib_model *pihyst_lib_create_boucwen(const double *params, int32_t *status);
+
+/** A model from a flat model file (`pihyst export MODEL.json --flat -o FILE`); a
+ *  Bouc-Wen model's file has family 3. */
 pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status);
 
 /** Free a handle (NULL is fine). */

@@ -45,6 +45,7 @@ int main(void)
     run_bank_tests();
     run_bank_soa_tests();
     run_kernel_tests();
+    run_boucwen_tests();
 #ifndef PIHYST_TEST_F32
     run_creep_tests(); /* the creep lags are double precision only */
 #endif

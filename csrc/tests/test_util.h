@@ -38,6 +38,7 @@ void test_check_near(double x, double y, double tol, const char *what, const cha
 #define CHECK_NEAR(x, y, tol) test_check_near((x), (y), (tol), #x " ~ " #y, __FILE__, __LINE__)
 
 void run_model_tests(void);
+void run_boucwen_tests(void);
 void run_inverse_tests(void);
 void run_bank_tests(void);
 void run_bank_soa_tests(void);

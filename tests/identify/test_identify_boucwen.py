@@ -56,6 +56,23 @@ def test_options_it_cannot_honour_are_errors():
         fit(u, y, family="bouc-wen", offset=0.0)
 
 
+def test_latency_of_a_bouc_wen_model_is_measured_on_its_c_compensator(monkeypatch):
+    from pihyst.identify._latency import measure_latency
+    from pihyst.inverse._boucwen import BoucWenCompensatorTwin
+
+    def twin_step(self, y_desired):
+        raise AssertionError("the latency must be that of the C compensator, not the twin")
+
+    monkeypatch.setattr(BoucWenCompensatorTwin, "step", twin_step)
+    lat = measure_latency(TRUE)
+    assert 0 < lat.typical < 1e-2 and 0 < lat.worst < 1e-2
+    assert "(C)" in lat.to_dict()["measured"]
+    # and the fit report carries it
+    u, y = record(TRUE, n_triangles=2)
+    entry = fit(u, y, family="bouc-wen").report.family("bouc-wen")
+    assert entry["latency"]["typical_us"] > 0 and entry["latency"]["worst_us"] > 0
+
+
 @pytest.mark.slow
 def test_a_lagged_bouc_wen_record_gives_a_delayed_bouc_wen_model():
     truth = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)

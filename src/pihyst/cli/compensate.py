@@ -10,7 +10,7 @@ from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
 from pihyst.cli.model_inputs import add_initial_state_option, initial_state
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
-from pihyst.inverse import Compensator, PreviewRun
+from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import ColumnWriter, load_model
 
 
@@ -130,8 +130,8 @@ def run(args):
             max_step = max_step if np.isfinite(max_step) else None
         state = initial_state(model, args.initial_state)
         try:
-            compensator = Compensator(model, u_min=args.u_min, u_max=args.u_max,
-                                      slew_rate=max_step, initial_state=state)
+            compensator = compensator_for(model, u_min=args.u_min, u_max=args.u_max,
+                                          slew_rate=max_step, initial_state=state)
         except ValueError as err:
             raise UsageError(f"{args.model}: {err}") from None
         lo, hi = compensator.limits

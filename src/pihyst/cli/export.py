@@ -28,14 +28,19 @@ def register(sub):
     p.set_defaults(run=run)
 
 
+def _size(model):
+    if model.family == "bouc-wen":
+        return "state (u, z)"
+    return f"{model.n_operators} operators"
+
+
 def run(args):
     model = load_model(args.model)
     if args.flat:
         if args.float or args.name:
             raise UsageError("--float and --name go with --c, not --flat")
         write_atomically(args.output, flat_text(model))
-        print(f"wrote {args.output}: {model.family} model, {model.n_operators} operators "
-              f"(pihyst_lib_load)")
+        print(f"wrote {args.output}: {model.family} model, {_size(model)} (pihyst_lib_load)")
         return
     stem = os.path.splitext(os.path.basename(args.output))[0]
     name = args.name if args.name is not None else stem
@@ -44,6 +49,6 @@ def run(args):
     text = c_header(model, name, precision="float" if args.float else "double",
                     source=os.path.basename(args.model))
     write_atomically(args.output, text)
-    print(f"wrote {args.output}: {model.family} model, {model.n_operators} operators as "
+    print(f"wrote {args.output}: {model.family} model, {_size(model)} as "
           f"{c_identifier(name)}_params ({'float' if args.float else 'double'}); init with "
           f"{c_identifier(name)}_init(&model)")

@@ -28,6 +28,11 @@ class InputRange:
         self.margin = TOLERANCE * (hi - lo)
         self.outside = 0
         self.worst = 0.0
+        # a Bouc-Wen model's input range is its normalization x = (u - u_lo) / (u_hi - u_lo):
+        # another range would be another model, so its voltages are clamped instead
+        if model.family == "bouc-wen":
+            self.run_model, self.extends = model, False
+            return
         try:
             self.run_model = model.replace(input_range=(lo - self.margin, hi + self.margin))
             self.extends = True
@@ -90,7 +95,8 @@ def add_initial_state_option(p, modes=INITIAL_STATES):
 def initial_state(model, mode):
     """The operator state a mode names (settle starts from the model's own state)."""
     lo, hi = model.input_range
-    zero = np.zeros(model.n_operators)
+    # the virgin state: zero operators, or for Bouc-Wen z = 0 at the bottom of the range
+    zero = np.array([lo, 0.0]) if model.family == "bouc-wen" else np.zeros(model.n_operators)
     if mode in ("model", "settle"):
         return model.initial_state
     if mode == "zero":

@@ -16,7 +16,7 @@ from pihyst.cli.compensate import (
 from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.cli.record_options import add_record_options, read_from_args
-from pihyst.inverse import Compensator, PreviewRun
+from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import load_model, write_columns
 from pihyst.sim.signals import MAX_SAMPLES
 
@@ -76,7 +76,7 @@ def run(args):
         max_step = args.slew_rate * smallest_step([rec], args.desired)
         max_step = max_step if np.isfinite(max_step) else None
     try:
-        compensator = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
+        compensator = compensator_for(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     # a delayed model: with preview, as pihyst.compensate

@@ -30,7 +30,15 @@ import numpy as np
 
 from pihyst.exceptions import FitError
 from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
-from pihyst.model._boucwen import MAX_EXPONENT, BoucWenModel, cycled_z, substep, trajectory
+from pihyst.model._boucwen import (
+    MAX_EXPONENT,
+    MAX_SHAPE,
+    MIN_SPREAD,
+    BoucWenModel,
+    cycled_z,
+    substep,
+    trajectory,
+)
 
 #: The shape grid of the outer search (normalized input): beta, gamma / beta, n.
 GRID_BETA = tuple(np.geomspace(0.5, 60.0, 12).tolist())
@@ -264,6 +272,8 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         nonlocal evaluations
         evaluations += 1
         beta, gamma, nn = unpack(p)
+        if not (beta + abs(gamma) <= MAX_SHAPE and beta + gamma >= MIN_SPREAD):
+            return math.inf
         stiffness = nn * (beta + abs(gamma)) ** (1.0 / nn)
         h = min(1.0 / 64.0, 1.0 / (SEARCH_STEPS_PER_SATURATION * stiffness))
         x0, z0 = start(beta, gamma, nn, h)

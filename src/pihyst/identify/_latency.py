@@ -1,15 +1,16 @@
 """Real-time cost of a fitted model: the latency of its exact compensator, measured.
 
-A candidate model runs in a controller as :class:`pihyst.Compensator`, one desired
-displacement in, one voltage out, every sample. Its cost per sample depends on the
-trajectory: following a smooth trajectory the inverse moves little between samples
-(**typical**); a desired displacement drawn at random every sample makes it cross the
-most operator breakpoints and reversals (**worst case**). Both are measured here, in
-blocks of ``Compensator.run`` (the C loop; no Python per sample), sized to take about
-``BLOCK_SECONDS`` each, the median of ``REPEATS`` blocks, so a candidate costs a few
-milliseconds to measure and a passing disturbance on the machine does not count (a
-compensator slower than ``SLOW_SECONDS`` per sample is timed on the probe's
-``PROBE_SAMPLES`` samples alone).
+A candidate model runs in a controller as its exact compensator
+(:class:`pihyst.Compensator` for a PI model, :class:`pihyst.inverse.BoucWenCompensator`
+for Bouc-Wen; both in C), one desired displacement in, one voltage out, every sample. Its
+cost per sample depends on the trajectory: following a smooth trajectory the inverse moves
+little between samples (**typical**); a desired displacement drawn at random every sample
+makes it cross the most operator breakpoints and reversals (**worst case**). Both are
+measured here, in blocks of the compensator's ``run`` (the C loop; no Python per sample),
+sized to take about ``BLOCK_SECONDS`` each, the median of ``REPEATS`` blocks, so a
+candidate costs a few milliseconds to measure and a passing disturbance on the machine
+does not count (a compensator slower than ``SLOW_SECONDS`` per sample is timed on the
+probe's ``PROBE_SAMPLES`` samples alone).
 """
 
 import time
@@ -17,14 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pihyst.inverse import Compensator
-from pihyst.inverse._compensator import OTHER_COMPENSATORS
+from pihyst.inverse import compensator_for
 
 BLOCK_SECONDS = 1e-3
 REPEATS = 3
 PROBE_SAMPLES = 8
-# a compensator slower than this per sample (a Bouc-Wen model with a sharp shape, in
-# Python: up to 0.3 s) is measured by the probe alone: the blocks would take minutes
+# a compensator slower than this per sample (a Bouc-Wen model with a sharp shape: 0.3 s
+# in Python, still milliseconds in C for jumps) is measured by the probe alone
 SLOW_SECONDS = 1e-3
 MIN_SAMPLES, MAX_SAMPLES = 32, 4000
 TRACKING_PERIOD = 400        # samples per cycle of the tracking trajectory
@@ -40,7 +40,7 @@ class Latency:
 
     def to_dict(self):
         return {"typical_us": 1e6 * self.typical, "worst_us": 1e6 * self.worst,
-                "measured": "pihyst.Compensator(model).run: median time per sample of "
+                "measured": "the model's compensator's run (C): median time per sample of "
                             f"{REPEATS} blocks; typical: a sine over 5-95 % of the output "
                             f"range, {TRACKING_PERIOD} samples per cycle; worst case: a "
                             "random desired displacement every sample"}
@@ -65,8 +65,7 @@ def _time(comp, make):
 def measure_latency(model, seed=0):
     """:class:`Latency` of ``model``'s compensator."""
     lo, hi = model.input_range
-    # a model that is not a PI model has its own compensator (Bouc-Wen: Python, slower)
-    comp = OTHER_COMPENSATORS.get(getattr(model, "family", None), Compensator)(model)
+    comp = compensator_for(model)
     # outputs the model reaches after a full cycle: its major loop's ends
     y_lo, y_hi = model.predict(np.array([lo, hi, lo]))[[0, 1]]
     y_lo, y_hi = min(y_lo, y_hi), max(y_lo, y_hi)

@@ -7,6 +7,7 @@ input.
 
 from pihyst.inverse._bank import CompensatorBank
 from pihyst.inverse._boucwen import BoucWenCompensator
+from pihyst.inverse._choice import compensator_for
 from pihyst.inverse._compensator import (
     FLAG_NAN,
     FLAG_SATURATED_HIGH,
@@ -21,4 +22,4 @@ from pihyst.model import classical_inverse, reachable_output_range
 
 __all__ = ["BoucWenCompensator", "FLAG_NAN", "FLAG_SATURATED_HIGH", "FLAG_SATURATED_LOW",
            "FLAG_SLEW", "CompensationResult", "Compensator", "CompensatorBank", "PreviewRun",
-           "classical_inverse", "compensate", "reachable_output_range"]
+           "classical_inverse", "compensate", "compensator_for", "reachable_output_range"]

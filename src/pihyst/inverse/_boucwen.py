@@ -6,20 +6,26 @@ From the state (u_p, z_p) the output for the next voltage u is
 
 (the model's own Runge-Kutta arithmetic, docs/theory/bouc-wen.md). A monotone model
 (``model.is_monotone``) has Y non-decreasing on both sides of u_p, with Y(u_p) the current
-output. The compensator brackets the desired value y_d between u_p and the reachable end
-[max(u_min, u_p - slew), min(u_max, u_p + slew)] and solves Y(u) = y_d by Newton steps
-kept inside the bracket (bisection when a step leaves it or does not halve it), until
-the bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + |c_1| +
-|c_2| + |a| z_max): the inverse is exact to that tolerance. Where Y is flat at y_d the
-bracket keeps the voltage nearest u_p. Out of reach: the voltage saturates at the
-bracket's end and is flagged (limit or slew); NaN holds the last voltage. The flags are
-those of :mod:`pihyst.inverse._compensator`, and so is the result.
+output. The compensator solves Y(u) = y_d between u_p and the reachable end
+[max(u_min, u_p - slew), min(u_max, u_p + slew)] by Newton steps from u_p, evaluating the
+end only when a step would reach or pass it; once y_d is bracketed, Newton steps that stay
+inside and halve the step before last, else bisection (:meth:`_solve`), until the
+bracket is two adjacent floats or |Y(u) - y_d| <= 4 eps (|y_d| + |offset| + |c_1| +
+|c_2| + |a| z_max): the inverse is exact to that tolerance. Where Y is flat at y_d (a
+model at its monotone bound) the voltage is one of the flat stretch. Out of reach: the
+voltage saturates at the bracket's end and is flagged (limit or slew); NaN holds the last
+voltage. The flags are those of :mod:`pihyst.inverse._compensator`, and so is the result.
+
+:class:`BoucWenCompensator` runs in the C core (csrc/pihyst_boucwen.c, the same algorithm
+operation for operation); :class:`BoucWenCompensatorTwin` is its Python twin, the
+reference the tests compare it against.
 """
 
 import math
 
 import numpy as np
 
+from pihyst import _boucwen_core
 from pihyst.inverse._compensator import (
     FLAG_NAN,
     FLAG_SATURATED_HIGH,
@@ -34,17 +40,20 @@ from pihyst.model import InvalidModelError
 from pihyst.model._boucwen import BoucWenModel, advance, slope
 
 _EPS = np.finfo(float).eps
+MAX_ITERATIONS = 200
+NEWTON_FIRST = 8      # Newton steps from u_p before the reachable end must be evaluated
 
 
-class BoucWenCompensator:
+class BoucWenCompensatorTwin:
     """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
-    limits and a slew limit; the same interface as :class:`pihyst.Compensator`.
+    limits and a slew limit; the same interface as :class:`pihyst.Compensator`. In
+    Python: the twin of the C core's :class:`BoucWenCompensator`.
 
     Examples
     --------
     >>> from pihyst.model import BoucWenModel
     >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
-    >>> comp = BoucWenCompensator(m, slew_rate=10.0)
+    >>> comp = BoucWenCompensatorTwin(m, slew_rate=10.0)
     >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
     >>> u, comp.last_flags == comp.FLAG_SLEW
     (10.0, True)
@@ -158,21 +167,18 @@ class BoucWenCompensator:
         end = min(hi, up + slew) if s > 0 else max(lo, up - slew)
         while abs(end - up) > slew:        # rounding of u_p +- slew: stay within the limit
             end = math.nextafter(end, up)
-        y_end, z_end = self._y(end)
-        if (y_end - yd) * s <= 0:          # out of reach (or just reached) at the end
-            reached = y_end == yd
-            self._flags = 0 if reached else (
-                (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
-                if end == (hi if s > 0 else lo) else FLAG_SLEW)
-            self._u, self._z = end, z_end
-            return end
-        u, z = self._solve(up, end, yd, s)
-        self._u, self._z, self._flags = u, z, 0
-        return u
+        self._u, self._z, self._flags = self._solve(up, end, yd, s)
+        return self._u
 
-    def _solve(self, a, b, yd, s):
-        # a = u_p (Y(a) before yd), b = the reachable end (Y(b) past yd); the bracket
-        # [a, b] keeps that property while Newton or bisection steps shrink it
+    def _solve(self, a, end, yd, s):
+        # a = u_p (Y(a) before yd); Newton steps from there. The reachable end is
+        # evaluated only when a step would reach or pass it (or after NEWTON_FIRST steps
+        # without a bracket): out of reach there, the voltage stops at the end; else
+        # [a, b] brackets yd (Y(a) before, Y(b) past it) while Newton or bisection steps
+        # shrink it: Newton where its step stays in the bracket and is at most half the
+        # step before last, else bisection (so the bracket at least halves every two
+        # steps, and Newton converging from one side is not interrupted). A tracking step
+        # thus costs a few short model steps, not a long one.
         m = self.model
         span = m.input_range[1] - m.input_range[0]
         tol = 4 * _EPS * (abs(yd) + self._scale)
@@ -184,28 +190,42 @@ class BoucWenCompensator:
             return u - err / dy if dy > 0 else math.nan
 
         u = newton(a, self._z, m.output(a, self._z) - yd)
-        old = abs(b - a)
-        z_b = None
-        for _ in range(200):
-            if not min(a, b) < u < max(a, b):
+        dx = dx_old = abs(end - a)
+        b = z_b = None
+        for i in range(MAX_ITERATIONS):
+            if b is None and (not min(a, end) < u < max(a, end) or i >= NEWTON_FIRST):
+                y_end, z_end = self._y(end)
+                if (y_end - yd) * s <= 0:      # out of reach (or just reached) at the end
+                    limit = self.limits[1] if s > 0 else self.limits[0]
+                    flags = 0 if y_end == yd else (
+                        (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
+                        if end == limit else FLAG_SLEW)
+                    return end, z_end, flags
+                b, z_b = end, z_end
+            if b is not None and not min(a, b) < u < max(a, b):
                 u = 0.5 * (a + b)
             y, z = self._y(u)
             err = y - yd
             if abs(err) <= tol:
-                return u, z
+                return u, z, 0
             if err * s < 0:
                 a = u
             else:
                 b, z_b = u, z
-            width = abs(b - a)
-            if width <= 2 * _EPS * max(abs(a), abs(b), 1e-300):
+            if b is None:
+                u = newton(u, z, err)
+                continue
+            if abs(b - a) <= 2 * _EPS * max(abs(a), abs(b), 1e-300):
                 break
-            # Newton unless the bracket stopped halving (then bisect)
-            u = newton(u, z, err) if width <= 0.5 * old else 0.5 * (a + b)
-            old = width
-        if z_b is None:      # the bracket collapsed onto its far end, which reaches yd
-            _, z_b = self._y(b)
-        return b, z_b
+            step = newton(u, z, err)
+            dx_old = dx
+            if min(a, b) < step < max(a, b) and abs(step - u) <= 0.5 * dx_old:
+                dx = abs(step - u)
+                u = step
+            else:
+                u = 0.5 * (a + b)
+                dx = 0.5 * abs(b - a)
+        return b, z_b, 0
 
     def run(self, y_desired):
         """Compensate a block of desired outputs; returns a
@@ -230,8 +250,81 @@ class BoucWenCompensator:
 
     def __repr__(self):
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
-        return (f"BoucWenCompensator(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
+        return (f"{type(self).__name__}(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
                 f"{slew}, voltage={self.voltage:g})")
+
+
+class BoucWenCompensator(BoucWenCompensatorTwin):
+    """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
+    limits and a slew limit; the same interface as :class:`pihyst.Compensator`. Runs in
+    the C core; :class:`BoucWenCompensatorTwin` is the same algorithm in Python.
+
+    Examples
+    --------
+    >>> from pihyst.model import BoucWenModel
+    >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+    >>> comp = BoucWenCompensator(m, slew_rate=10.0)
+    >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
+    >>> u, comp.last_flags == comp.FLAG_SLEW
+    (10.0, True)
+    >>> u = comp.step(5.0)             # within reach: exact
+    >>> round(u, 6), abs(comp.displacement - 5.0) < 1e-12
+    (18.667945, True)
+    """
+
+    @property
+    def state(self):
+        return np.array(self._core_model.state)
+
+    @property
+    def voltage(self):
+        return self._core_model.state[0]
+
+    @property
+    def displacement(self):
+        u, z = self._core_model.state
+        return self.model.output(u, z)
+
+    @property
+    def last_flags(self):
+        return self._core.last_flags
+
+    def reset(self, state=None, voltage=None):
+        """Back to the initial state and voltage, or to ``state`` = (u, z)."""
+        start = self._start if state is None else self.model._state(state)
+        if voltage is not None:
+            voltage = _number(voltage, "voltage")
+            lo, hi = self.limits
+            if not lo <= voltage <= hi:
+                raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+        if not hasattr(self, "_core"):
+            slew = math.inf if self.slew_rate is None else self.slew_rate
+            self._core_model = self.model._core(self._start)
+            self._core = _boucwen_core.BoucWenCompensator(
+                self._core_model, *self.limits, slew, self._start[0])
+        # the state as given (its u may lie outside the voltage limits), then the voltage
+        self._core_model.state = start
+        if voltage is not None:
+            self._core.reset(start, voltage)
+
+    def step(self, y_desired):
+        """The voltage for one desired output (applied to the state)."""
+        return self._core.step(float(y_desired))
+
+    def run(self, y_desired):
+        """Compensate a block of desired outputs; returns a
+        :class:`pihyst.inverse.CompensationResult`."""
+        yd = _desired(y_desired)
+        initial_state, initial_voltage = self.state, self.voltage
+        u, y, flags = self._core.run(yd)
+        low = (flags & FLAG_SATURATED_LOW) != 0
+        high = (flags & FLAG_SATURATED_HIGH) != 0
+        return CompensationResult(
+            desired=yd, voltage=u, displacement=y, flags=flags, saturated=low | high,
+            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
+            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
+            initial_voltage=initial_voltage, final_state=self.state,
+            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
 
 
 OTHER_COMPENSATORS[BoucWenModel.family] = BoucWenCompensator

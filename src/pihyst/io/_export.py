@@ -19,6 +19,7 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.exceptions import InvalidModelError
+from pihyst.io._export_boucwen import boucwen_flat_lines, boucwen_header
 
 _FAMILY_ENUM = {"classical": "PIHYST_CLASSICAL", "multislope": "PIHYST_MULTISLOPE",
                 "pwl": "PIHYST_PWL"}
@@ -62,6 +63,10 @@ def c_header(model, name, *, precision="double", source=""):
     """
     if precision not in ("double", "float"):
         raise InvalidModelError(f"precision must be 'double' or 'float', got {precision!r}")
+    if model.family == "bouc-wen":
+        name = c_identifier(name)
+        return boucwen_header(model, name, lambda v: _literal(v, precision), precision,
+                              source, _delay_comment(model, name))
     if model.family not in _FAMILY_ENUM:
         raise InvalidModelError(f"no C form for a {model.family!r} model")
     name = c_identifier(name)
@@ -159,16 +164,22 @@ def _delay_comment(model, name):
 def flat_text(model):
     """The model as the shared library's flat model file (docs/export.md).
 
-    Lines: the magic ``pihyst-flat 1``; ``family K`` (0 classical, 1 multislope, 2 pwl);
+    Lines: the magic ``pihyst-flat 1``; ``family K`` (0 classical, 1 multislope, 2 pwl;
+    3 Bouc-Wen, whose lines follow :func:`pihyst.io._export_boucwen.boucwen_flat_lines`);
     ``offset u_min u_max``; ``U a b h`` (multislope, else the paper's defaults); the K
     thresholds (classical, multislope) or, for pwl, K lines ``n x_1..x_n y_1..y_n`` of
     rising then K of falling polylines; the K weights; the K initial states; for a
     delayed model, ``delay d``. Numbers in 17 significant digits, so the library reads
     back exactly the model's doubles.
     """
+    num = lambda values: " ".join(repr(float(v)) for v in values)  # noqa: E731
+    if model.family == "bouc-wen":
+        lines = [FLAT_MAGIC, *boucwen_flat_lines(model, num)]
+        if model.delay:      # as below: the library ignores it, the caller applies it
+            lines.append(f"delay {model.delay}")
+        return "\n".join(lines) + "\n"
     if model.family not in _FAMILY_CODE:
         raise InvalidModelError(f"no flat form for a {model.family!r} model")
-    num = lambda values: " ".join(repr(float(v)) for v in values)  # noqa: E731
     lines = [FLAT_MAGIC, f"{_FAMILY_CODE[model.family]} {model.n_operators}",
              num([model.offset, *model.input_range])]
     if model.family == "multislope":

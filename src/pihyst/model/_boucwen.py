@@ -22,6 +22,10 @@ Its distance to the exact ODE solution is below 1e-8 of z_max (tests/model/test_
 checks it against the closed form for n = 1).
 
 The model's state is (u, z): the last input and the Bouc-Wen variable.
+
+Runs (``simulate``, ``predict``, the stepper) go through the C core
+(csrc/pihyst_boucwen.c, the same arithmetic operation for operation); the functions of this
+module are its Python twin, which the tests compare it against (:func:`twin_simulation`).
 """
 
 import json
@@ -30,6 +34,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidModelError
 from pihyst.model._delay import (
@@ -57,6 +62,8 @@ SCHEMA_VERSION = 1
 DEFAULT_UNITS = MappingProxyType({"input": "V", "output": "um"})
 MAX_SHAPE = 1000.0   # beta + |gamma| above this: the loop is a step, not a model
 MAX_EXPONENT = 10.0
+MIN_SPREAD = 1e-9    # beta + gamma below this: z_max = (beta + gamma)^(-1/n) is beyond use
+                     # and |z|^n overflows (the C core refuses it as well)
 
 
 def _number(value, name):
@@ -83,8 +90,14 @@ def slope(z, s, beta, gamma, n):
     return 1.0 - p * (s * beta * sg + gamma)
 
 
-_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
-_GL_NODES, _GL_WEIGHTS = _GL_NODES.tolist(), _GL_WEIGHTS.tolist()
+# 8-point Gauss-Legendre nodes and weights on [-1, 1]: numpy.polynomial.legendre.leggauss(8)
+# to 17 digits, written out so that the C core (csrc/pihyst_boucwen.c) holds the same
+_GL_NODES = [-0.9602898564975362, -0.7966664774136267, -0.525532409916329,
+             -0.18343464249564978, 0.18343464249564978, 0.525532409916329,
+             0.7966664774136267, 0.9602898564975362]
+_GL_WEIGHTS = [0.10122853629037706, 0.22238103445337443, 0.3137066458778869,
+               0.36268378337836166, 0.36268378337836166, 0.3137066458778869,
+               0.22238103445337443, 0.10122853629037706]
 
 
 def _rk4(z, k, s, beta, gamma, n):
@@ -202,6 +215,9 @@ class BoucWenModel(Immutable):
                                     f"beta={self.beta:g}, gamma={self.gamma:g}")
         if not self.beta + abs(self.gamma) <= MAX_SHAPE:
             raise InvalidModelError(f"Bouc-Wen needs beta + |gamma| <= {MAX_SHAPE:g}")
+        if not self.beta + self.gamma >= MIN_SPREAD:
+            raise InvalidModelError(f"Bouc-Wen needs beta + gamma >= {MIN_SPREAD:g} (a finite "
+                                    f"bound of z); got {self.beta + self.gamma:g}")
         if not 1.0 <= self.n <= MAX_EXPONENT:
             raise InvalidModelError(f"Bouc-Wen exponent n must be in [1, {MAX_EXPONENT:g}], "
                                     f"got {self.n:g}")
@@ -272,6 +288,12 @@ class BoucWenModel(Immutable):
     def _checked_input(self, u):
         return checked_input(u, self.input_range)
 
+    def _core(self, state):
+        """The model in the C core (:mod:`pihyst._boucwen_core`) at ``state`` = (u, z)."""
+        return _boucwen_core.BoucWen(self.beta, self.gamma, self.n, self.hysteretic,
+                                     self.linear, self.quadratic, self.offset,
+                                     self.input_range, state)
+
     def _state(self, state):
         if state is None:
             return self.initial_state
@@ -282,6 +304,19 @@ class BoucWenModel(Immutable):
         returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z). With a
         :attr:`delay` the input is delayed as for the PI models
         (:meth:`pihyst.model.PIModel.simulate`; ``t`` only checks the sample period)."""
+        u = self._checked_input(u)
+        d = self.delay_at(t=t)
+        if d and pending_input is not None:
+            pending_input = self._checked_input(pending_input)
+        run = delayed_input(u, d, pending_input)
+        core = self._core(self._state(initial_state))
+        y = core.run(run)
+        return Response(input=u, output=y, final_state=np.array(core.state),
+                        pending_input=pending_after(u, d, pending_input) if d else None)
+
+    def twin_simulation(self, u, *, initial_state=None, t=None, pending_input=None):
+        """:meth:`simulate` by the Python twin of the C core (this module's functions):
+        the reference the tests compare the C core against; slow."""
         u = self._checked_input(u)
         d = self.delay_at(t=t)
         if d and pending_input is not None:
@@ -418,7 +453,7 @@ class BoucWenStepper:
     def __init__(self, model, initial_state=None, *, pending_input=None, sample_period=None):
         self.model = model
         self._initial = model._state(initial_state)
-        self._u, self._z = self._initial
+        self._core = model._core(self._initial)
         #: the input dead time in samples (a FIFO of that many inputs)
         self.delay = model.delay_at(sample_period)
         if self.delay and pending_input is not None:
@@ -428,18 +463,19 @@ class BoucWenStepper:
     @property
     def state(self):
         """(u, z) after the last sample applied (with a delay: d samples back)."""
-        return np.array([self._u, self._z])
+        return np.array(self._core.state)
 
     def reset(self, state=None):
         """Back to ``state`` (default: the initial state), the delay FIFO to its start."""
-        self._u, self._z = self._initial if state is None else self.model._state(state)
+        self._core.state = self._initial if state is None else self.model._state(state)
         self._line.reset()
 
     def output_at(self, u):
         """The output if the next sample applied were ``u`` (the state is not changed;
         with a delay, ``u`` is the input leaving the FIFO)."""
         m = self.model
-        z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
+        u_p, z_p = self._core.state
+        z = self._core.advance(z_p, m._x(u) - m._x(u_p))
         return m.output(u, z)
 
     def step(self, u):
@@ -449,8 +485,4 @@ class BoucWenStepper:
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
-        u = self._line.push(u)
-        m = self.model
-        self._z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
-        self._u = u
-        return m.output(u, self._z)
+        return self._core.step(self._line.push(u))

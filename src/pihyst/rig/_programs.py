@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from pihyst.inverse import Compensator
+from pihyst.inverse import compensator_for
 
 
 class VoltageProgram:
@@ -43,8 +43,8 @@ class VoltageProgram:
 
 class FeedforwardProgram:
     """Track ``desired`` (um, one per tick) open loop: u = H^-1(y_desired), the exact
-    inverse of ``model`` (:class:`pihyst.Compensator`) within the voltage limits and the
-    slew limit per tick.
+    inverse of ``model`` (:func:`pihyst.inverse.compensator_for`: the family's compensator)
+    within the voltage limits and the slew limit per tick.
 
     A model with an input delay of d ticks is driven with preview: the voltage of tick k
     aims at ``desired[k + d]`` (the trajectory is known in advance), and the last d
@@ -63,15 +63,15 @@ class FeedforwardProgram:
             raise ValueError(f"the model's input range [{lo:g}, {hi:g}] V and the rig's "
                              f"limits [{u_min:g}, {u_max:g}] V do not overlap")
         self.max_step = max_step
-        self.compensator = Compensator(model, u_min=self.limits[0], u_max=self.limits[1],
-                                       slew_rate=max_step)
+        self.compensator = compensator_for(model, u_min=self.limits[0], u_max=self.limits[1],
+                                           slew_rate=max_step)
         self.n_ticks = self.desired.size
         self.description = description
         self._start = None
 
     def initial_voltage(self):
         # the voltage for the first desired value, reached by a monotone ramp from 0 V
-        probe = Compensator(self.model, u_min=self.limits[0], u_max=self.limits[1])
+        probe = compensator_for(self.model, u_min=self.limits[0], u_max=self.limits[1])
         u0 = probe.step(self.desired[0])
         self._start = (probe.state, u0)
         return u0

@@ -1,0 +1,27 @@
+"""The exact compensator of any model: :class:`pihyst.Compensator` for a PI model, the
+family's own for the others (Bouc-Wen: :class:`pihyst.inverse.BoucWenCompensator`), with
+the same options, so that callers (the CLI, the rig, control) need not know the family."""
+
+from pihyst.exceptions import InvalidArgumentError
+from pihyst.inverse._compensator import OTHER_COMPENSATORS, Compensator
+
+
+def compensator_for(model, *, creep_state=None, **options):
+    """A compensator of ``model``; ``options`` as for :class:`pihyst.Compensator`
+    (``u_min``, ``u_max``, ``slew_rate``, ``initial_voltage``, ``initial_state``).
+
+    Examples
+    --------
+    >>> from pihyst.model import BoucWenModel
+    >>> comp = compensator_for(BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0,
+    ...                                     linear=40.0), u_max=100.0)
+    >>> type(comp).__name__, comp.limits
+    ('BoucWenCompensator', (0.0, 100.0))
+    """
+    cls = OTHER_COMPENSATORS.get(getattr(model, "family", None))
+    if cls is None:
+        return Compensator(model, creep_state=creep_state, **options)
+    if creep_state is not None:
+        raise InvalidArgumentError(f"a {model.family} model has no creep: creep_state does "
+                                   f"not apply")
+    return cls(model, **options)
