@@ -206,8 +206,8 @@ def test_non_finite_command_is_refused(tmp_path):
 
 def test_watchdog_zeroes_a_stalled_loop(tmp_path):
     import time
-    config = make_config(rig={"rate_hz": 20.0, "watchdog_periods": 6.0},
-                         supply={"baudrate": 115200})
+    config = make_config(rig={"rate_hz": 20.0, "watchdog_periods": 6.0,
+                              "slew_V_per_s": 100.0}, supply={"baudrate": 115200})
     stalled = []
 
     def stall():
@@ -224,6 +224,8 @@ def test_watchdog_zeroes_a_stalled_loop(tmp_path):
     t_zero = min(t for t, u in st.commands if u == 0.0 and t > stalled[0])
     # (the tick was busy a few ms before the stall began)
     assert stalled[0] + 0.25 < t_zero < stalled[0] + 1.5
+    # and the shutdown knew it: no ramp down from 20 V (a step back up from 0 V) followed
+    assert all(u == 0.0 for t, u in st.commands if t >= t_zero)
 
 
 # ----------------------------------------------------------------------------- tracking

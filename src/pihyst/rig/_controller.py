@@ -93,19 +93,27 @@ class Controller:
             self.log.note(text)
 
     def _send(self, u):
+        # the guard learns the outcome under the supply lock: the watchdog thread may zero
+        # the supply between this send and the next, and must leave the guard knowing it
         with self._supply_lock:
             if self._watchdog is not None and self._watchdog.tripped is not None:
                 raise StopRun(f"watchdog: the loop stalled for {self._watchdog.tripped:.3f} s "
                               f"(limit {self._watchdog.limit_s:.3f} s); output zeroed")
-            self.supply.set_voltage(u)
+            try:
+                self.supply.set_voltage(u)
+            except OSError:
+                self.guard.failed(u)
+                raise
+            self.guard.sent(u)
 
     def _zero_from_watchdog(self):
         if self._supply_lock.acquire(timeout=max(0.05, self.settings.period_s)):
             try:
                 self.supply.set_voltage(0.0)
+                self.guard.sent(0.0)      # the shutdown must not ramp up again from 0 V
                 self.supply.output_off()
             except Exception:  # noqa: BLE001 - the loop reports the stall itself
-                pass
+                self.guard.failed(0.0)
             finally:
                 self._supply_lock.release()
 
@@ -154,9 +162,7 @@ class Controller:
         try:
             self._send(u)
             sent = u
-            self.guard.sent(u)
         except OSError as err:
-            self.guard.failed(u)
             error = error or f"supply: {err}"
             supply_status = f"error: {err}"
         readback = NAN
@@ -297,17 +303,23 @@ class Controller:
         step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
         failures = 0
         while self.guard.hi > 0 and step is not None and failures < 2:
-            u = self.guard.check(max(0.0, self.guard.hi - step))
             start, late = self._wait(deadline)
             y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
             try:
                 with self._supply_lock:
-                    self.supply.set_voltage(u)
+                    # chosen under the lock: the watchdog may have zeroed the supply
+                    u = self.guard.check(max(0.0, self.guard.hi - step))
+                    if self.guard.hi <= 0:
+                        break
+                    try:
+                        self.supply.set_voltage(u)
+                    except OSError:
+                        self.guard.failed(u)
+                        raise
+                    self.guard.sent(u)
                 sent, supply_status = u, "ok"
-                self.guard.sent(u)
             except OSError as err:
                 failures += 1
-                self.guard.failed(u)
                 sent, supply_status = NAN, f"error: {err}"
             end = self.clock.now()
             deadline, overrun = self._advance(deadline, end)
