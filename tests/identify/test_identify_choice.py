@@ -42,8 +42,9 @@ TRUE = at_rest(ClassicalPI([0, 20, 45], [0.3, 0.2, 0.1], offset=1.0))
 
 
 # ---------------------------------------------------------------- the choice rule
-def _cand(name, n_ops, rms, worst=1e-7, fixed=True):
-    fam = SimpleNamespace(name=name, minor_loops_fixed=fixed)
+def _cand(name, n_ops, rms, worst=1e-7, fixed=True, piecewise=True):
+    fam = SimpleNamespace(name=name, minor_loops_fixed=fixed,
+                          piecewise_linear_inverse=piecewise)
     fitted = SimpleNamespace(name=name, family=fam, n_operators=n_ops, n_params=n_ops + 1)
     return Candidate(fitted, {}, rms, Latency(typical=worst / 2, worst=worst))
 
@@ -66,6 +67,16 @@ def test_smallest_then_most_accurate_within_tolerance_and_never_by_timing():
     # a tighter field: only the most accurate is within tolerance
     chosen, _ = _choose([_cand("a", 9, 0.200), _cand("b", 4, 0.2 * (1 + 1.1 * TOLERANCE))])
     assert chosen.name == "a"
+
+
+def test_an_iterative_compensator_only_when_clearly_more_accurate():
+    # Bouc-Wen (one "operator", an iterative inverse) ties a 7-operator PI: the PI is kept
+    bw = _cand("bouc-wen", 1, 0.2 * (1 + 0.5 * TOLERANCE), piecewise=False)
+    chosen, criterion = _choose([bw, _cand("modified-pi", 7, 0.2)])
+    assert chosen.name == "modified-pi" and "iterative" in criterion
+    # more accurate by more than the tolerance: chosen
+    bw = _cand("bouc-wen", 1, 0.2 / (1 + 1.5 * TOLERANCE), piecewise=False)
+    assert _choose([bw, _cand("modified-pi", 7, 0.2)])[0].name == "bouc-wen"
 
 
 def test_bounds_exclude_and_say_why():
@@ -92,10 +103,11 @@ def test_unknown_minor_loops_prefer_structures_that_fix_them():
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(st.integers(1, 200), st.floats(0.01, 1.0), st.floats(1e-8, 1e-4),
-                          st.booleans()), min_size=1, max_size=6),
+                          st.booleans(), st.booleans()), min_size=1, max_size=6),
        st.booleans(), st.one_of(st.none(), st.integers(1, 200)))
 def test_choice_property(specs, known, max_ops):
-    cands = [_cand(f"f{i}", n, r, w, fixed) for i, (n, r, w, fixed) in enumerate(specs)]
+    cands = [_cand(f"f{i}", n, r, w, fixed, piecewise)
+             for i, (n, r, w, fixed, piecewise) in enumerate(specs)]
     try:
         chosen, _ = _choose(cands, known=known, max_operators=max_ops)
     except FitError:
@@ -105,10 +117,12 @@ def test_choice_property(specs, known, max_ops):
     assert chosen in eligible
     best = min(c.judged_rms for c in eligible)
     assert chosen.judged_rms <= best * (1 + TOLERANCE)
+    def rank(c):
+        return (not c.fitted.family.piecewise_linear_inverse, c.fitted.n_operators,
+                c.judged_rms)
     for c in eligible:
         if c.judged_rms <= best * (1 + TOLERANCE):
-            assert (c.fitted.n_operators, c.judged_rms) >= (chosen.fitted.n_operators,
-                                                            chosen.judged_rms)
+            assert rank(c) >= rank(chosen)
     if max_ops is not None:
         assert chosen.fitted.n_operators <= max_ops
 

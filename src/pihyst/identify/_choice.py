@@ -10,7 +10,11 @@ cycles and a validation record), an operator count and a measured compensator la
    fixes them (PI-type), unless no such family was fitted.
 2. **Accurate enough**: judged RMS within ``TOLERANCE`` (2 %) of the lowest among the
    eligible.
-3. **Smallest**: of those, the fewest operators, then the lowest judged error. The
+3. **Fastest kind, then smallest**: of those, the families whose compensator solves a
+   piecewise-linear equation per sample (every PI family) before those whose compensator
+   iterates (Bouc-Wen: Newton on its Runge-Kutta step, 10-100 times the cost per sample,
+   far more on jumps), so an iterative model is chosen only when it is more accurate by
+   more than the tolerance; then the fewest operators, then the lowest judged error. The
    measured latency bounds the choice (``max_latency``) and is reported, but breaks no
    tie: timings vary from run to run, and the same record must give the same model.
    (A ``max_latency`` close to a candidate's measured latency can still go either way.)
@@ -72,8 +76,10 @@ def choose(candidates, *, minor_loops_known, unknown_reason, judged_on_held_back
     if judged_on_held_back:
         best = min(c.judged_rms for c in eligible)
         near = [c for c in eligible if c.judged_rms <= best * (1 + TOLERANCE)]
-        chosen = min(near, key=lambda c: (c.fitted.n_operators, c.judged_rms, c.name))
-        criterion = (f"the fewest operators, then the lowest judged error, among the "
+        chosen = min(near, key=lambda c: (not c.fitted.family.piecewise_linear_inverse,
+                                          c.fitted.n_operators, c.judged_rms, c.name))
+        criterion = (f"a piecewise-linear compensator before an iterative one, then the "
+                     f"fewest operators, then the lowest judged error, among the "
                      f"families within {100 * TOLERANCE:g} % of the lowest judged RMS error "
                      f"(the worst of held-back cycles and validation record)")
     else:

@@ -98,6 +98,9 @@ class Family(ABC):
     # PI-type structure: the minor loops follow from the major loop (the operators'
     # geometry fixes them), so a record of major loops alone is enough to fit it
     minor_loops_fixed = True
+    # the compensator solves one piecewise-linear equation per sample (a segment walk):
+    # tens of nanoseconds whatever the trajectory; False for an iterative inverse
+    piecewise_linear_inverse = True
 
     def max_threshold(self, S):
         return np.inf
@@ -429,6 +432,9 @@ class BoucWen(Family):
     # its minor loops follow from the shape (beta, gamma, n) the major loop identifies:
     # three parameters of a differential equation, none of them seen only inside the range
     minor_loops_fixed = True
+    # its compensator iterates (Newton on the Runge-Kutta step): 0.2-6 us per tracking
+    # sample, up to hundreds of us on jumps (benchmarks/bench_boucwen.py)
+    piecewise_linear_inverse = False
 
     def __init__(self, n=None):
         self.n = None if n is None else float(n)

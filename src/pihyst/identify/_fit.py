@@ -74,13 +74,14 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         (:class:`~pihyst.identify.KrasnoselskiiPokrovskii`: a ``grid`` of kernels). A
         name stands for the family with its default options. ``"bouc-wen"``
         (:class:`~pihyst.identify.BoucWen`) is not a PI family: a
-        :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md), compared with the
-        others when listed (``family=[*pihyst.identify.FAMILY_NAMES, "bouc-wen"]``).
-        Default: all of the PI families (``FAMILY_NAMES``),
+        :class:`~pihyst.model.BoucWenModel` (docs/theory/bouc-wen.md).
+        Default: every family (``FAMILY_NAMES``: the PI families and Bouc-Wen),
         judged on held-back data (and ``validate``); of those within 2 % of the lowest
-        judged RMS, the fewest operators, then the lowest judged error, is returned.
+        judged RMS, a piecewise-linear compensator (PI) before an iterative one
+        (Bouc-Wen), then the fewest operators, then the lowest judged error, is returned.
         When the data do not determine the minor loops (no reversals inside the range),
-        families whose structure fixes them (all but ``kp``) are preferred.
+        families whose structure fixes them plausibly (classical, modified-pi,
+        Bouc-Wen; not ``kp`` nor multislope) are preferred.
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
         range) instead of choosing them (families with thresholds only).
