@@ -145,3 +145,22 @@ def test_entry_point(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "why each threshold" in proc.stdout
     assert pihyst.load_model(out).n_operators == 3
+
+
+def test_creep_is_decided_with_a_time_column_and_skipped_with_a_broken_one(tmp_path, capsys):
+    data, u, y = record(tmp_path)
+    out = tmp_path / "model.json"
+    assert main(["fit", str(data), "-o", str(out)]) == 0
+    assert "creep: " in capsys.readouterr().out       # the decision is reported
+    assert main(["fit", str(data), "--no-creep", "-o", str(out)]) == 0
+    assert "creep: " not in capsys.readouterr().out
+    # time running backwards: fitted without creep, and a warning says where
+    t = np.arange(u.size, dtype=float)
+    t[40] = 1.0
+    broken = tmp_path / "broken.csv"
+    write_columns(broken, {"time_s": t, "voltage_V": u, "displacement_um": y})
+    assert main(["fit", str(broken), "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "creep: " not in captured.out
+    warning = [line for line in captured.err.splitlines() if "time column is not used" in line]
+    assert len(warning) == 1 and "broken.csv:" in warning[0] and "sample 40" in warning[0]

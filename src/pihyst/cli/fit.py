@@ -187,10 +187,9 @@ def run(args):
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
     record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json,
-                            optional=() if args.no_creep else ("time",))
+                            say=not args.json, optional=())
     u, y = record.voltage, record.displacement
-    t = None if args.no_creep else record.time
+    t = None if args.no_creep else _times_for_creep(args)
     other = validate = None
     if args.validate is not None:
         other = read_from_args(args, args.validate, need=("voltage", "displacement"),
@@ -229,6 +228,35 @@ def run(args):
         lag = f", input delay {model.delay} samples" if model.delay else ""
         print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
               f"operators{lag} (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+
+
+def _times_for_creep(args):
+    """The record's sample times for creep="auto", or None: a record without a time column
+    is fitted without creep, and so is one whose time column is unusable (a warning says
+    where; the fit itself needs no time)."""
+    try:
+        # (the time is optional here: a record without one is fitted without creep)
+        times = read_from_args(args, args.data, need=("voltage", "displacement"), say=False,
+                               optional=("time",))
+    except UsageError:
+        return None
+    except RecordError as err:
+        return _unused_time(err)
+    t = times.time
+    if t is None:
+        return None
+    bad = np.flatnonzero(~np.isfinite(t) | np.r_[False, np.diff(t) < 0])
+    if bad.size:
+        k = int(bad[0])
+        what = "is not finite" if not np.isfinite(t[k]) else "runs backwards"
+        return _unused_time(times.error(k, "time", f"time {what} at sample {k}"))
+    return t
+
+
+def _unused_time(err):
+    print(f"pihyst: warning: {err}: the time column is not used, creep is not tried (fix "
+          f"it, or give --no-creep)", flush=True, file=sys.stderr)
+    return None
 
 
 def _sample_period(args):
