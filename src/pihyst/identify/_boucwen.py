@@ -36,7 +36,6 @@ from pihyst.model._boucwen import (
     MIN_SPREAD,
     BoucWenModel,
     cycled_z,
-    substep,
     trajectory,
 )
 
@@ -53,10 +52,6 @@ SEARCH_SAMPLES = 600    # the shape search runs on about this many samples (+ re
 # Preisach beam, 70 s per fit); the sharpest shape identified on the simulated
 # Bouc-Wen beams has 150 (n = 3.5, docs/theory/bouc-wen.md)
 MAX_SHARPNESS = 200.0
-# the search's substeps: 4 per 1/stiffness, the stiffness of dz/dx at saturation being
-# n (beta + |gamma|)^(1/n) (the final z uses the model's finer substeps): coarse, but
-# the same for every shape compared, and z near saturation is attracting
-SEARCH_STEPS_PER_SATURATION = 4.0
 # the family in fit()'s comparison runs on at most this many samples plus every input
 # extremum: z at a kept sample depends only on the extrema before it (rate-independent),
 # so the kept samples' errors are exact; each sample costs a few microseconds in Python
@@ -213,19 +208,14 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
     x = v / span
 
-    def start(beta, gamma, nn, h=None):
+    def start(beta, gamma, nn):
         # (x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
-        # settled by the first sweep); arrays of shapes share the substep of the largest
+        # settled by the first sweep)
         if settle:
-            return x[0], 0.0 * beta
-        if h is None and np.ndim(beta):
-            h = _h(beta, gamma)
-        return 0.0, cycled_z(beta, gamma, nn, h=h)
+            return x[0], 0.0
+        return 0.0, cycled_z(beta, gamma, nn)
 
-    def _h(beta, gamma):
-        return substep(np.max(beta), np.max(np.abs(gamma)))
-
-    # 1. grid: every shape at once on a decimated record
+    # 1. grid: every shape on a decimated record
     keep = _keep(x, SEARCH_SAMPLES)
     where = np.zeros(x.size, dtype=bool)
     where[fit_i] = True
@@ -234,8 +224,9 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     if shape is None:
         grid = np.array([(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in ns])
         gb, gg, gn = grid.T
-        x0, z0 = start(gb, gg, gn)
-        Z = trajectory(x[keep], x0, z0, gb, gg, gn, h=_h(gb, gg))
+        # one C-core trajectory per shape, each at its own substeps
+        Z = np.column_stack([trajectory(x[keep], *start(b, g, e), b, g, e)
+                             for b, g, e in grid])
         xs, ys = x[keep][kfit], y[keep][kfit]
         rss = np.empty(len(grid))
         for j in range(len(grid)):
@@ -274,10 +265,9 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         beta, gamma, nn = unpack(p)
         if not (beta + abs(gamma) <= MAX_SHAPE and beta + gamma >= MIN_SPREAD):
             return math.inf
-        stiffness = nn * (beta + abs(gamma)) ** (1.0 / nn)
-        h = min(1.0 / 64.0, 1.0 / (SEARCH_STEPS_PER_SATURATION * stiffness))
-        x0, z0 = start(beta, gamma, nn, h)
-        zk = trajectory(xk, x0, z0, beta, gamma, nn, h=h)
+        # the model's own arithmetic, in the C core
+        x0, z0 = start(beta, gamma, nn)
+        zk = trajectory(xk, x0, z0, beta, gamma, nn)
         xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]
         off, c1, c2, a = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma))
         r = yf - (off + c1 * xf + c2 * xf * xf + a * zf)

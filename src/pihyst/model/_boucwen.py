@@ -147,9 +147,19 @@ def advance(z, dx, beta, gamma, n, h=None):
     return z
 
 
+def _normalized_core(beta, gamma, n, x0=0.0, z0=0.0):
+    """The C core's model of z alone on the normalized input (a = 1, range [0, 1]): the
+    same arithmetic as :func:`advance` with the model's substeps, at C speed."""
+    return _boucwen_core.BoucWen(beta, gamma, n, 1.0, 0.0, 0.0, 0.0, (0.0, 1.0), (x0, z0))
+
+
 def trajectory(x, x0, z0, beta, gamma, n, h=None):
-    """z at every normalized input x[t], starting from (x0, z0); the shape may be arrays
-    (then the result is len(x) x len(shape))."""
+    """z at every normalized input x[t] in [0, 1], starting from (x0, z0); the shape may
+    be arrays (then the result is len(x) x len(shape)). One shape with the model's own
+    substeps runs in the C core."""
+    if h is None and np.ndim(z0) == 0 and np.ndim(beta) == 0:
+        return _normalized_core(beta, gamma, n, x0, z0).trajectory(
+            np.asarray(x, dtype=np.float64))[1]
     out = np.empty((x.size,) + np.shape(z0))
     xp, z = float(x0), z0
     for t, xt in enumerate(x.tolist()):
@@ -161,6 +171,8 @@ def trajectory(x, x0, z0, beta, gamma, n, h=None):
 
 def cycled_z(beta, gamma, n, h=None):
     """z at rest at x = 0 after a full 0 -> 1 -> 0 cycle from the virgin state z = 0."""
+    if h is None and np.ndim(beta) == 0:
+        return _normalized_core(beta, gamma, n).rest_z
     z0 = np.zeros(np.shape(beta)) if np.ndim(beta) else 0.0
     return advance(advance(z0, 1.0, beta, gamma, n, h), -1.0, beta, gamma, n, h)
 
