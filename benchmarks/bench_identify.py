@@ -29,6 +29,7 @@ from scipy.optimize import nnls
 from timing import best_time
 
 from pihyst import ClassicalPI, fit
+from pihyst._reference import turning_points_loop
 from pihyst.exceptions import PihystWarning
 from pihyst.identify import cycled_state
 from pihyst.identify._cycles import layout, turning_points
@@ -201,25 +202,6 @@ def speed(n=100_000):
           f"held-back RMS {worst:.1e}")
 
 
-def _loop_turning_points(v, tolerance):
-    """The per-sample loop that _cycles.turning_points replaced (the tests' reference)."""
-    points, hi_i, lo_i, direction = [], 0, 0, 0
-    for t in range(1, v.size):
-        x = v[t]
-        if x > v[hi_i]:
-            hi_i = t
-        if x < v[lo_i]:
-            lo_i = t
-        if direction >= 0 and v[hi_i] - x > tolerance:
-            if hi_i > 0:
-                points.append((hi_i, +1))
-            direction, lo_i = -1, t
-        elif direction <= 0 and x - v[lo_i] > tolerance:
-            if lo_i > 0:
-                points.append((lo_i, -1))
-            direction, hi_i = +1, t
-    return points
-
 
 def speed_large(n=1_000_000):
     print(f"\nSpeed on {n} samples (decaying triangles on the paper beam):")
@@ -228,8 +210,8 @@ def speed_large(n=1_000_000):
     y = make_plant("paper-beam", seed=1).run(u, t)
     tol = 0.01 * np.ptp(u)
     t_vec = best_time(lambda: turning_points(u, tol), 3)
-    t_loop = best_time(lambda: _loop_turning_points(u, tol), 1)
-    same = turning_points(u, tol) == _loop_turning_points(u, tol)
+    t_loop = best_time(lambda: turning_points_loop(u, tol), 1)
+    same = turning_points(u, tol) == turning_points_loop(u, tol)
     print(f"  turning points: vectorized {1e3 * t_vec:.1f} ms, per-sample loop "
           f"{1e3 * t_loop:.0f} ms ({t_loop / t_vec:.0f}x; same points: {same})")
     t_cls = best_time(lambda: fit(u, y, family="classical", n_operators=4, refit=False), 2)

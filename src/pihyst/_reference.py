@@ -1,7 +1,8 @@
 """Pure-NumPy twin of :mod:`pihyst._core`: same class, same methods, no C.
 
 A test oracle, written for clarity rather than speed: the tests run both on the
-same signals and compare. Formulas are docs/theory/operators.md.
+same signals and compare. Formulas are docs/theory/operators.md. Also the per-sample
+reference of a vectorized NumPy path (:func:`turning_points_loop`).
 """
 
 import numpy as np
@@ -459,3 +460,26 @@ class Creep:
             y[t] = self.step(comp.output, d)
             flags[t] = comp.last_flags
         return u, y, flags
+
+
+def turning_points_loop(v, tolerance):
+    """Turning points of ``v``, sample by sample: the reference of the vectorized
+    :func:`pihyst.identify._cycles.turning_points` (same (index, +1 max / -1 min) list)."""
+    points = []
+    hi_i = lo_i = 0
+    direction = 0          # +1 rising (looking for a maximum), -1 falling, 0 unknown
+    for t in range(1, v.size):
+        x = v[t]
+        if x > v[hi_i]:
+            hi_i = t
+        if x < v[lo_i]:
+            lo_i = t
+        if direction >= 0 and v[hi_i] - x > tolerance:
+            if hi_i > 0:
+                points.append((hi_i, +1))
+            direction, lo_i = -1, t
+        elif direction <= 0 and x - v[lo_i] > tolerance:
+            if lo_i > 0:
+                points.append((lo_i, -1))
+            direction, hi_i = +1, t
+    return points

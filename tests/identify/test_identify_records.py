@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pihyst._reference import turning_points_loop
 from pihyst.exceptions import FitError
 from pihyst.identify._cycles import checked_signals, layout, starts_at_rest, turning_points
 
@@ -14,27 +15,6 @@ def ramps(levels, n=20):
     return np.concatenate([np.linspace(a, b, n, endpoint=False) for a, b in
                            zip(levels[:-1], levels[1:])] + [levels[-1:]])
 
-
-def turning_points_loop(v, tolerance):
-    """The per-sample loop that turning_points vectorizes: the reference."""
-    points = []
-    hi_i = lo_i = 0
-    direction = 0          # +1 rising (looking for a maximum), -1 falling, 0 unknown
-    for t in range(1, v.size):
-        x = v[t]
-        if x > v[hi_i]:
-            hi_i = t
-        if x < v[lo_i]:
-            lo_i = t
-        if direction >= 0 and v[hi_i] - x > tolerance:
-            if hi_i > 0:
-                points.append((hi_i, +1))
-            direction, lo_i = -1, t
-        elif direction <= 0 and x - v[lo_i] > tolerance:
-            if lo_i > 0:
-                points.append((lo_i, -1))
-            direction, hi_i = +1, t
-    return points
 
 
 @settings(max_examples=200, deadline=None)

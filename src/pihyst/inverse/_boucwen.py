@@ -32,9 +32,9 @@ from pihyst.inverse._compensator import (
     FLAG_SATURATED_LOW,
     FLAG_SLEW,
     OTHER_COMPENSATORS,
-    CompensationResult,
     _desired,
     _number,
+    run_result,
 )
 from pihyst.model import InvalidModelError
 from pihyst.model._boucwen import BoucWenModel, advance, slope
@@ -239,14 +239,7 @@ class BoucWenCompensatorTwin:
             u[i] = self.step(v)
             y[i] = self.displacement
             flags[i] = self._flags
-        low = (flags & FLAG_SATURATED_LOW) != 0
-        high = (flags & FLAG_SATURATED_HIGH) != 0
-        return CompensationResult(
-            desired=yd, voltage=u, displacement=y, flags=flags, saturated=low | high,
-            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
-            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
-            initial_voltage=initial_voltage, final_state=self.state,
-            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
+        return run_result(self, yd, u, y, flags, initial_state, initial_voltage)
 
     def __repr__(self):
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
@@ -317,14 +310,7 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
         yd = _desired(y_desired)
         initial_state, initial_voltage = self.state, self.voltage
         u, y, flags = self._core.run(yd)
-        low = (flags & FLAG_SATURATED_LOW) != 0
-        high = (flags & FLAG_SATURATED_HIGH) != 0
-        return CompensationResult(
-            desired=yd, voltage=u, displacement=y, flags=flags, saturated=low | high,
-            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
-            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
-            initial_voltage=initial_voltage, final_state=self.state,
-            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate)
+        return run_result(self, yd, u, y, flags, initial_state, initial_voltage)
 
 
 OTHER_COMPENSATORS[BoucWenModel.family] = BoucWenCompensator

@@ -304,15 +304,9 @@ class Compensator:
             u, y, flags = self._lags.compensate(self._core, y_desired, dt)
             if y.size:
                 self._output = float(y[-1])
-        low = (flags & FLAG_SATURATED_LOW) != 0
-        high = (flags & FLAG_SATURATED_HIGH) != 0
-        return CompensationResult(
-            desired=y_desired, voltage=u, displacement=y, flags=flags, saturated=low | high,
-            saturated_low=low, saturated_high=high, slew_limited=(flags & FLAG_SLEW) != 0,
-            nan_held=(flags & FLAG_NAN) != 0, initial_state=initial_state,
-            initial_voltage=initial_voltage, final_state=self.state,
-            final_voltage=self.voltage, limits=self.limits, slew_rate=self.slew_rate,
-            initial_creep_state=initial_creep, final_creep_state=self.creep_state)
+        return run_result(self, y_desired, u, y, flags, initial_state, initial_voltage,
+                          initial_creep_state=initial_creep,
+                          final_creep_state=self.creep_state)
 
     def __repr__(self):
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
@@ -447,19 +441,27 @@ class PreviewRun:
         voltage = np.concatenate([self._voltage, np.full(held, self.comp.voltage)])
         before = self._start[2]          # the displacement at the initial voltage
         reached = [(before, 0) if r is None else r for r in self._reached[:n]]
-        out = CompensationResult(
-            desired=self._desired[:n], voltage=voltage[:n],
-            displacement=np.array([r[0] for r in reached], dtype=np.float64),
-            flags=np.array([r[1] for r in reached], dtype=np.uint8),
-            saturated=None, saturated_low=None, saturated_high=None, slew_limited=None,
-            nan_held=None, initial_state=self._start[0], initial_voltage=self._start[1],
-            final_state=self.comp.state, final_voltage=self.comp.voltage,
-            limits=self.comp.limits, slew_rate=self.comp.slew_rate,
-            initial_creep_state=self._start[3],
+        out = run_result(
+            self.comp, self._desired[:n], voltage[:n],
+            np.array([r[0] for r in reached], dtype=np.float64),
+            np.array([r[1] for r in reached], dtype=np.uint8), self._start[0],
+            self._start[1], initial_creep_state=self._start[3],
             final_creep_state=getattr(self.comp, "creep_state", None))
         self._desired, self._voltage = self._desired[n:], voltage[n:]
         self._reached = self._reached[n:]
-        return _with_flag_arrays(out)
+        return out
+
+
+def run_result(comp, desired, voltage, displacement, flags, initial_state, initial_voltage,
+               **creep_states):
+    """The :class:`CompensationResult` of a run of the compensator ``comp`` (now at its
+    end), its per-sample booleans derived from ``flags``."""
+    return _with_flag_arrays(CompensationResult(
+        desired=desired, voltage=voltage, displacement=displacement, flags=flags,
+        saturated=None, saturated_low=None, saturated_high=None, slew_limited=None,
+        nan_held=None, initial_state=initial_state, initial_voltage=initial_voltage,
+        final_state=comp.state, final_voltage=comp.voltage, limits=comp.limits,
+        slew_rate=comp.slew_rate, **creep_states))
 
 
 def _with_flag_arrays(result):
