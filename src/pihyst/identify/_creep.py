@@ -19,6 +19,12 @@ H_prev = Phi w + c until H stops changing (creep is a few percent of H, so two o
 passes; B is :func:`log_t_basis`). The structure (family, thresholds, shape) is chosen by
 the ordinary fit, run again on the record with the estimated creep removed,
 y + sum_i g_i psi_i; the joint QP then refits its weights and the creep gains together.
+
+A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for its fixed
+shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
+(c, c_1, c_2, a) under the monotonicity bound, which becomes plain bounds in two cases
+(a >= 0, a <= 0; identify/_boucwen.py), so each pass solves the same bounded QP in
+(c, c_1, c_2, a, p) once per case and keeps the better (:func:`_joint_qp_boucwen`).
 """
 
 import functools
@@ -27,10 +33,12 @@ import numpy as np
 
 from pihyst import _core
 from pihyst.exceptions import FitError
+from pihyst.identify._boucwen import boucwen_coefficients, boucwen_columns
 from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._family_fit import FramedRecord
 from pihyst.identify._qp import solve_qp
+from pihyst.model._boucwen import BoucWenModel
 from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 
 __all__ = ["fit_with_creep"]
@@ -149,6 +157,73 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
     return hyst, gains, passes
 
 
+def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, rows=None,
+                      **_):
+    """Linear part (offset, c_1, c_2, a) and creep gains of the Bouc-Wen ``model`` (its
+    shape fixed) by repeated joint QPs on the samples ``rows`` (default every sample from
+    ``start``), as :func:`_joint_qp`:
+
+        min || X_s v + c - sum_i g_i psi_i(H_prev) - y ||^2,   v = (q_0, q_1, p) >= 0,
+        g = B p_creep, 0 <= p_creep <= G / (2n),
+
+    X_s the regressors of the monotone case s (a >= 0 or a <= 0, identify/_boucwen.py);
+    both cases are solved and the smaller residual kept. ``offset`` must be True (a
+    Bouc-Wen model always fits its offset).
+    """
+    if offset is not True:
+        raise FitError("bouc-wen fits its own offset: a fixed offset is not available "
+                       "with creep")
+    fitted = np.zeros(u.size, dtype=bool)
+    if rows is None:
+        fitted[start:] = True
+    else:
+        fitted[rows] = True
+    hyst = model.replace(creep=None)
+    # z depends on the shape only: one run of the C core
+    z = hyst._core(hyst.initial_state).trajectory(u)[1]
+    x = hyst._x(u)
+    spread = 2.0 * hyst.beta / (hyst.beta + hyst.gamma)      # D
+    h = hyst.output(u, z)
+    n = tau.size
+    tie = log_t_basis(n, int(np.count_nonzero(tau <= duration)))
+    p = tie.shape[1]
+    lower = np.r_[np.zeros(3), -np.inf, np.zeros(p)]
+    upper = np.r_[np.full(4, np.inf), np.full(p, MAX_TOTAL_GAIN / (2 * n))]
+    names = ["q_0", "q_1", "p", "offset", "creep per lag", "creep rise toward slow lags"]
+    xf, zf, yf = x[fitted], z[fitted], y[fitted]
+    span = max(float(np.ptp(yf)), 1e-300)
+    gains, passes = np.zeros(n), 0
+    while passes < MAX_PASSES:
+        passes += 1
+        psi = _lag_deficits(hyst, h, dt, tau, hyst.initial_state)[fitted] @ tie
+        best = None
+        for negative in (False, True):
+            X = np.column_stack([boucwen_columns(xf, zf, spread, negative),
+                                 np.ones(xf.size), -psi])
+            sol = solve_qp(X.T @ X, X.T @ yf, lower=lower, upper=upper, warn=False,
+                           names=names).x
+            r = X @ sol - yf
+            rss = float(r @ r)
+            if best is None or rss < best[0]:
+                best = (rss, negative, sol)
+        _, negative, sol = best
+        c1, c2, a = boucwen_coefficients(sol[:3], spread, negative)
+        gains = np.clip(tie @ sol[4:], 0.0, None)
+        hyst = hyst.replace(offset=float(sol[3]), linear=c1, quadratic=c2, hysteretic=a)
+        h_new = hyst.output(u, z)
+        change = float(np.max(np.abs(h_new - h)))
+        h = h_new
+        if change <= 1e-6 * span:
+            break
+    return hyst, gains, passes
+
+
+def _joint_qp_of(model):
+    """The joint QP of the model's kind: :func:`_joint_qp` (PI operators) or
+    :func:`_joint_qp_boucwen`."""
+    return _joint_qp_boucwen if isinstance(model, BoucWenModel) else _joint_qp
+
+
 def _free(model):
     """Whether the joint QP may move every weight: not for the regularized kernel basis
     (family kp), whose weights it would overfit without the regularization."""
@@ -207,17 +282,17 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                                           "judge it on (creep=True fits it regardless)"})
         if start_model is None:
             return _without_creep(first, {"kept": False, "reason": f"the chosen family, "
-                                          f"{first.report.chosen}, cannot carry creep (the "
-                                          f"PI families can)"})
+                                          f"{first.report.chosen}, cannot carry creep"})
         rows = rec.layout.indices("fit")
     elif start_model is None:
-        raise FitError(f"a {first.report.chosen} model has no creep: fit creep with a PI "
-                       f"family")
+        raise FitError(f"a {first.report.chosen} model has no creep: fit creep with one of "
+                       f"{', '.join(CREEP_FAMILIES)}")
     start_model = start_model.replace(creep=None, delay=0)
     start = start_model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     # first creep estimate: every weight free (a kp basis may overfit here; only the
     # creep estimate is kept, the structure and weights are fitted again below)
-    hyst, gains, _ = _joint_qp(start_model, ua, ya, dta, tau, start=start, rows=rows, **qp)
+    hyst, gains, _ = _joint_qp_of(start_model)(start_model, ua, ya, dta, tau, start=start,
+                                               rows=rows, **qp)
     # the record without its creep: the settled displacement the structure is chosen on
     psi = _lag_deficits(hyst, hyst.predict(ua), dta, tau, hyst.initial_state)
     second_kw = dict(kwargs)
@@ -231,8 +306,9 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                         rec.layout.indices("held_back"), qp)
         if not judged["kept"]:
             return _without_creep(first, judged)
-    hyst, gains, passes = _joint_qp(second.model.replace(delay=0), ua, ya, dta, tau,
-                                    start=start, free_weights=_free(second.model), **qp)
+    hyst, gains, passes = _joint_qp_of(second.model)(
+        second.model.replace(delay=0), ua, ya, dta, tau, start=start,
+        free_weights=_free(second.model), **qp)
     aligned = hyst.replace(creep=Creep(tau, gains, dt_fixed))
     model = aligned.replace(delay=d, sample_period=dt_fixed if d else None)
     meta = dict(second.model.metadata)
@@ -242,7 +318,9 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
         "creep_total": float(gains.sum()), "qp_passes": passes,
         "rms_without_creep": _rms(first.model.replace(delay=0), ua, ya, None, start),
         "rms_with_creep": _rms(aligned, ua, ya, t[d:], start),
-        "weights": "free" if _free(second.model) else "one scale (regularized kp shape)",
+        "weights": ("linear part (offset, c_1, c_2, a), shape fixed"
+                    if isinstance(hyst, BoucWenModel) else
+                    "free" if _free(second.model) else "one scale (regularized kp shape)"),
         "note": ("family and thresholds chosen on the record with the estimated creep "
                  "removed; weights, offset and creep gains fitted together on every "
                  "sample after the settling sweep"),
@@ -290,9 +368,9 @@ def _judge(first, second, u, y, t, dt, tau, start, fit_rows, held_rows, qp):
     its creep removed) with weights and creep gains fitted on the fitted cycles only,
     against the ordinary fit, both on the held-back cycles (the choice's RMS, before any
     refit). Creep is kept when it lowers that RMS by more than the choice's tolerance."""
-    hyst, gains, _ = _joint_qp(second.model.replace(delay=0), u, y, dt, tau, start=start,
-                               rows=fit_rows,
-                               free_weights=_free(second.model), **qp)
+    hyst, gains, _ = _joint_qp_of(second.model)(second.model.replace(delay=0), u, y, dt,
+                                                tau, start=start, rows=fit_rows,
+                                                free_weights=_free(second.model), **qp)
     with_creep = hyst.replace(creep=Creep(tau, gains, float(np.median(dt))))
     r = with_creep.predict(u, t=t)[held_rows] - y[held_rows]
     rms_creep = float(np.sqrt(np.mean(r * r)))
