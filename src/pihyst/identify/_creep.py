@@ -33,7 +33,7 @@ import numpy as np
 
 from pihyst import _core
 from pihyst.exceptions import FitError
-from pihyst.identify._boucwen import boucwen_coefficients, boucwen_columns
+from pihyst.identify._boucwen_creep import fit_shape_and_creep
 from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._family_fit import FramedRecord
@@ -158,18 +158,12 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
 
 
 def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, rows=None,
-                      **_):
-    """Linear part (offset, c_1, c_2, a) and creep gains of the Bouc-Wen ``model`` (its
-    shape fixed) by repeated joint QPs on the samples ``rows`` (default every sample from
-    ``start``), as :func:`_joint_qp`:
-
-        min || X_s v + c - sum_i g_i psi_i(H_prev) - y ||^2,   v = (q_0, q_1, p) >= 0,
-        g = B p_creep, 0 <= p_creep <= G / (2n),
-
-    X_s the regressors of the monotone case s (a >= 0 or a <= 0, identify/_boucwen.py);
-    both cases are solved and the smaller residual kept. ``offset`` must be True (a
-    Bouc-Wen model always fits its offset).
-    """
+                      fixed_n=None, **_):
+    """Shape, linear part (offset, c_1, c_2, a) and creep gains of the Bouc-Wen
+    ``model`` fitted together on the samples ``rows`` (default every sample from
+    ``start``), the shape searched from ``model``'s (identify/_boucwen_creep.py; the
+    gains tied by :func:`log_t_basis` as for :func:`_joint_qp`). A Bouc-Wen model always
+    fits its offset."""
     if offset is not True:
         raise FitError("bouc-wen fits its own offset: a fixed offset is not available "
                        "with creep")
@@ -178,50 +172,25 @@ def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, r
         fitted[start:] = True
     else:
         fitted[rows] = True
-    hyst = model.replace(creep=None)
-    # z depends on the shape only: one run of the C core
-    z = hyst._core(hyst.initial_state).trajectory(u)[1]
-    x = hyst._x(u)
-    spread = 2.0 * hyst.beta / (hyst.beta + hyst.gamma)      # D
-    h = hyst.output(u, z)
-    n = tau.size
-    tie = log_t_basis(n, int(np.count_nonzero(tau <= duration)))
-    p = tie.shape[1]
-    lower = np.r_[np.zeros(3), -np.inf, np.zeros(p)]
-    upper = np.r_[np.full(4, np.inf), np.full(p, MAX_TOTAL_GAIN / (2 * n))]
-    names = ["q_0", "q_1", "p", "offset", "creep per lag", "creep rise toward slow lags"]
-    xf, zf, yf = x[fitted], z[fitted], y[fitted]
-    span = max(float(np.ptp(yf)), 1e-300)
-    gains, passes = np.zeros(n), 0
-    while passes < MAX_PASSES:
-        passes += 1
-        psi = _lag_deficits(hyst, h, dt, tau, hyst.initial_state)[fitted] @ tie
-        best = None
-        for negative in (False, True):
-            X = np.column_stack([boucwen_columns(xf, zf, spread, negative),
-                                 np.ones(xf.size), -psi])
-            sol = solve_qp(X.T @ X, X.T @ yf, lower=lower, upper=upper, warn=False,
-                           names=names).x
-            r = X @ sol - yf
-            rss = float(r @ r)
-            if best is None or rss < best[0]:
-                best = (rss, negative, sol)
-        _, negative, sol = best
-        c1, c2, a = boucwen_coefficients(sol[:3], spread, negative)
-        gains = np.clip(tie @ sol[4:], 0.0, None)
-        hyst = hyst.replace(offset=float(sol[3]), linear=c1, quadratic=c2, hysteretic=a)
-        h_new = hyst.output(u, z)
-        change = float(np.max(np.abs(h_new - h)))
-        h = h_new
-        if change <= 1e-6 * span:
-            break
+    tie = log_t_basis(tau.size, int(np.count_nonzero(tau <= duration)))
+    hyst, gains, passes, _ = fit_shape_and_creep(model.replace(creep=None), u, y, dt, tau,
+                                                 tie, fitted, fixed_n=fixed_n)
     return hyst, gains, passes
 
 
-def _joint_qp_of(model):
+def _joint_qp_of(model, fixed_n=None):
     """The joint QP of the model's kind: :func:`_joint_qp` (PI operators) or
-    :func:`_joint_qp_boucwen`."""
-    return _joint_qp_boucwen if isinstance(model, BoucWenModel) else _joint_qp
+    :func:`_joint_qp_boucwen` (``fixed_n``: the exponent the family was given)."""
+    if isinstance(model, BoucWenModel):
+        return functools.partial(_joint_qp_boucwen, fixed_n=fixed_n)
+    return _joint_qp
+
+
+def _fixed_exponent(family):
+    """The exponent a Bouc-Wen family object among the ``family`` option fixes, or None."""
+    specs = family if isinstance(family, (list, tuple)) else [family]
+    return next((getattr(f, "n", None) for f in specs
+                 if getattr(f, "name", None) == BoucWenModel.family), None)
 
 
 def _free(model):
@@ -270,6 +239,7 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     kwargs["delay"] = d
     ua, ya, dta, ta = u[:u.size - d], y[d:], np.r_[dt[0], dt[d + 1:]], t[d:]
     qp = dict(offset=offset, nonnegative=nonnegative, duration=duration)
+    fixed_n = _fixed_exponent(kwargs.get("family"))
     start_model = _creep_capable(first, kwargs.get("family") is not None or decide)
     rows = None
     if decide:
@@ -291,8 +261,8 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     start = start_model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     # first creep estimate: every weight free (a kp basis may overfit here; only the
     # creep estimate is kept, the structure and weights are fitted again below)
-    hyst, gains, _ = _joint_qp_of(start_model)(start_model, ua, ya, dta, tau, start=start,
-                                               rows=rows, **qp)
+    hyst, gains, _ = _joint_qp_of(start_model, fixed_n)(start_model, ua, ya, dta, tau,
+                                                        start=start, rows=rows, **qp)
     # the record without its creep: the settled displacement the structure is chosen on
     psi = _lag_deficits(hyst, hyst.predict(ua), dta, tau, hyst.initial_state)
     second_kw = dict(kwargs)
@@ -303,10 +273,10 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     judged = None
     if decide:
         judged = _judge(first, second, ua, ya, ta, dta, tau, start, rows,
-                        rec.layout.indices("held_back"), qp)
+                        rec.layout.indices("held_back"), qp, fixed_n)
         if not judged["kept"]:
             return _without_creep(first, judged)
-    hyst, gains, passes = _joint_qp_of(second.model)(
+    hyst, gains, passes = _joint_qp_of(second.model, fixed_n)(
         second.model.replace(delay=0), ua, ya, dta, tau, start=start,
         free_weights=_free(second.model), **qp)
     aligned = hyst.replace(creep=Creep(tau, gains, dt_fixed))
@@ -363,14 +333,14 @@ def _creep_capable(result, chosen_only):
                            if "settled" in result.model.metadata.get("fit", {}) else {})}})
 
 
-def _judge(first, second, u, y, t, dt, tau, start, fit_rows, held_rows, qp):
+def _judge(first, second, u, y, t, dt, tau, start, fit_rows, held_rows, qp, fixed_n=None):
     """Whether creep generalizes: the structure of ``second`` (chosen on the record with
     its creep removed) with weights and creep gains fitted on the fitted cycles only,
     against the ordinary fit, both on the held-back cycles (the choice's RMS, before any
     refit). Creep is kept when it lowers that RMS by more than the choice's tolerance."""
-    hyst, gains, _ = _joint_qp_of(second.model)(second.model.replace(delay=0), u, y, dt,
-                                                tau, start=start, rows=fit_rows,
-                                                free_weights=_free(second.model), **qp)
+    joint_qp = _joint_qp_of(second.model, fixed_n)
+    hyst, gains, _ = joint_qp(second.model.replace(delay=0), u, y, dt, tau, start=start,
+                              rows=fit_rows, free_weights=_free(second.model), **qp)
     with_creep = hyst.replace(creep=Creep(tau, gains, float(np.median(dt))))
     r = with_creep.predict(u, t=t)[held_rows] - y[held_rows]
     rms_creep = float(np.sqrt(np.mean(r * r)))
