@@ -92,3 +92,13 @@ def test_default_fit_leaves_out_creep_an_actuator_does_not_have(truth, record):
     res = pihyst.fit(u, y, t=t, family="bouc-wen", input_range=(0.0, 150.0))
     assert res.model.creep is None
     assert not res.model.metadata["fit"]["creep"]["decision"]["kept"]
+
+
+def test_creep_true_with_a_fixed_exponent_and_without_times(record):
+    t, u, y = record
+    res = pihyst.fit(u, y, t=t, family=pihyst.identify.BoucWen(n=1.5), creep=True,
+                     input_range=(0.0, 150.0))
+    assert res.model.creep is not None and res.model.n == 1.5
+    assert res.model.metadata["fit"]["creep"]["creep_total"] > 0
+    with pytest.raises(pihyst.FitError, match="sample times"):
+        pihyst.fit(u, y, family="bouc-wen", creep=True)

@@ -20,11 +20,12 @@ passes; B is :func:`log_t_basis`). The structure (family, thresholds, shape) is 
 the ordinary fit, run again on the record with the estimated creep removed,
 y + sum_i g_i psi_i; the joint QP then refits its weights and the creep gains together.
 
-A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for its fixed
+A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for a fixed
 shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
 (c, c_1, c_2, a) under the monotonicity bound, which becomes plain bounds in two cases
 (a >= 0, a <= 0; identify/_boucwen.py), so each pass solves the same bounded QP in
-(c, c_1, c_2, a, p) once per case and keeps the better (:func:`_joint_qp_boucwen`).
+(c, c_1, c_2, a, p) once per case and keeps the better; the shape is searched with that
+joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_creep.py).
 """
 
 import functools
@@ -288,7 +289,7 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
         "creep_total": float(gains.sum()), "qp_passes": passes,
         "rms_without_creep": _rms(first.model.replace(delay=0), ua, ya, None, start),
         "rms_with_creep": _rms(aligned, ua, ya, t[d:], start),
-        "weights": ("linear part (offset, c_1, c_2, a), shape fixed"
+        "weights": ("shape and linear part (offset, c_1, c_2, a) fitted with the gains"
                     if isinstance(hyst, BoucWenModel) else
                     "free" if _free(second.model) else "one scale (regularized kp shape)"),
         "note": ("family and thresholds chosen on the record with the estimated creep "
