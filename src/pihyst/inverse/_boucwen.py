@@ -220,7 +220,7 @@ class BoucWenCompensatorTwin:
     def step(self, y_desired, dt=None):
         """The voltage for one desired output (applied to the state). With creep, ``dt``
         is the time since the previous sample (default ``model.creep.dt``)."""
-        yd = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
+        yd = float(y_desired)
         creep = self.model.creep
         if creep is None:
             return self._step(yd)
@@ -397,7 +397,7 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
     def step(self, y_desired, dt=None):
         """The voltage for one desired output (applied to the state). With creep, ``dt``
         is the time since the previous sample (default ``model.creep.dt``)."""
-        yd = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
+        yd = float(y_desired)
         if self.model.creep is None:
             return self._core.step(yd)
         dt = self._dt(dt)
