@@ -468,10 +468,10 @@ class BoucWenModel(Immutable):
              **{k: getattr(self, k) for k in ("beta", "gamma", "n", "hysteretic", "linear",
                                                 "quadratic", "offset")},
              "input_range": list(self.input_range),
-             "initial_state": list(self.initial_state), "units": dict(self.units),
-             **delay_dict(self)}
+             "initial_state": list(self.initial_state), "units": dict(self.units)}
         if self.creep is not None:
             d["creep"] = self.creep.to_dict()
+        d.update(delay_dict(self))
         if self.metadata:
             d["metadata"] = dict(self.metadata)
         return d
