@@ -53,9 +53,10 @@ const char *pihyst_lib_status_text(int32_t status)
     case PIHYST_LIB_ECREEP_BOUCWEN: return "creep of a Bouc-Wen model is not supported by "
                                            "this library";
     default:
-        if (status <= PIHYST_LIB_ECREEP(PIHYST_CREEP_ENULL) &&
-            status >= PIHYST_LIB_ECREEP(PIHYST_CREEP_EDT))
-            return pihyst_creep_status_text((pihyst_creep_status)(status + 110));
+        if (status <= PIHYST_LIB_ECREEP_BASE + PIHYST_CREEP_ENULL &&
+            status >= PIHYST_LIB_ECREEP_BASE + PIHYST_CREEP_EDT)
+            return pihyst_creep_status_text(
+                (pihyst_creep_status)(status - PIHYST_LIB_ECREEP_BASE));
         return pihyst_status_text((pihyst_status)status);
     }
 }
@@ -266,7 +267,7 @@ int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const doubl
                           NULL);
     if (s != PIHYST_CREEP_OK) {
         free(buffer);
-        return PIHYST_LIB_ECREEP(s);
+        return PIHYST_LIB_ECREEP_BASE + s;
     }
     free(h->creep_buffer);
     h->creep_buffer = buffer;

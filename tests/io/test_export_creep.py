@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import pihyst
 from pihyst.cli import main
@@ -19,6 +21,8 @@ from pihyst.exceptions import InvalidModelError
 from pihyst.inverse import BoucWenCompensator
 from pihyst.io._export import c_header, flat_text
 from pihyst.model import BoucWenModel, Creep
+
+from strategies import classical_models, multislope_models, pwl_models
 
 REPO = Path(__file__).resolve().parents[2]
 CSRC = REPO / "csrc"
@@ -356,6 +360,43 @@ def test_library_applies_the_flat_files_creep(lib, family, tmp_path):
         assert n_flagged == int(np.count_nonzero(flags)) == int(np.count_nonzero(ref.flags))
 
 
+@st.composite
+def creeps(draw):
+    n = draw(st.integers(1, 5))
+    tau = np.sort(draw(st.lists(st.floats(1e-3, 1e4), min_size=n, max_size=n, unique=True)))
+    g = np.array(draw(st.lists(st.floats(0.0, 1.0), min_size=n, max_size=n)))
+    total = draw(st.floats(0.0, 0.9))
+    g = g / g.sum() * total if g.sum() > 0 else g
+    return Creep(tau, g, dt=draw(st.floats(1e-5, 10.0)))
+
+
+@settings(max_examples=40)
+@given(model=st.one_of(classical_models(), multislope_models(), pwl_models()),
+       creep=creeps(), seed=st.integers(0, 2**32 - 1))
+def test_library_reproduces_any_model_with_creep_from_its_flat_file(lib, tmp_path_factory,
+                                                                    model, creep, seed):
+    model = model.replace(creep=creep)
+    path = tmp_path_factory.mktemp("flat") / "m.pihyst"
+    path.write_text(flat_text(model))
+    h, status = _load(lib, path)
+    assert status == 0, lib.pihyst_lib_status_text(status)
+    u, yd = _signals(model, n=300, seed=seed)
+    try:
+        y = np.empty_like(u)
+        assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
+        assert lib.pihyst_lib_reset(h, None, 0) == 0
+        assert lib.pihyst_lib_compensator_start(h, np.nan, np.nan, 0.0, 0.0) == 0
+        volts = np.empty_like(yd)
+        assert lib.pihyst_lib_compensate(h, _ptr(yd), _ptr(volts), None, yd.size) >= 0
+    finally:
+        lib.pihyst_lib_free(h)
+    y_ref = model.predict(u)
+    scale = max(np.ptp(y_ref), np.max(np.abs(y_ref)), 1.0)
+    np.testing.assert_allclose(y, y_ref, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(volts, pihyst.compensate(model, yd).voltage, rtol=0,
+                               atol=1e-12 * np.ptp(model.input_range))
+
+
 def test_library_creep_state_can_be_set_and_removed(lib, tmp_path):
     model = MODELS["classical"]
     h = _from_arrays(lib, model)
@@ -451,7 +492,7 @@ def test_export_command_writes_a_creep_models_header_and_flat_file(tmp_path, cap
     assert "stage_x_creep_init" in text
     assert main(["export", str(model_path), "--flat", "-o", str(tmp_path / "m.pihyst")]) == 0
     assert (tmp_path / "m.pihyst").read_text() == flat_text(model)
-    capsys.readouterr()
+    assert "4 operators, 3 creep lags at 0.01 s" in capsys.readouterr().out
     out = tmp_path / "f.h"
     assert main(["export", str(model_path), "--c", "--float", "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip()
