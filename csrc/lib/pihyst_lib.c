@@ -251,8 +251,8 @@ int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const doubl
     if (n < 0) return PIHYST_LIB_ELENGTH;
     if (h->boucwen) return n == 0 ? PIHYST_OK : PIHYST_LIB_ECREEP_BOUCWEN;
     if (n > 0 && (!tau || !gain)) return PIHYST_ENULL;
-    h->comp_started = 0;
     if (n == 0) {
+        h->comp_started = 0;
         free(h->creep_buffer);
         h->creep_buffer = NULL;
         h->n_lags = 0;
@@ -273,6 +273,7 @@ int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const doubl
     h->creep_buffer = buffer;
     h->creep = lags;
     h->n_lags = k;
+    h->comp_started = 0;
     pihyst_creep_settle(&h->creep, hysteresis_output(h));
     return PIHYST_OK;
 }
