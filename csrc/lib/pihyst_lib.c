@@ -5,6 +5,7 @@
 
 #include "pihyst.h"
 #include "pihyst_boucwen.h"
+#include "pihyst_creep.h"
 
 #include <locale.h>
 #include <math.h>
@@ -28,10 +29,14 @@ struct pihyst_lib_model {
     pihyst_bw_model bw;
     pihyst_bw_compensator bw_comp;
     double bw_initial[2];       /* (u, z) */
+    size_t n_lags;              /* creep lags (0: none), at the fixed interval */
+    double *creep_buffer;       /* tau, gain, alpha, state: n_lags values each */
+    pihyst_creep creep;
 };
 
 #define BOUCWEN_FAMILY 3 /* the flat file's family code */
 #define BOUCWEN_STATE_LEN 2
+#define MAX_CREEP_LAGS 4096 /* a flat file's creep line with more is not a model's */
 
 int32_t pihyst_lib_abi_version(void) { return PIHYST_LIB_ABI_VERSION; }
 
@@ -45,7 +50,14 @@ const char *pihyst_lib_status_text(int32_t status)
                                            "(pihyst_lib_compensator_start)";
     case PIHYST_LIB_ELENGTH: return "a length is negative or does not match the model";
     case PIHYST_LIB_EINPUT: return "an input sample is NaN or outside the input range";
-    default: return pihyst_status_text((pihyst_status)status);
+    case PIHYST_LIB_ECREEP_BOUCWEN: return "creep of a Bouc-Wen model is not supported by "
+                                           "this library";
+    default:
+        if (status <= PIHYST_LIB_ECREEP_BASE + PIHYST_CREEP_ENULL &&
+            status >= PIHYST_LIB_ECREEP_BASE + PIHYST_CREEP_EDT)
+            return pihyst_creep_status_text(
+                (pihyst_creep_status)(status - PIHYST_LIB_ECREEP_BASE));
+        return pihyst_status_text((pihyst_status)status);
     }
 }
 
@@ -60,6 +72,7 @@ void pihyst_lib_free(pihyst_lib_model *h)
     free(h->buffer);
     free(h->starts);
     free(h->scratch);
+    free(h->creep_buffer);
     free(h);
 }
 
@@ -215,6 +228,80 @@ pihyst_lib_model *pihyst_lib_create_boucwen(const double *params, int32_t *statu
     return h;
 }
 
+/* ---------------------------------------------------------------- creep */
+
+/* H = offset + sum_k w_k f_k: the hysteresis output of the operator state, where the
+ * creep lags settle (pihyst_creep.h) */
+static double hysteresis_output(const pihyst_lib_model *h)
+{
+    size_t k;
+    double sum = 0.0;
+    for (k = 0; k < h->n_ops; ++k) sum += h->params.weights[k] * h->state[k];
+    return h->params.offset + sum;
+}
+
+int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const double *gain,
+                             int32_t n, double dt)
+{
+    size_t k;
+    double *buffer;
+    pihyst_creep lags;
+    pihyst_creep_status s;
+    if (!h) return PIHYST_ENULL;
+    if (n < 0) return PIHYST_LIB_ELENGTH;
+    if (h->boucwen) return n == 0 ? PIHYST_OK : PIHYST_LIB_ECREEP_BOUCWEN;
+    if (n > 0 && (!tau || !gain)) return PIHYST_ENULL;
+    if (n == 0) {
+        h->comp_started = 0;
+        free(h->creep_buffer);
+        h->creep_buffer = NULL;
+        h->n_lags = 0;
+        return PIHYST_OK;
+    }
+    k = (size_t)n;
+    buffer = malloc(4 * k * sizeof *buffer);
+    if (!buffer) return PIHYST_LIB_ENOMEM;
+    memcpy(buffer, tau, k * sizeof *buffer);
+    memcpy(buffer + k, gain, k * sizeof *buffer);
+    s = pihyst_creep_init(&lags, k, buffer, buffer + k, dt, buffer + 2 * k, buffer + 3 * k,
+                          NULL);
+    if (s != PIHYST_CREEP_OK) {
+        free(buffer);
+        return PIHYST_LIB_ECREEP_BASE + s;
+    }
+    free(h->creep_buffer);
+    h->creep_buffer = buffer;
+    h->creep = lags;
+    h->n_lags = k;
+    h->comp_started = 0;
+    pihyst_creep_settle(&h->creep, hysteresis_output(h));
+    return PIHYST_OK;
+}
+
+int32_t pihyst_lib_n_creep_lags(const pihyst_lib_model *h)
+{
+    return h ? (int32_t)h->n_lags : PIHYST_ENULL;
+}
+
+int32_t pihyst_lib_get_creep_state(const pihyst_lib_model *h, double *z, int32_t n)
+{
+    if (!h || (n > 0 && !z)) return PIHYST_ENULL;
+    if (n != (int32_t)h->n_lags) return PIHYST_LIB_ELENGTH;
+    if (n > 0) memcpy(z, h->creep.state, h->n_lags * sizeof *z);
+    return PIHYST_OK;
+}
+
+int32_t pihyst_lib_set_creep_state(pihyst_lib_model *h, const double *z, int32_t n)
+{
+    if (!h) return PIHYST_ENULL;
+    if (z && n != (int32_t)h->n_lags) return PIHYST_LIB_ELENGTH;
+    if (z && !all_finite(z, h->n_lags)) return PIHYST_ENONFINITE;
+    if (h->n_lags == 0) return PIHYST_OK;
+    if (z) memcpy(h->creep.state, z, h->n_lags * sizeof *z);
+    else pihyst_creep_settle(&h->creep, hysteresis_output(h));
+    return PIHYST_OK;
+}
+
 /* ---------------------------------------------------------------- flat model files */
 
 /* One number of the file, read whatever the process's LC_NUMERIC: the file always has
@@ -248,6 +335,38 @@ static int read_count(FILE *f, int32_t *out)
     return 1;
 }
 
+/* The lines after the model's numbers, each at most once: "creep n tau_1..tau_n
+ * g_1..g_n dt" (the lags, into *tail: 2n values tau then gain, freed by the caller) and
+ * "delay d" (the caller applies a delay: read and ignored). Files of version 1 have at
+ * most the delay line. */
+typedef struct {
+    int32_t n_lags;
+    double *lags;
+    double dt;
+} flat_tail;
+
+static int read_tail(FILE *f, flat_tail *tail)
+{
+    char word[16];
+    int got, delay_seen = 0;
+    while ((got = fscanf(f, "%15s", word)) == 1) {
+        if (strcmp(word, "delay") == 0 && !delay_seen) {
+            long d;
+            if (fscanf(f, "%ld", &d) != 1 || d < 0) return 0;
+            delay_seen = 1;
+        } else if (strcmp(word, "creep") == 0 && !tail->lags) {
+            if (!read_count(f, &tail->n_lags) || tail->n_lags > MAX_CREEP_LAGS) return 0;
+            tail->lags = malloc(2 * (size_t)tail->n_lags * sizeof *tail->lags);
+            if (!tail->lags || !read_numbers(f, tail->lags, 2 * (size_t)tail->n_lags) ||
+                !read_number(f, &tail->dt))
+                return 0;
+        } else {
+            return 0;
+        }
+    }
+    return got == EOF;
+}
+
 pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
 {
     FILE *f;
@@ -258,6 +377,7 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
     size_t n_pts = 0, cap = 0;
     int ok;
     pihyst_lib_model *h = NULL;
+    flat_tail tail = {0, NULL, 0.0};
 
     if (!path) {
         set_status(status, PIHYST_ENULL);
@@ -269,16 +389,18 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
         return NULL;
     }
     ok = fscanf(f, "%15s %d", magic, &version) == 2 && strcmp(magic, "pihyst-flat") == 0 &&
-         version == 1 && fscanf(f, "%d", &family) == 1 && read_count(f, &k) &&
+         (version == 1 || version == 2) && fscanf(f, "%d", &family) == 1 &&
+         read_count(f, &k) &&
          read_numbers(f, head, 3);
     if (ok && family == BOUCWEN_FAMILY) {
         /* "offset u_min u_max", "beta gamma n", "hysteretic linear quadratic", "u z" */
         double bw[11];
         ok = k == 1 && read_numbers(f, bw, 3) && read_numbers(f, bw + 3, 3) &&
-             read_numbers(f, bw + 9, 2);
+             read_numbers(f, bw + 9, 2) && read_tail(f, &tail);
         fclose(f);
-        if (!ok) {
-            set_status(status, PIHYST_LIB_EFORMAT);
+        free(tail.lags);
+        if (!ok || tail.n_lags) {
+            set_status(status, ok ? PIHYST_LIB_ECREEP_BOUCWEN : PIHYST_LIB_EFORMAT);
             return NULL;
         }
         bw[6] = head[0];
@@ -319,7 +441,8 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
     } else if (ok) {
         ok = read_numbers(f, thr, (size_t)k);
     }
-    ok = ok && read_numbers(f, w, (size_t)k) && read_numbers(f, s0, (size_t)k);
+    ok = ok && read_numbers(f, w, (size_t)k) && read_numbers(f, s0, (size_t)k) &&
+         read_tail(f, &tail);
     fclose(f);
     if (ok && family == PIHYST_PWL) {
         /* regroup [x y] per polyline into the concatenated x and y arrays create wants */
@@ -349,7 +472,17 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
         h = pihyst_lib_create(family, k, thr, w, head[0], head[1], head[2], shape, NULL, NULL,
                               NULL, NULL, NULL, NULL, s0, status);
     }
+    if (h && tail.n_lags) {
+        int32_t s = pihyst_lib_set_creep(h, tail.lags, tail.lags + tail.n_lags, tail.n_lags,
+                                         tail.dt);
+        if (s != PIHYST_OK) {
+            pihyst_lib_free(h);
+            h = NULL;
+            set_status(status, s);
+        }
+    }
     if (!ok) set_status(status, PIHYST_LIB_EFORMAT);
+    free(tail.lags);
     free(thr);
     free(w);
     free(s0);
@@ -382,6 +515,7 @@ int32_t pihyst_lib_predict(pihyst_lib_model *h, const double *u, double *y, int3
         if (!(u[t] >= h->model.u_min && u[t] <= h->model.u_max)) return PIHYST_LIB_EINPUT;
     h->comp_started = 0;
     pihyst_model_run(&h->model, u, y, (size_t)n);
+    if (h->n_lags) pihyst_creep_run(&h->creep, y, NULL, y, (size_t)n); /* y = (C3) of H */
     return PIHYST_OK;
 }
 
@@ -414,6 +548,7 @@ int32_t pihyst_lib_reset(pihyst_lib_model *h, const double *state, int32_t n)
     if (state && !all_finite(state, h->n_ops)) return PIHYST_ENONFINITE;
     h->comp_started = 0;
     pihyst_model_reset(&h->model, state ? state : h->initial_state);
+    if (h->n_lags) pihyst_creep_settle(&h->creep, hysteresis_output(h));
     return PIHYST_OK;
 }
 
@@ -439,6 +574,7 @@ int32_t pihyst_lib_compensator_start(pihyst_lib_model *h, double u_min, double u
     s = pihyst_compensator_init(&h->comp, &h->model, u_min, u_max, max_step, u_initial,
                                 h->scratch, len);
     if (s != PIHYST_OK) return s;
+    if (h->n_lags) pihyst_creep_settle(&h->creep, h->comp.y_last);
     h->comp_started = 1;
     return PIHYST_OK;
 }
@@ -452,5 +588,8 @@ int32_t pihyst_lib_compensate(pihyst_lib_model *h, const double *y_desired, doub
     if (h->boucwen)
         return (int32_t)pihyst_bw_compensator_run(&h->bw_comp, y_desired, u, NULL, flags,
                                                   (size_t)n);
+    if (h->n_lags)
+        return (int32_t)pihyst_creep_compensator_run(&h->creep, &h->comp, y_desired, NULL, u,
+                                                     NULL, flags, (size_t)n);
     return (int32_t)pihyst_compensator_run(&h->comp, y_desired, u, NULL, flags, (size_t)n);
 }

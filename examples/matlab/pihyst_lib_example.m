@@ -13,7 +13,7 @@ if ~libisloaded('libpihyst')
     loadlibrary(fullfile(libdir, 'libpihyst.so'), fullfile(libdir, 'lib', 'pihyst_lib.h'), ...
                 'includepath', libdir);
 end
-assert(calllib('libpihyst', 'pihyst_lib_abi_version') == 1, 'unexpected pihyst ABI version');
+assert(calllib('libpihyst', 'pihyst_lib_abi_version') == 3, 'unexpected pihyst ABI version');
 
 status = libpointer('int32Ptr', 0);
 h = calllib('libpihyst', 'pihyst_lib_load', 'multislope.pihyst', status);

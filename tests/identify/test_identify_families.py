@@ -100,7 +100,8 @@ def test_family_fit_is_a_typed_result_whose_refit_uses_all_cycles():
     assert e_both <= e_fit
     assert not np.allclose(both.weights, fitted.weights)
     assert pihyst.identify.Classical().minor_loops_fixed
-    assert not pihyst.identify.KrasnoselskiiPokrovskii().minor_loops_fixed
+    assert pihyst.identify.KrasnoselskiiPokrovskii().minor_loops_fixed
+    assert not pihyst.identify.Multislope().minor_loops_fixed
 
 
 def test_subsampled_record_keeps_exact_operator_outputs():

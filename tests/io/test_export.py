@@ -224,7 +224,7 @@ def test_shared_library_refuses_bad_input(lib, tmp_path):
         lib.pihyst_lib_free(h)
     status = ctypes.c_int32(0)
     bad = tmp_path / "bad.pihyst"
-    for text in ("", "pihyst-flat 2\n0 1\n", "pihyst-flat 1\n0 1\n0 0 150\n150 0.8 1.2 0.5\n0\n",
+    for text in ("", "pihyst-flat 3\n0 1\n", "pihyst-flat 1\n0 1\n0 0 150\n150 0.8 1.2 0.5\n0\n",
                  flat_text(MODELS["classical"]).replace("0.2", "nan")):
         bad.write_text(text)
         assert lib.pihyst_lib_load(str(bad).encode(), ctypes.byref(status)) is None

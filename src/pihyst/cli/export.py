@@ -29,9 +29,11 @@ def register(sub):
 
 
 def _size(model):
-    if model.family == "bouc-wen":
-        return "state (u, z)"
-    return f"{model.n_operators} operators"
+    size = "state (u, z)" if model.family == "bouc-wen" else f"{model.n_operators} operators"
+    creep = getattr(model, "creep", None)
+    if creep is not None:
+        size += f", {creep.n_lags} creep lags at {creep.dt:g} s"
+    return size
 
 
 def run(args):

@@ -80,8 +80,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         judged RMS, a piecewise-linear compensator (PI) before an iterative one
         (Bouc-Wen), then the fewest operators, then the lowest judged error, is returned.
         When the data do not determine the minor loops (no reversals inside the range),
-        families whose structure fixes them plausibly (classical, modified-pi,
-        Bouc-Wen; not ``kp`` nor multislope) are preferred.
+        families whose structure or regularization fixes them plausibly (classical,
+        modified-pi, kp, Bouc-Wen; not multislope) are preferred.
     thresholds : array_like, optional
         Use exactly these thresholds (input units, measured from the bottom of the input
         range) instead of choosing them (families with thresholds only).

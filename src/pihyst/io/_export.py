@@ -11,6 +11,10 @@ A model's input delay of d samples (``model.delay``) is not inside the C core's 
 header defines ``<NAME>_DELAY_SAMPLES`` and the flat file ends with a line ``delay d``
 (only when d > 0); firmware feeds the compensator the target d ticks ahead, and
 predictions come d ticks late (docs/export.md).
+
+A model with creep (``model.creep``) carries its lags into both forms
+(:mod:`pihyst.io._export_creep`): the header's ``<name>_creep_init`` and the flat file's
+``creep`` line, which the shared library applies at the fixed interval ``creep.dt``.
 """
 
 import re
@@ -20,11 +24,19 @@ import numpy as np
 from pihyst._version import __version__
 from pihyst.exceptions import InvalidModelError
 from pihyst.io._export_boucwen import boucwen_flat_lines, boucwen_header
+from pihyst.io._export_creep import (
+    check_creep_precision,
+    creep_body,
+    creep_comment,
+    creep_defines,
+    creep_flat_line,
+    creep_include,
+    flat_magic,
+)
 
 _FAMILY_ENUM = {"classical": "PIHYST_CLASSICAL", "multislope": "PIHYST_MULTISLOPE",
                 "pwl": "PIHYST_PWL"}
 _FAMILY_CODE = {"classical": 0, "multislope": 1, "pwl": 2}
-FLAT_MAGIC = "pihyst-flat 1"
 
 
 def c_identifier(text):
@@ -63,10 +75,13 @@ def c_header(model, name, *, precision="double", source=""):
     """
     if precision not in ("double", "float"):
         raise InvalidModelError(f"precision must be 'double' or 'float', got {precision!r}")
+    check_creep_precision(model, precision)
     if model.family == "bouc-wen":
         name = c_identifier(name)
         return boucwen_header(model, name, lambda v: _literal(v, precision), precision,
-                              source, _delay_comment(model, name))
+                              source, _delay_comment(model, name),
+                              lambda ctype, label, values: _array(ctype, label, values,
+                                                                  precision))
     if model.family not in _FAMILY_ENUM:
         raise InvalidModelError(f"no C form for a {model.family!r} model")
     name = c_identifier(name)
@@ -86,10 +101,14 @@ def c_header(model, name, *, precision="double", source=""):
            f" *     {real} volts = pihyst_compensator_step{sfx}(&c, y_desired, &flags);\n",
            " * One model per header: the state and scratch below are this model's.\n",
            *_delay_comment(model, name),
+           *creep_comment(model, name),
            " */\n",
-           f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst.h\"\n\n",
+           f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst.h\"\n",
+           creep_include(model), "\n",
            f"#define {name.upper()}_N_OPS {k}\n",
-           f"#define {name.upper()}_DELAY_SAMPLES {model.delay}\n"]
+           f"#define {name.upper()}_DELAY_SAMPLES {model.delay}\n",
+           *creep_defines(model, name, model.hysteresis_output(model.initial_state),
+                          lambda v: _literal(v, precision))]
     n_points = 0
     if model.family in ("classical", "multislope"):
         out.append(_array(real, f"{name}_thresholds", model.thresholds, precision))
@@ -141,6 +160,8 @@ def c_header(model, name, *, precision="double", source=""):
             f"        {real} u_initial)\n{{\n",
             f"    return pihyst_compensator_init{sfx}(c, m, u_min, u_max, max_step, u_initial,\n"
             f"        {name}_scratch, sizeof {name}_scratch / sizeof {name}_scratch[0]);\n}}\n\n",
+            *creep_body(model, name, lambda ctype, label, values:
+                        _array(ctype, label, values, precision)),
             f"#endif /* {guard} */\n"]
     return "".join(out)
 
@@ -168,19 +189,17 @@ def flat_text(model):
     3 Bouc-Wen, whose lines follow :func:`pihyst.io._export_boucwen.boucwen_flat_lines`);
     ``offset u_min u_max``; ``U a b h`` (multislope, else the paper's defaults); the K
     thresholds (classical, multislope) or, for pwl, K lines ``n x_1..x_n y_1..y_n`` of
-    rising then K of falling polylines; the K weights; the K initial states; for a
-    delayed model, ``delay d``. Numbers in 17 significant digits, so the library reads
-    back exactly the model's doubles.
+    rising then K of falling polylines; the K weights; the K initial states; for a model
+    with creep, ``creep n tau_1..tau_n g_1..g_n dt`` (and the magic ``pihyst-flat 2``);
+    for a delayed model, ``delay d``. Numbers in 17 significant digits, so the library
+    reads back exactly the model's doubles.
     """
     num = lambda values: " ".join(repr(float(v)) for v in values)  # noqa: E731
     if model.family == "bouc-wen":
-        lines = [FLAT_MAGIC, *boucwen_flat_lines(model, num)]
-        if model.delay:      # as below: the library ignores it, the caller applies it
-            lines.append(f"delay {model.delay}")
-        return "\n".join(lines) + "\n"
+        return _with_tail(model, [flat_magic(model), *boucwen_flat_lines(model, num)], num)
     if model.family not in _FAMILY_CODE:
         raise InvalidModelError(f"no flat form for a {model.family!r} model")
-    lines = [FLAT_MAGIC, f"{_FAMILY_CODE[model.family]} {model.n_operators}",
+    lines = [flat_magic(model), f"{_FAMILY_CODE[model.family]} {model.n_operators}",
              num([model.offset, *model.input_range])]
     if model.family == "multislope":
         lines.append(num([model.U, model.a, model.b, model.h]))
@@ -192,8 +211,17 @@ def flat_text(model):
     else:
         lines.append(num(model.thresholds))
     lines += [num(model.weights), num(model.initial_state)]
+    return _with_tail(model, lines, num)
+
+
+def _with_tail(model, lines, num):
+    """The file's text: ``lines``, then the creep and delay lines the model has. Both come
+    after the numbers of the model: the library applies the creep, and loads a delayed
+    model as the same model without the delay, which the caller applies
+    (docs/export.md)."""
+    creep = creep_flat_line(model, num)
+    if creep is not None:
+        lines.append(creep)
     if model.delay:
-        # after the numbers the library reads: it loads the model as before, the caller
-        # applies the delay (docs/export.md)
         lines.append(f"delay {model.delay}")
     return "\n".join(lines) + "\n"

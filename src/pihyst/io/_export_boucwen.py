@@ -3,16 +3,25 @@ compiles the C core's pihyst_boucwen.c, and the shared library's flat model file
 3). :mod:`pihyst.io._export` dispatches here for ``model.family == "bouc-wen"``."""
 
 from pihyst._version import __version__
+from pihyst.io._export_creep import (
+    creep_body,
+    creep_comment,
+    creep_defines,
+    creep_include,
+)
 
 FLAT_FAMILY = 3      # the shared library's family code for Bouc-Wen (csrc/lib/pihyst_lib.h)
 
 
-def boucwen_header(model, name, literal, precision, source="", delay_comment=()):
+def boucwen_header(model, name, literal, precision, source="", delay_comment=(),
+                   array=None):
     """The text of a C header holding the Bouc-Wen ``model``: ``<name>_params`` (a
     ``pihyst_bw_params``), ``<name>_init(pihyst_bw_model *m)``,
     ``<name>_compensator_init(...)`` and ``<NAME>_DELAY_SAMPLES``; ``literal`` writes one
     number of ``precision``, ``delay_comment`` are the comment lines on the model's input
-    delay (those of the PI headers)."""
+    delay (those of the PI headers). A model with a ``creep`` also gets its lags
+    (:mod:`pihyst.io._export_creep`; ``array(ctype, name, values)`` writes their
+    arrays)."""
     real, sfx = ("double", "") if precision == "double" else ("float", "_f32")
     guard = f"PIHYST_MODEL_{name.upper()}_H"
     lit = literal
@@ -37,9 +46,13 @@ def boucwen_header(model, name, literal, precision, source="", delay_comment=())
            f" *     {real} volts = pihyst_bw_compensator_step{sfx}(&c, y_desired, &flags);\n",
            " * The model struct holds its state (u, z); it needs no other storage.\n",
            *delay_comment,
+           *creep_comment(model, name, bouc_wen=True),
            " */\n",
-           f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst_boucwen.h\"\n\n",
-           f"#define {name.upper()}_DELAY_SAMPLES {model.delay}\n\n",
+           f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst_boucwen.h\"\n",
+           creep_include(model), "\n",
+           f"#define {name.upper()}_DELAY_SAMPLES {model.delay}\n",
+           *creep_defines(model, name, model.output(*model.initial_state), literal),
+           "\n",
            f"static const pihyst_bw_params{sfx} {name}_params = {{\n", "\n".join(fields),
            "\n};\n\n",
            "/* Set m to this model at its initial state. */\n",
@@ -55,6 +68,7 @@ def boucwen_header(model, name, literal, precision, source="", delay_comment=())
            f"        {real} u_initial)\n{{\n",
            f"    return pihyst_bw_compensator_init{sfx}(c, m, u_min, u_max, max_step, "
            f"u_initial);\n}}\n\n",
+           *creep_body(model, name, array),
            f"#endif /* {guard} */\n"]
     return "".join(out)
 
@@ -62,7 +76,8 @@ def boucwen_header(model, name, literal, precision, source="", delay_comment=())
 def boucwen_flat_lines(model, num):
     """The lines after the magic of the flat model file: ``3 1``; ``offset u_min
     u_max``; ``beta gamma n``; ``hysteretic linear quadratic``; ``u z`` (the initial
-    state). ``num`` writes numbers exactly."""
+    state). ``num`` writes numbers exactly. (The creep and delay lines that follow are
+    :func:`pihyst.io._export.flat_text`'s, the same for every family.)"""
     return [f"{FLAT_FAMILY} 1", num([model.offset, *model.input_range]),
             num([model.beta, model.gamma, model.n]),
             num([model.hysteretic, model.linear, model.quadratic]),

@@ -1,0 +1,500 @@
+"""Export of a model with creep (docs/export.md): the C header's creep lags compile with
+the core under the firmware flags and a firmware loop reproduces ``predict`` and
+``compensate`` at the fixed interval ``creep.dt`` (to 1e-12, as the headers without
+creep); the flat file's creep line loads into the shared library, whose predict and
+compensate then do the same through ctypes; models without creep export as before; bad
+input gives one-line errors (exit 2 from the command)."""
+
+import ctypes
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import pihyst
+from pihyst.cli import main
+from pihyst.exceptions import InvalidModelError
+from pihyst.inverse import BoucWenCompensator
+from pihyst.io._export import c_header, flat_text
+from pihyst.model import BoucWenModel, Creep
+
+from strategies import classical_models, multislope_models, pwl_models
+
+REPO = Path(__file__).resolve().parents[2]
+CSRC = REPO / "csrc"
+CC = shutil.which("cc") or shutil.which("gcc")
+FIRMWARE_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2"]
+
+CREEP = Creep([0.3, 3.0, 30.0], [0.02, 0.035, 0.015], dt=0.01)
+KP_LIKE = pihyst.PiecewiseLinearPI(
+    [([0, 40, 60, 150], [0, 0, 1, 1]), ([0, 90, 110, 150], [0, 0, 1, 1]),
+     ([0, 150], [-5, 145])],
+    [([0, 10, 30, 150], [0, 0, 1, 1]), ([0, 60, 80, 150], [0, 0, 1, 1]),
+     ([0, 150], [5, 155])],
+    [6.0, 4.0, 0.2], offset=-1.5, initial_state=[0.0, 0.0, 5.0],
+    creep=Creep([0.05, 0.5], [0.1, 0.05], dt=0.002))
+MODELS = {
+    "classical": pihyst.ClassicalPI([0, 10, 30, 60], [0.2, 0.05, 0.03, 0.01], offset=0.7,
+                                    initial_state=[0, 10, 30, 60], creep=CREEP),
+    "multislope": pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028], b=1.25,
+                                      creep=Creep([1.0], [0.04], dt=0.05)),
+    "pwl": KP_LIKE,
+}
+
+DRIVER = r"""
+#include <stdio.h>
+#include <math.h>
+#include "{header}"
+/* stdin: n, n voltages, n desired outputs; stdout: n predictions, then per desired
+ * output the voltage, the output with creep and the flags */
+int main(void)
+{{
+    static double u[4096], yd[4096];
+    pihyst_model m;
+    pihyst_compensator c;
+    pihyst_creep cr;
+    int n, t;
+    if (scanf("%d", &n) != 1 || n > 4096) return 3;
+    for (t = 0; t < n; ++t) if (scanf("%lf", &u[t]) != 1) return 3;
+    for (t = 0; t < n; ++t) if (scanf("%lf", &yd[t]) != 1) return 3;
+    if ({name}_init(&m) != PIHYST_OK) return 4;
+    if ({name}_creep_init(&cr, {NAME}_INITIAL_OUTPUT) != PIHYST_CREEP_OK) return 6;
+    for (t = 0; t < n; ++t) printf("%.17g\n", pihyst_creep_step(&cr, pihyst_model_step(&m, u[t])));
+    pihyst_model_reset(&m, {name}_initial_state);
+    if ({name}_compensator_init(&c, &m, NAN, NAN, INFINITY, m.u_min) != PIHYST_OK) return 5;
+    if ({name}_creep_init(&cr, c.y_last) != PIHYST_CREEP_OK) return 6;
+    for (t = 0; t < n; ++t) {{
+        pihyst_flags flags = 0;
+        double y, volts = pihyst_creep_compensator_step(&cr, &c, -1.0, yd[t], &y, &flags);
+        printf("%.17g %.17g %d\n", volts, y, (int)flags);
+    }}
+    return 0;
+}}
+"""
+
+
+def _signals(model, n=1500, seed=1):
+    rng = np.random.default_rng(seed)
+    lo, hi = model.input_range
+    u = np.interp(np.linspace(0, 1, n), np.linspace(0, 1, 12),
+                  np.r_[lo, rng.uniform(lo, hi, 10), lo])
+    y = model.predict(u)
+    return u, y + rng.normal(0, 0.05 * np.ptp(y), n)  # desired: reachable and not
+
+
+def _compile(tmp_path, header_text, driver_text, objects):
+    (tmp_path / "exported.h").write_text(header_text)
+    (tmp_path / "driver.c").write_text(driver_text)
+    exe = tmp_path / "driver"
+    subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", f"-I{tmp_path}",
+                    str(tmp_path / "driver.c"), *objects, "-lm", "-o", str(exe)],
+                   check=True, capture_output=True, text=True)
+    return exe
+
+
+def _run(exe, u, yd):
+    stdin = "\n".join(f"{v!r}" for v in [u.size, *u.tolist(), *yd.tolist()]) + "\n"
+    out = subprocess.run([str(exe)], input=stdin, check=True, capture_output=True, text=True)
+    values = np.array(out.stdout.split(), dtype=float)
+    loop = values[u.size:].reshape(-1, 3)
+    return values[:u.size], loop[:, 0], loop[:, 1], loop[:, 2].astype(np.uint8)
+
+
+@pytest.fixture(scope="module")
+def core_objects(tmp_path_factory):
+    """The C core with its creep lags and the Bouc-Wen model, compiled once with the
+    firmware flags."""
+    if CC is None or not CSRC.is_dir():
+        pytest.skip("needs a C compiler and the source tree's csrc/")
+    out = tmp_path_factory.mktemp("core")
+    objects = []
+    for source in ("pihyst_model.c", "pihyst_inverse.c", "pihyst_creep.c", "pihyst_boucwen.c"):
+        obj = out / source.replace(".c", ".o")
+        subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", "-c", str(CSRC / source), "-o",
+                        str(obj)], check=True, capture_output=True, text=True)
+        objects.append(str(obj))
+    return objects
+
+
+# ---------------------------------------------------------------- the C header
+@pytest.mark.parametrize("family", sorted(MODELS))
+def test_header_loop_reproduces_predict_and_compensate_with_creep(tmp_path, family,
+                                                                  core_objects):
+    model = MODELS[family]
+    name = f"exported_{family}"
+    exe = _compile(tmp_path, c_header(model, name),
+                   DRIVER.format(header="exported.h", name=name, NAME=name.upper()),
+                   core_objects)
+    u, yd = _signals(model)
+    y_c, volts, y_comp, flags = _run(exe, u, yd)
+    scale = np.ptp(model.predict(u))
+    np.testing.assert_allclose(y_c, model.predict(u), rtol=0, atol=1e-12 * scale)
+    ref = pihyst.compensate(model, yd)
+    np.testing.assert_allclose(volts, ref.voltage, rtol=0,
+                               atol=1e-12 * np.ptp(model.input_range))
+    np.testing.assert_allclose(y_comp, ref.displacement, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_array_equal(flags, ref.flags)
+    # creep is in the loop: without it the outputs differ by far more than rounding
+    assert np.max(np.abs(model.replace(creep=None).predict(u) - y_c)) > 1e-3 * scale
+
+
+def test_header_holds_the_creep_parameters_exactly():
+    model = MODELS["classical"]
+    text = c_header(model, "stage_x", source="m.json")
+    assert "#define STAGE_X_CREEP_LAGS 3\n" in text
+    assert "#define STAGE_X_CREEP_DT 0.01\n" in text
+    assert (f"#define STAGE_X_INITIAL_OUTPUT "
+            f"{model.hysteresis_output(model.initial_state)!r}\n") in text
+    assert "static const double stage_x_creep_tau[3] = {\n    0.3, 3.0, 30.0\n};" in text
+    assert "static const double stage_x_creep_gain[3] = {\n    0.02, 0.035, 0.015\n};" in text
+    assert "stage_x_creep_init(pihyst_creep *cr, double h_settled)" in text
+    assert "pihyst_creep_compensator_step(&cr, &c, -1.0, y_desired, &y, &flags)" in text
+    assert '#include "pihyst_creep.h"' in text
+
+
+def test_a_model_without_creep_exports_as_before():
+    model = MODELS["classical"].replace(creep=None)
+    text = c_header(model, "stage_x")
+    assert "creep" not in text.lower() and "INITIAL_OUTPUT" not in text
+    assert flat_text(model).startswith("pihyst-flat 1\n") and "creep" not in flat_text(model)
+
+
+def test_single_precision_header_of_a_creep_model_is_refused_in_one_line():
+    with pytest.raises(InvalidModelError, match="double only") as err:
+        c_header(MODELS["multislope"], "ax", precision="float")
+    assert "\n" not in str(err.value)
+    assert "pihyst_model_init_f32" in c_header(MODELS["multislope"].replace(creep=None), "ax",
+                                               precision="float")
+
+
+# ---------------------------------------------------------------- a Bouc-Wen model
+class _BoucWenWithCreep:
+    """A Bouc-Wen model carrying creep lags, as BoucWenModel will (the export is written
+    for any model with ``creep``)."""
+
+    def __init__(self, model, creep):
+        self._model = model
+        self.creep = creep
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+
+BW_DRIVER = r"""
+#include <stdio.h>
+#include <math.h>
+#include "{header}"
+/* as DRIVER, with the Bouc-Wen loop the header's comment gives */
+int main(void)
+{{
+    static double u[4096], yd[4096];
+    pihyst_bw_model m;
+    pihyst_bw_compensator c;
+    pihyst_creep cr;
+    int n, t;
+    if (scanf("%d", &n) != 1 || n > 4096) return 3;
+    for (t = 0; t < n; ++t) if (scanf("%lf", &u[t]) != 1) return 3;
+    for (t = 0; t < n; ++t) if (scanf("%lf", &yd[t]) != 1) return 3;
+    if ({name}_init(&m) != PIHYST_OK) return 4;
+    if ({name}_creep_init(&cr, {NAME}_INITIAL_OUTPUT) != PIHYST_CREEP_OK) return 6;
+    for (t = 0; t < n; ++t) printf("%.17g\n", pihyst_creep_step(&cr, pihyst_bw_step(&m, u[t])));
+    if ({name}_init(&m) != PIHYST_OK) return 4;
+    if ({name}_compensator_init(&c, &m, NAN, NAN, INFINITY, m.u_min) != PIHYST_OK) return 5;
+    if ({name}_creep_init(&cr, c.y_last) != PIHYST_CREEP_OK) return 6;
+    for (t = 0; t < n; ++t) {{
+        pihyst_flags flags = 0;
+        double volts = pihyst_bw_compensator_step(&c, pihyst_creep_target(&cr, yd[t]), &flags);
+        double y = pihyst_creep_step(&cr, c.y_last);
+        printf("%.17g %.17g %d\n", volts, y, (int)flags);
+    }}
+    return 0;
+}}
+"""
+
+
+def test_bouc_wen_header_with_creep_runs_the_lags_around_the_bouc_wen_core(tmp_path,
+                                                                          core_objects):
+    # the reference: the Bouc-Wen model's output through the lags (C1)-(C3), and its
+    # compensator given each sample's hysteresis target (C5), the lags advanced by the
+    # output reached
+    bw = BoucWenModel(beta=4.0, gamma=-2.0, n=1.5, hysteretic=5.0, linear=10.0,
+                      quadratic=3.0, input_range=(-20.0, 120.0))
+    model = _BoucWenWithCreep(bw, CREEP)
+    exe = _compile(tmp_path, c_header(model, "bw_x"),
+                   BW_DRIVER.format(header="exported.h", name="bw_x", NAME="BW_X"),
+                   core_objects)
+    u, yd = _signals(bw)
+    y_c, volts, y_comp, flags = _run(exe, u, yd)
+    rest = np.full(CREEP.n_lags, bw.output(*bw.initial_state))
+    y_ref = CREEP.lags(rest).run(bw.predict(u))
+    scale = np.ptp(y_ref)
+    np.testing.assert_allclose(y_c, y_ref, rtol=0, atol=1e-12 * scale)
+    comp = BoucWenCompensator(bw, initial_voltage=bw.input_range[0])
+    lags = CREEP.lags(np.full(CREEP.n_lags, comp.displacement))
+    v_ref, y_ref = [], []
+    for target in yd:
+        v_ref.append(comp.step(lags.target(target)))
+        y_ref.append(lags.step(comp.displacement))
+    np.testing.assert_allclose(volts, v_ref, rtol=0, atol=1e-12 * np.ptp(bw.input_range))
+    np.testing.assert_allclose(y_comp, y_ref, rtol=0, atol=1e-12 * scale)
+    text = flat_text(model)
+    assert text.startswith("pihyst-flat 2\n3 1\n")
+    assert text.endswith("\ncreep 3 0.3 3.0 30.0 0.02 0.035 0.015 0.01\n")
+
+
+# ---------------------------------------------------------------- the flat file
+def test_flat_file_has_the_creep_line_after_the_model_and_before_the_delay():
+    model = MODELS["classical"].replace(delay=2)
+    lines = flat_text(model).splitlines()
+    assert lines[0] == "pihyst-flat 2"
+    assert lines[-2:] == ["creep 3 0.3 3.0 30.0 0.02 0.035 0.015 0.01", "delay 2"]
+    # the numbers before are those of the model without creep, read back exactly
+    assert lines[1:-2] == flat_text(model.replace(creep=None, delay=0)).splitlines()[1:]
+    odd = model.replace(creep=Creep([0.1 / 3, 2 ** 0.5], [1 / 7, 1e-17], dt=1 / 3))
+    creep_line = flat_text(odd).splitlines()[-2].split()
+    assert creep_line[:2] == ["creep", "2"]
+    back = np.array(creep_line[2:], dtype=float)
+    assert back.tolist() == [*odd.creep.tau, *odd.creep.gain, odd.creep.dt]
+
+
+# ---------------------------------------------------------------- the shared library
+@pytest.fixture(scope="module")
+def lib():
+    if CC is None or not CSRC.is_dir():
+        pytest.skip("needs a C compiler and the source tree's csrc/")
+    subprocess.run(["make", "-s", "-C", str(CSRC), "shared"], check=True, capture_output=True)
+    so = ctypes.CDLL(str(CSRC / "libpihyst.so"))
+    dp = ctypes.POINTER(ctypes.c_double)
+    ip = ctypes.POINTER(ctypes.c_int32)
+    i32 = ctypes.c_int32
+    vp = ctypes.c_void_p
+    so.pihyst_lib_create.restype = vp
+    so.pihyst_lib_create.argtypes = [i32, i32, dp, dp, ctypes.c_double, ctypes.c_double,
+                                     ctypes.c_double, dp, ip, dp, dp, ip, dp, dp, dp, ip]
+    so.pihyst_lib_create_boucwen.restype = vp
+    so.pihyst_lib_create_boucwen.argtypes = [dp, ip]
+    so.pihyst_lib_load.restype = vp
+    so.pihyst_lib_load.argtypes = [ctypes.c_char_p, ip]
+    so.pihyst_lib_free.argtypes = [vp]
+    so.pihyst_lib_predict.argtypes = [vp, dp, dp, i32]
+    so.pihyst_lib_reset.argtypes = [vp, dp, i32]
+    so.pihyst_lib_compensator_start.argtypes = [vp, ctypes.c_double, ctypes.c_double,
+                                                ctypes.c_double, ctypes.c_double]
+    so.pihyst_lib_compensate.argtypes = [vp, dp, dp, ctypes.POINTER(ctypes.c_uint8), i32]
+    so.pihyst_lib_set_creep.argtypes = [vp, dp, dp, i32, ctypes.c_double]
+    so.pihyst_lib_n_creep_lags.argtypes = [vp]
+    so.pihyst_lib_get_creep_state.argtypes = [vp, dp, i32]
+    so.pihyst_lib_set_creep_state.argtypes = [vp, dp, i32]
+    so.pihyst_lib_status_text.restype = ctypes.c_char_p
+    return so
+
+
+def _ptr(a, ctype=ctypes.c_double):
+    return None if a is None else a.ctypes.data_as(ctypes.POINTER(ctype))
+
+
+def _load(lib, path):
+    status = ctypes.c_int32(1)
+    h = lib.pihyst_lib_load(str(path).encode(), ctypes.byref(status))
+    return h, status.value
+
+
+def _from_arrays(lib, model):
+    """A handle from pihyst_lib_create (classical) and pihyst_lib_set_creep."""
+    f = lambda a: np.ascontiguousarray(a, dtype=float)  # noqa: E731
+    status = ctypes.c_int32(1)
+    thr, w, s0 = f(model.thresholds), f(model.weights), f(model.initial_state)
+    h = lib.pihyst_lib_create(0, model.n_operators, _ptr(thr), _ptr(w), model.offset,
+                              *model.input_range, None, None, None, None, None, None, None,
+                              _ptr(s0), ctypes.byref(status))
+    assert status.value == 0
+    tau, gain = f(model.creep.tau), f(model.creep.gain)
+    assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain), tau.size, model.creep.dt) == 0
+    return h
+
+
+@pytest.mark.parametrize("family", sorted(MODELS))
+def test_library_applies_the_flat_files_creep(lib, family, tmp_path):
+    model = MODELS[family]
+    path = tmp_path / "m.pihyst"
+    path.write_text(flat_text(model))
+    handles = {"file": _load(lib, path)[0]}
+    if family == "classical":
+        handles["arrays"] = _from_arrays(lib, model)
+    u, yd = _signals(model)
+    ref_run = model.simulate(u)
+    ref = pihyst.compensate(model, yd)
+    scale = np.ptp(ref_run.output)
+    for source, h in handles.items():
+        assert h, source
+        try:
+            n = model.creep.n_lags
+            assert lib.pihyst_lib_n_creep_lags(h) == n
+            y = np.empty_like(u)
+            half = u.size // 2                      # in two chunks: the lags continue
+            assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), half) == 0
+            assert lib.pihyst_lib_predict(h, _ptr(u[half:]), _ptr(y[half:]),
+                                          u.size - half) == 0
+            z = np.empty(n)
+            assert lib.pihyst_lib_get_creep_state(h, _ptr(z), n) == 0
+            assert lib.pihyst_lib_reset(h, None, 0) == 0
+            assert lib.pihyst_lib_compensator_start(h, np.nan, np.nan, 0.0,
+                                                    model.input_range[0]) == 0
+            volts = np.empty_like(yd)
+            flags = np.empty(yd.size, dtype=np.uint8)
+            n_flagged = lib.pihyst_lib_compensate(h, _ptr(yd), _ptr(volts),
+                                                  _ptr(flags, ctypes.c_uint8), yd.size)
+            z_comp = np.empty(n)
+            assert lib.pihyst_lib_get_creep_state(h, _ptr(z_comp), n) == 0
+        finally:
+            lib.pihyst_lib_free(h)
+        np.testing.assert_allclose(y, ref_run.output, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(z, ref_run.final_creep_state, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(volts, ref.voltage, rtol=0,
+                                   atol=1e-12 * np.ptp(model.input_range))
+        np.testing.assert_allclose(z_comp, ref.final_creep_state, rtol=0, atol=1e-12 * scale)
+        assert n_flagged == int(np.count_nonzero(flags)) == int(np.count_nonzero(ref.flags))
+
+
+@st.composite
+def creeps(draw):
+    n = draw(st.integers(1, 5))
+    tau = np.sort(draw(st.lists(st.floats(1e-3, 1e4), min_size=n, max_size=n, unique=True)))
+    g = np.array(draw(st.lists(st.floats(0.0, 1.0), min_size=n, max_size=n)))
+    total = draw(st.floats(0.0, 0.9))
+    g = g / g.sum() * total if g.sum() > 0 else g
+    return Creep(tau, g, dt=draw(st.floats(1e-5, 10.0)))
+
+
+@settings(max_examples=40)
+@given(model=st.one_of(classical_models(), multislope_models(), pwl_models()),
+       creep=creeps(), seed=st.integers(0, 2**32 - 1))
+def test_library_reproduces_any_model_with_creep_from_its_flat_file(lib, tmp_path_factory,
+                                                                    model, creep, seed):
+    model = model.replace(creep=creep)
+    path = tmp_path_factory.mktemp("flat") / "m.pihyst"
+    path.write_text(flat_text(model))
+    h, status = _load(lib, path)
+    assert status == 0, lib.pihyst_lib_status_text(status)
+    u, yd = _signals(model, n=300, seed=seed)
+    try:
+        y = np.empty_like(u)
+        assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
+        assert lib.pihyst_lib_reset(h, None, 0) == 0
+        assert lib.pihyst_lib_compensator_start(h, np.nan, np.nan, 0.0, 0.0) == 0
+        volts = np.empty_like(yd)
+        assert lib.pihyst_lib_compensate(h, _ptr(yd), _ptr(volts), None, yd.size) >= 0
+    finally:
+        lib.pihyst_lib_free(h)
+    y_ref = model.predict(u)
+    scale = max(np.ptp(y_ref), np.max(np.abs(y_ref)), 1.0)
+    np.testing.assert_allclose(y, y_ref, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(volts, pihyst.compensate(model, yd).voltage, rtol=0,
+                               atol=1e-12 * np.ptp(model.input_range))
+
+
+def test_library_creep_state_can_be_set_and_removed(lib, tmp_path):
+    model = MODELS["classical"]
+    h = _from_arrays(lib, model)
+    try:
+        u, yd = _signals(model, n=200)
+        z0 = np.array([3.0, 2.0, 1.0])
+        assert lib.pihyst_lib_set_creep_state(h, _ptr(z0), 3) == 0
+        y = np.empty_like(u)
+        assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
+        np.testing.assert_allclose(y, model.predict(u, creep_state=z0), rtol=0, atol=1e-12)
+        # after start, lag states given continue the compensator from them
+        assert lib.pihyst_lib_reset(h, None, 0) == 0
+        assert lib.pihyst_lib_compensator_start(h, np.nan, np.nan, 0.0, 0.0) == 0
+        assert lib.pihyst_lib_set_creep_state(h, _ptr(z0), 3) == 0
+        volts = np.empty_like(yd)
+        assert lib.pihyst_lib_compensate(h, _ptr(yd), _ptr(volts), None, yd.size) >= 0
+        np.testing.assert_allclose(volts, pihyst.compensate(model, yd, creep_state=z0).voltage,
+                                   rtol=0, atol=1e-12)
+        assert lib.pihyst_lib_set_creep_state(h, _ptr(z0), 2) == -104
+        assert lib.pihyst_lib_set_creep(h, None, None, 0, 0.0) == 0      # creep removed
+        assert lib.pihyst_lib_n_creep_lags(h) == 0
+        assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
+        np.testing.assert_allclose(y, model.replace(creep=None).predict(u), rtol=0, atol=1e-12)
+    finally:
+        lib.pihyst_lib_free(h)
+
+
+def test_library_refuses_bad_creep_in_one_line(lib, tmp_path):
+    model = MODELS["classical"]
+    h = _from_arrays(lib, model)
+    try:
+        tau, gain = np.array([1.0, 10.0]), np.array([0.6, 0.5])
+        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain), 2, 0.01) == -115
+        text = lib.pihyst_lib_status_text(-115).decode()
+        assert "sum to less than 1" in text and "\n" not in text
+        assert lib.pihyst_lib_set_creep(h, _ptr(-tau), _ptr(gain / 4), 2, 0.01) == -114
+        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain / 4), 2, -1.0) == -116
+        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain / 4), -1, 0.01) == -104
+        assert lib.pihyst_lib_n_creep_lags(h) == 3                       # unchanged
+    finally:
+        lib.pihyst_lib_free(h)
+    path = tmp_path / "bad.pihyst"
+    good = flat_text(model)
+    for text, status in [
+            (good.replace("creep 3", "creep 4"), -102),                  # cut short
+            (good.replace("creep 3", "creep 0"), -102),
+            (good.replace(" 0.01\n", "\n"), -102),                        # no dt
+            (good.replace("0.035", "nan"), -102),
+            (good + "creep 1 1.0 0.1 0.01\n", -102),                      # twice
+            (good + "drift 1\n", -102),                                   # unknown line
+            (good.replace("0.02 0.035 0.015", "0.5 0.4 0.3"), -115),      # gains sum >= 1
+            (flat_text(model.replace(creep=None)).replace("flat 1", "flat 3"), -102)]:
+        path.write_text(text)
+        h, got = _load(lib, path)
+        assert h is None and got == status, text
+    # a Bouc-Wen model's file with a creep line: refused (the library has no Bouc-Wen
+    # creep), with its own status
+    bw = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0, offset=0.3)
+    path.write_text(flat_text(_BoucWenWithCreep(bw, CREEP)))
+    h, got = _load(lib, path)
+    assert h is None and got == -106
+    assert b"Bouc-Wen" in lib.pihyst_lib_status_text(-106)
+    status = ctypes.c_int32(1)
+    params = np.array([5.0, 1.0, 1.0, -8.0, 40.0, 0.0, 0.3, 0.0, 150.0, 0.0, 0.0])
+    h = lib.pihyst_lib_create_boucwen(_ptr(params), ctypes.byref(status))
+    try:
+        tau, gain = np.array([1.0]), np.array([0.1])
+        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain), 1, 0.01) == -106
+    finally:
+        lib.pihyst_lib_free(h)
+
+
+def test_library_still_loads_a_version_1_file_with_a_delay(lib, tmp_path):
+    model = MODELS["classical"].replace(creep=None, delay=2)
+    path = tmp_path / "old.pihyst"
+    path.write_text(flat_text(model))
+    assert path.read_text().startswith("pihyst-flat 1\n")
+    h, status = _load(lib, path)
+    try:
+        assert status == 0 and lib.pihyst_lib_n_creep_lags(h) == 0
+    finally:
+        lib.pihyst_lib_free(h)
+
+
+# ---------------------------------------------------------------- the command
+def test_export_command_writes_a_creep_models_header_and_flat_file(tmp_path, capsys):
+    model = MODELS["classical"]
+    model_path = tmp_path / "m.json"
+    model.save(model_path)
+    assert main(["export", str(model_path), "--c", "-o", str(tmp_path / "stage-x.h")]) == 0
+    text = (tmp_path / "stage-x.h").read_text()
+    assert text == c_header(model, "stage_x", source="m.json")
+    assert "stage_x_creep_init" in text
+    assert main(["export", str(model_path), "--flat", "-o", str(tmp_path / "m.pihyst")]) == 0
+    assert (tmp_path / "m.pihyst").read_text() == flat_text(model)
+    assert "4 operators, 3 creep lags at 0.01 s" in capsys.readouterr().out
+    out = tmp_path / "f.h"
+    assert main(["export", str(model_path), "--c", "--float", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "creep" in err and "--float" in err and len(err.splitlines()) == 1
+    assert "Traceback" not in err and not out.exists()
