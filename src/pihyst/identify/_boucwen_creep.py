@@ -41,6 +41,9 @@ CHUNK = 1 << 15
 MAX_PASSES = 6
 #: Nelder-Mead evaluations of the shape search with creep
 MAX_EVALUATIONS = 150
+#: the search's QPs run on at most about this many of the fitted samples (evenly spaced;
+#: the lags run on every sample), the chosen shape's on all of them
+SEARCH_ROWS = 5000
 
 
 def _deficits(s, s0, dt, tau):
@@ -119,10 +122,16 @@ def fit_shape_and_creep(model, u, y, dt, tau, tie, fitted, *, fixed_n=None, sear
     the shape searched from ``model``'s (module notes) unless ``search`` is False;
     ``fixed_n`` keeps the exponent."""
     rec = _Record(model, u, y, dt, tau, tie, fitted)
-    best = joint_linear_fit(model, rec)
     if not search:
-        return best[1], best[2], best[3], 1
+        _, hyst, gains, passes = joint_linear_fit(model, rec)
+        return hyst, gains, passes, 1
     from scipy.optimize import minimize
+
+    rows = np.flatnonzero(fitted)
+    sparse = np.zeros_like(fitted)
+    sparse[rows[::max(1, rows.size // SEARCH_ROWS)]] = True
+    full, rec = rec, _Record(model, u, y, dt, tau, tie, sparse)
+    best = joint_linear_fit(model, rec)
 
     def unpack(p):
         ratio = float(np.tanh(p[1]))
@@ -151,4 +160,5 @@ def fit_shape_and_creep(model, u, y, dt, tau, tie, fitted, *, fixed_n=None, sear
                       "maxfev": MAX_EVALUATIONS,
                       "initial_simplex": p0 + np.vstack([np.zeros(3),
                                                          np.diag([0.2, 0.2, 0.15])])})
-    return best[1], best[2], best[3], evaluations
+    _, hyst, gains, passes = joint_linear_fit(best[1], full)
+    return hyst, gains, passes, evaluations
