@@ -146,3 +146,29 @@ def test_creep_option_is_checked(record):
     t, u, y = record
     with pytest.raises(pihyst.FitError, match="creep must be"):
         pihyst.fit(u, y, t=t, creep="yes")
+
+
+def test_creep_fitted_on_a_short_record_goes_on_past_it():
+    # log-t creep over 0.1-3000 s, identified from a 12 s record: the default lags reach
+    # CREEP_HORIZON_S (the gains past the record tied to the last one's), so the model
+    # keeps creeping through 60 s holds instead of stopping at the record's length
+    from pihyst.model._creep import CREEP_HORIZON_S, default_time_constants
+
+    tau_true = 0.1 * 10 ** (0.5 * np.arange(9))                 # 0.1 s .. 1000 s
+    truth = ClassicalPI([0.0, 10.0, 25.0, 45.0], [0.15, 0.06, 0.04, 0.03],
+                        creep=Creep(tau_true, np.full(9, 0.005), dt=0.01))
+    t, u = signals.decaying_triangles(period_s=4.0, dt=0.01)
+    assert t[-1] < 20.0
+    tau = default_time_constants(0.01, t[-1])
+    assert tau[0] == pytest.approx(0.1) and tau[-1] >= CREEP_HORIZON_S / np.sqrt(10)
+    y = truth.predict(u, t=t)
+    kw = {"family": "classical", "thresholds": [0.0, 10.0, 25.0, 45.0],
+          "initial_state": "zero"}
+    model = pihyst.fit(u, y, t=t, creep=True, **kw).model
+    np.testing.assert_allclose(model.creep.tau, tau)
+    ts, us = signals.staircase(step_s=60.0, dt=0.05)
+    ys = truth.predict(us, t=ts)
+    err = np.mean(np.abs(model.predict(us, t=ts) - ys)) / np.ptp(ys)
+    short = pihyst.fit(u, y, t=t, creep=tau[tau <= t[-1]], **kw).model
+    err_short = np.mean(np.abs(short.predict(us, t=ts) - ys)) / np.ptp(ys)
+    assert err < 0.5 * err_short, (err, err_short)

@@ -4,21 +4,20 @@ tolerance); the shared library's plain C ABI, called through ctypes, does the sa
 flat model file round-trips."""
 
 import ctypes
-import shutil
-import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
+from c_export import (
+    compile_core,
+    compile_driver,
+    export_signals,
+    run_driver,
+    shared_library,
+)
 
 import pihyst
 from pihyst.cli import main
 from pihyst.io._export import c_header, flat_text
-
-REPO = Path(__file__).resolve().parents[2]
-CSRC = REPO / "csrc"
-CC = shutil.which("cc") or shutil.which("gcc")
-FIRMWARE_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2"]
 
 KP_LIKE = pihyst.PiecewiseLinearPI(
     [([0, 40, 60, 150], [0, 0, 1, 1]), ([0, 90, 110, 150], [0, 0, 1, 1]),
@@ -57,44 +56,20 @@ int main(void)
 """
 
 
-def _signals(model, n=1500, seed=1):
-    rng = np.random.default_rng(seed)
-    lo, hi = model.input_range
-    u = np.interp(np.linspace(0, 1, n), np.linspace(0, 1, 12),
-                  np.r_[lo, rng.uniform(lo, hi, 10), lo])
-    y = model.predict(u)
-    return u, y + rng.normal(0, 0.05 * np.ptp(y), n)  # desired: reachable and not
-
-
 @pytest.fixture(scope="module")
 def core_objects(tmp_path_factory):
     """The C core compiled once with the firmware flags, for every driver to link."""
-    if CC is None or not CSRC.is_dir():
-        pytest.skip("needs a C compiler and the source tree's csrc/")
-    out = tmp_path_factory.mktemp("core")
-    objects = []
-    for source in ("pihyst_model.c", "pihyst_inverse.c", "pihyst_model_f32.c",
-                   "pihyst_inverse_f32.c"):
-        obj = out / source.replace(".c", ".o")
-        subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", "-c", str(CSRC / source), "-o",
-                        str(obj)], check=True, capture_output=True, text=True)
-        objects.append(str(obj))
-    return objects
+    return compile_core(tmp_path_factory, ("pihyst_model.c", "pihyst_inverse.c",
+                                           "pihyst_model_f32.c", "pihyst_inverse_f32.c"))
 
 
 def _build_and_run(tmp_path, model, precision, core):
     name = f"exported_{model.family}"
-    (tmp_path / f"{name}.h").write_text(c_header(model, name, precision=precision))
     real, sfx = ("double", "") if precision == "double" else ("float", "_f32")
-    (tmp_path / "driver.c").write_text(DRIVER.format(header=f"{name}.h", real=real, sfx=sfx,
-                                                     name=name))
-    exe = tmp_path / "driver"
-    subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", f"-I{tmp_path}", str(tmp_path / "driver.c"),
-                    *core, "-lm", "-o", str(exe)], check=True, capture_output=True, text=True)
-    u, yd = _signals(model)
-    stdin = "\n".join(f"{v!r}" for v in [u.size, *u.tolist(), *yd.tolist()]) + "\n"
-    out = subprocess.run([str(exe)], input=stdin, check=True, capture_output=True, text=True)
-    values = np.array(out.stdout.split(), dtype=float)
+    exe = compile_driver(tmp_path, f"{name}.h", c_header(model, name, precision=precision),
+                         DRIVER.format(header=f"{name}.h", real=real, sfx=sfx, name=name), core)
+    u, yd = export_signals(model)
+    values = run_driver(exe, u, yd)
     return u, yd, values[:u.size], values[u.size:]
 
 
@@ -122,29 +97,7 @@ def test_header_in_single_precision_within_its_stated_tolerance(tmp_path, family
 # ---------------------------------------------------------------- the shared library
 @pytest.fixture(scope="module")
 def lib():
-    if CC is None or not CSRC.is_dir():
-        pytest.skip("needs a C compiler and the source tree's csrc/")
-    subprocess.run(["make", "-s", "-C", str(CSRC), "shared"], check=True, capture_output=True)
-    so = ctypes.CDLL(str(CSRC / "libpihyst.so"))
-    dp = ctypes.POINTER(ctypes.c_double)
-    ip = ctypes.POINTER(ctypes.c_int32)
-    i32 = ctypes.c_int32
-    so.pihyst_lib_create.restype = ctypes.c_void_p
-    so.pihyst_lib_create.argtypes = [i32, i32, dp, dp, ctypes.c_double, ctypes.c_double,
-                                     ctypes.c_double, dp, ip, dp, dp, ip, dp, dp, dp, ip]
-    so.pihyst_lib_load.restype = ctypes.c_void_p
-    so.pihyst_lib_load.argtypes = [ctypes.c_char_p, ip]
-    so.pihyst_lib_free.argtypes = [ctypes.c_void_p]
-    so.pihyst_lib_predict.argtypes = [ctypes.c_void_p, dp, dp, i32]
-    so.pihyst_lib_get_state.argtypes = [ctypes.c_void_p, dp, i32]
-    so.pihyst_lib_reset.argtypes = [ctypes.c_void_p, dp, i32]
-    so.pihyst_lib_compensator_start.argtypes = [ctypes.c_void_p, ctypes.c_double,
-                                                ctypes.c_double, ctypes.c_double,
-                                                ctypes.c_double]
-    so.pihyst_lib_compensate.argtypes = [ctypes.c_void_p, dp, dp,
-                                         ctypes.POINTER(ctypes.c_uint8), i32]
-    so.pihyst_lib_status_text.restype = ctypes.c_char_p
-    return so
+    return shared_library()
 
 
 def _ptr(a, ctype=ctypes.c_double):
@@ -176,7 +129,7 @@ def _create(lib, model):
 
 
 def _run_lib(lib, h, model):
-    u, yd = _signals(model)
+    u, yd = export_signals(model)
     y = np.empty_like(u)
     assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
     assert lib.pihyst_lib_reset(h, None, 0) == 0
@@ -290,7 +243,7 @@ def test_the_library_runs_a_delayed_model_as_firmware_does(lib, tmp_path):
     h = lib.pihyst_lib_load(str(path).encode(), ctypes.byref(status))
     assert status.value == 0, lib.pihyst_lib_status_text(status.value)
     try:
-        u, yd = _signals(model)
+        u, yd = export_signals(model)
         y = np.empty_like(u)
         assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
         np.testing.assert_allclose(y[:-d], model.predict(u)[d:], rtol=0, atol=1e-12)

@@ -4,22 +4,15 @@ pihyst_boucwen.c under the firmware flags and reproduces predict and compensate 
 (family 3) and does the same through ctypes; the command writes both."""
 
 import ctypes
-import shutil
-import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
+from c_export import compile_core, compile_driver, export_signals, run_driver, shared_library
 
 from pihyst.cli import main
 from pihyst.inverse import BoucWenCompensator
 from pihyst.io._export import c_header, flat_text
 from pihyst.model import BoucWenModel
-
-REPO = Path(__file__).resolve().parents[2]
-CSRC = REPO / "csrc"
-CC = shutil.which("cc") or shutil.which("gcc")
-FIRMWARE_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2"]
 
 MODELS = {
     "remanent": BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0, offset=0.3),
@@ -54,15 +47,6 @@ int main(void)
 """
 
 
-def _signals(model, n=1500, seed=1):
-    rng = np.random.default_rng(seed)
-    lo, hi = model.input_range
-    u = np.interp(np.linspace(0, 1, n), np.linspace(0, 1, 12),
-                  np.r_[lo, rng.uniform(lo, hi, 10), lo])
-    y = model.predict(u)
-    return u, y + rng.normal(0, 0.05 * np.ptp(y), n)  # desired: reachable and not
-
-
 def _compensated(model, yd):
     return BoucWenCompensator(model, initial_voltage=model.input_range[0]).run(yd)
 
@@ -71,31 +55,17 @@ def _compensated(model, yd):
 def core_objects(tmp_path_factory):
     """The Bouc-Wen core compiled once with the firmware flags (both precisions, plus
     pihyst_model.c for the status texts)."""
-    if CC is None or not CSRC.is_dir():
-        pytest.skip("needs a C compiler and the source tree's csrc/")
-    out = tmp_path_factory.mktemp("core")
-    objects = []
-    for source in ("pihyst_boucwen.c", "pihyst_boucwen_f32.c", "pihyst_model.c"):
-        obj = out / source.replace(".c", ".o")
-        subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", "-c", str(CSRC / source), "-o",
-                        str(obj)], check=True, capture_output=True, text=True)
-        objects.append(str(obj))
-    return objects
+    return compile_core(tmp_path_factory, ("pihyst_boucwen.c", "pihyst_boucwen_f32.c",
+                                           "pihyst_model.c"))
 
 
 def _build_and_run(tmp_path, model, precision, core):
     name = "exported_bw"
-    (tmp_path / f"{name}.h").write_text(c_header(model, name, precision=precision))
     real, sfx = ("double", "") if precision == "double" else ("float", "_f32")
-    (tmp_path / "driver.c").write_text(DRIVER.format(header=f"{name}.h", real=real, sfx=sfx,
-                                                     name=name))
-    exe = tmp_path / "driver"
-    subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", f"-I{tmp_path}", str(tmp_path / "driver.c"),
-                    *core, "-lm", "-o", str(exe)], check=True, capture_output=True, text=True)
-    u, yd = _signals(model)
-    stdin = "\n".join(f"{v!r}" for v in [u.size, *u.tolist(), *yd.tolist()]) + "\n"
-    out = subprocess.run([str(exe)], input=stdin, check=True, capture_output=True, text=True)
-    values = np.array(out.stdout.split(), dtype=float)
+    exe = compile_driver(tmp_path, f"{name}.h", c_header(model, name, precision=precision),
+                         DRIVER.format(header=f"{name}.h", real=real, sfx=sfx, name=name), core)
+    u, yd = export_signals(model)
+    values = run_driver(exe, u, yd)
     return u, yd, values[:u.size], values[u.size:]
 
 
@@ -126,29 +96,7 @@ def test_header_in_single_precision_within_its_stated_tolerance(tmp_path, key, c
 # ---------------------------------------------------------------- the shared library
 @pytest.fixture(scope="module")
 def lib():
-    if CC is None or not CSRC.is_dir():
-        pytest.skip("needs a C compiler and the source tree's csrc/")
-    subprocess.run(["make", "-s", "-C", str(CSRC), "shared"], check=True, capture_output=True)
-    so = ctypes.CDLL(str(CSRC / "libpihyst.so"))
-    dp = ctypes.POINTER(ctypes.c_double)
-    ip = ctypes.POINTER(ctypes.c_int32)
-    i32 = ctypes.c_int32
-    so.pihyst_lib_create_boucwen.restype = ctypes.c_void_p
-    so.pihyst_lib_create_boucwen.argtypes = [dp, ip]
-    so.pihyst_lib_load.restype = ctypes.c_void_p
-    so.pihyst_lib_load.argtypes = [ctypes.c_char_p, ip]
-    so.pihyst_lib_free.argtypes = [ctypes.c_void_p]
-    so.pihyst_lib_n_operators.argtypes = [ctypes.c_void_p]
-    so.pihyst_lib_predict.argtypes = [ctypes.c_void_p, dp, dp, i32]
-    so.pihyst_lib_get_state.argtypes = [ctypes.c_void_p, dp, i32]
-    so.pihyst_lib_reset.argtypes = [ctypes.c_void_p, dp, i32]
-    so.pihyst_lib_compensator_start.argtypes = [ctypes.c_void_p, ctypes.c_double,
-                                                ctypes.c_double, ctypes.c_double,
-                                                ctypes.c_double]
-    so.pihyst_lib_compensate.argtypes = [ctypes.c_void_p, dp, dp,
-                                         ctypes.POINTER(ctypes.c_uint8), i32]
-    so.pihyst_lib_status_text.restype = ctypes.c_char_p
-    return so
+    return shared_library()
 
 
 def _ptr(a, ctype=ctypes.c_double):
@@ -163,7 +111,7 @@ def _params(model):
 @pytest.mark.parametrize("key", sorted(MODELS))
 def test_shared_library_reproduces_predict_and_compensate(lib, key, tmp_path):
     model = MODELS[key]
-    u, yd = _signals(model)
+    u, yd = export_signals(model)
     for source in ("arrays", "file"):
         status = ctypes.c_int32(1)
         if source == "arrays":

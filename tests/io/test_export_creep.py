@@ -6,12 +6,10 @@ compensate then do the same through ctypes; models without creep export as befor
 input gives one-line errors (exit 2 from the command)."""
 
 import ctypes
-import shutil
-import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
+from c_export import compile_core, compile_driver, export_signals, run_driver, shared_library
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -23,11 +21,6 @@ from pihyst.io._export import c_header, flat_text
 from pihyst.model import BoucWenModel, Creep
 
 from strategies import classical_models, multislope_models, pwl_models
-
-REPO = Path(__file__).resolve().parents[2]
-CSRC = REPO / "csrc"
-CC = shutil.which("cc") or shutil.which("gcc")
-FIRMWARE_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2"]
 
 CREEP = Creep([0.3, 3.0, 30.0], [0.02, 0.035, 0.015], dt=0.01)
 KP_LIKE = pihyst.PiecewiseLinearPI(
@@ -77,29 +70,8 @@ int main(void)
 """
 
 
-def _signals(model, n=1500, seed=1):
-    rng = np.random.default_rng(seed)
-    lo, hi = model.input_range
-    u = np.interp(np.linspace(0, 1, n), np.linspace(0, 1, 12),
-                  np.r_[lo, rng.uniform(lo, hi, 10), lo])
-    y = model.predict(u)
-    return u, y + rng.normal(0, 0.05 * np.ptp(y), n)  # desired: reachable and not
-
-
-def _compile(tmp_path, header_text, driver_text, objects):
-    (tmp_path / "exported.h").write_text(header_text)
-    (tmp_path / "driver.c").write_text(driver_text)
-    exe = tmp_path / "driver"
-    subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", f"-I{tmp_path}",
-                    str(tmp_path / "driver.c"), *objects, "-lm", "-o", str(exe)],
-                   check=True, capture_output=True, text=True)
-    return exe
-
-
 def _run(exe, u, yd):
-    stdin = "\n".join(f"{v!r}" for v in [u.size, *u.tolist(), *yd.tolist()]) + "\n"
-    out = subprocess.run([str(exe)], input=stdin, check=True, capture_output=True, text=True)
-    values = np.array(out.stdout.split(), dtype=float)
+    values = run_driver(exe, u, yd)
     loop = values[u.size:].reshape(-1, 3)
     return values[:u.size], loop[:, 0], loop[:, 1], loop[:, 2].astype(np.uint8)
 
@@ -108,16 +80,8 @@ def _run(exe, u, yd):
 def core_objects(tmp_path_factory):
     """The C core with its creep lags and the Bouc-Wen model, compiled once with the
     firmware flags."""
-    if CC is None or not CSRC.is_dir():
-        pytest.skip("needs a C compiler and the source tree's csrc/")
-    out = tmp_path_factory.mktemp("core")
-    objects = []
-    for source in ("pihyst_model.c", "pihyst_inverse.c", "pihyst_creep.c", "pihyst_boucwen.c"):
-        obj = out / source.replace(".c", ".o")
-        subprocess.run([CC, *FIRMWARE_FLAGS, f"-I{CSRC}", "-c", str(CSRC / source), "-o",
-                        str(obj)], check=True, capture_output=True, text=True)
-        objects.append(str(obj))
-    return objects
+    return compile_core(tmp_path_factory, ("pihyst_model.c", "pihyst_inverse.c",
+                                           "pihyst_creep.c", "pihyst_boucwen.c"))
 
 
 # ---------------------------------------------------------------- the C header
@@ -126,10 +90,10 @@ def test_header_loop_reproduces_predict_and_compensate_with_creep(tmp_path, fami
                                                                   core_objects):
     model = MODELS[family]
     name = f"exported_{family}"
-    exe = _compile(tmp_path, c_header(model, name),
-                   DRIVER.format(header="exported.h", name=name, NAME=name.upper()),
-                   core_objects)
-    u, yd = _signals(model)
+    exe = compile_driver(tmp_path, "exported.h", c_header(model, name),
+                         DRIVER.format(header="exported.h", name=name, NAME=name.upper()),
+                         core_objects)
+    u, yd = export_signals(model)
     y_c, volts, y_comp, flags = _run(exe, u, yd)
     scale = np.ptp(model.predict(u))
     np.testing.assert_allclose(y_c, model.predict(u), rtol=0, atol=1e-12 * scale)
@@ -224,10 +188,10 @@ def test_bouc_wen_header_with_creep_runs_the_lags_around_the_bouc_wen_core(tmp_p
     bw = BoucWenModel(beta=4.0, gamma=-2.0, n=1.5, hysteretic=5.0, linear=10.0,
                       quadratic=3.0, input_range=(-20.0, 120.0))
     model = _BoucWenWithCreep(bw, CREEP)
-    exe = _compile(tmp_path, c_header(model, "bw_x"),
-                   BW_DRIVER.format(header="exported.h", name="bw_x", NAME="BW_X"),
-                   core_objects)
-    u, yd = _signals(bw)
+    exe = compile_driver(tmp_path, "exported.h", c_header(model, "bw_x"),
+                         BW_DRIVER.format(header="exported.h", name="bw_x", NAME="BW_X"),
+                         core_objects)
+    u, yd = export_signals(bw)
     y_c, volts, y_comp, flags = _run(exe, u, yd)
     rest = np.full(CREEP.n_lags, bw.output(*bw.initial_state))
     y_ref = CREEP.lags(rest).run(bw.predict(u))
@@ -264,33 +228,7 @@ def test_flat_file_has_the_creep_line_after_the_model_and_before_the_delay():
 # ---------------------------------------------------------------- the shared library
 @pytest.fixture(scope="module")
 def lib():
-    if CC is None or not CSRC.is_dir():
-        pytest.skip("needs a C compiler and the source tree's csrc/")
-    subprocess.run(["make", "-s", "-C", str(CSRC), "shared"], check=True, capture_output=True)
-    so = ctypes.CDLL(str(CSRC / "libpihyst.so"))
-    dp = ctypes.POINTER(ctypes.c_double)
-    ip = ctypes.POINTER(ctypes.c_int32)
-    i32 = ctypes.c_int32
-    vp = ctypes.c_void_p
-    so.pihyst_lib_create.restype = vp
-    so.pihyst_lib_create.argtypes = [i32, i32, dp, dp, ctypes.c_double, ctypes.c_double,
-                                     ctypes.c_double, dp, ip, dp, dp, ip, dp, dp, dp, ip]
-    so.pihyst_lib_create_boucwen.restype = vp
-    so.pihyst_lib_create_boucwen.argtypes = [dp, ip]
-    so.pihyst_lib_load.restype = vp
-    so.pihyst_lib_load.argtypes = [ctypes.c_char_p, ip]
-    so.pihyst_lib_free.argtypes = [vp]
-    so.pihyst_lib_predict.argtypes = [vp, dp, dp, i32]
-    so.pihyst_lib_reset.argtypes = [vp, dp, i32]
-    so.pihyst_lib_compensator_start.argtypes = [vp, ctypes.c_double, ctypes.c_double,
-                                                ctypes.c_double, ctypes.c_double]
-    so.pihyst_lib_compensate.argtypes = [vp, dp, dp, ctypes.POINTER(ctypes.c_uint8), i32]
-    so.pihyst_lib_set_creep.argtypes = [vp, dp, dp, i32, ctypes.c_double]
-    so.pihyst_lib_n_creep_lags.argtypes = [vp]
-    so.pihyst_lib_get_creep_state.argtypes = [vp, dp, i32]
-    so.pihyst_lib_set_creep_state.argtypes = [vp, dp, i32]
-    so.pihyst_lib_status_text.restype = ctypes.c_char_p
-    return so
+    return shared_library()
 
 
 def _ptr(a, ctype=ctypes.c_double):
@@ -325,7 +263,7 @@ def test_library_applies_the_flat_files_creep(lib, family, tmp_path):
     handles = {"file": _load(lib, path)[0]}
     if family == "classical":
         handles["arrays"] = _from_arrays(lib, model)
-    u, yd = _signals(model)
+    u, yd = export_signals(model)
     ref_run = model.simulate(u)
     ref = pihyst.compensate(model, yd)
     scale = np.ptp(ref_run.output)
@@ -380,7 +318,7 @@ def test_library_reproduces_any_model_with_creep_from_its_flat_file(lib, tmp_pat
     path.write_text(flat_text(model))
     h, status = _load(lib, path)
     assert status == 0, lib.pihyst_lib_status_text(status)
-    u, yd = _signals(model, n=300, seed=seed)
+    u, yd = export_signals(model, n=300, seed=seed)
     try:
         y = np.empty_like(u)
         assert lib.pihyst_lib_predict(h, _ptr(u), _ptr(y), u.size) == 0
@@ -401,7 +339,7 @@ def test_library_creep_state_can_be_set_and_removed(lib, tmp_path):
     model = MODELS["classical"]
     h = _from_arrays(lib, model)
     try:
-        u, yd = _signals(model, n=200)
+        u, yd = export_signals(model, n=200)
         z0 = np.array([3.0, 2.0, 1.0])
         assert lib.pihyst_lib_set_creep_state(h, _ptr(z0), 3) == 0
         y = np.empty_like(u)
