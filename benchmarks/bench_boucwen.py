@@ -36,7 +36,7 @@ from pihyst.exceptions import PihystWarning
 from pihyst.inverse import BoucWenCompensator
 from pihyst.inverse._boucwen import BoucWenCompensatorTwin
 from pihyst.metrics import mean_abs_error
-from pihyst.model import BoucWenModel
+from pihyst.model import BoucWenModel, Creep
 from pihyst.sim import make_plant
 from pihyst.sim._boucwen import BoucWen
 from pihyst.sim._plant import NOISE_UM, SUPPLY_STEP_V, Plant
@@ -124,7 +124,12 @@ def speed(repeats=5):
                                               linear=40.0)),
               ("n=2.5 (b=30, g=-10)", BoucWenModel(beta=30.0, gamma=-10.0, n=2.5,
                                                    hysteretic=6.0, linear=30.0,
-                                                   quadratic=4.0)))
+                                                   quadratic=4.0)),
+              # the first model with creep: 9 half-decade lags 0.1-1000 s at 1 kHz
+              ("n=1 + creep (9 lags)", BoucWenModel(
+                  beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0,
+                  creep=Creep(0.1 * 10 ** (0.5 * np.arange(9)), np.full(9, 0.005),
+                              dt=1e-3))))
     rng = np.random.default_rng(0)
     for label, m in models:
         lo, hi = m.input_range

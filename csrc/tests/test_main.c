@@ -48,6 +48,7 @@ int main(void)
     run_boucwen_tests();
 #ifndef PIHYST_TEST_F32
     run_creep_tests(); /* the creep lags are double precision only */
+    run_bw_creep_tests();
 #endif
 #ifdef PIHYST_TEST_F32
     run_twin_tests();

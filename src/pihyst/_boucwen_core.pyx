@@ -1,5 +1,6 @@
 # cython: boundscheck=False, wraparound=False
-"""The binding of the C core's Bouc-Wen model and compensator (csrc/pihyst_boucwen.h).
+"""The binding of the C core's Bouc-Wen model and compensator (csrc/pihyst_boucwen.h),
+with creep (csrc/pihyst_bw_creep.h).
 Private: use pihyst.model.BoucWenModel and pihyst.inverse.BoucWenCompensator instead.
 
 Every method checks lengths before it calls C and copies what it is given.
@@ -37,6 +38,22 @@ cdef extern from "pihyst_boucwen.h" nogil:
                                       pihyst_flags *flags)
     size_t pihyst_bw_compensator_run(pihyst_bw_compensator *c, const double *y_desired,
                                      double *u, double *y, pihyst_flags *flags, size_t n)
+
+cdef extern from "pihyst_creep.h" nogil:
+    ctypedef enum pihyst_creep_status:
+        PIHYST_CREEP_OK
+    ctypedef struct pihyst_creep:
+        size_t n
+    pihyst_creep_status pihyst_creep_init(pihyst_creep *c, size_t n, const double *tau,
+                                          const double *gain, double dt, double *alpha,
+                                          double *state, const double *initial_state)
+    const char *pihyst_creep_status_text(pihyst_creep_status status)
+
+cdef extern from "pihyst_bw_creep.h" nogil:
+    size_t pihyst_bw_creep_compensator_run(pihyst_creep *cr, pihyst_bw_compensator *c,
+                                           const double *y_desired, const double *dt,
+                                           double *u, double *y, pihyst_flags *flags,
+                                           size_t n)
 
 
 class CoreError(ValueError):
@@ -177,4 +194,63 @@ cdef class BoucWenCompensator:
             with nogil:
                 pihyst_bw_compensator_run(&self.c, &d_v[0], &u_v[0], &y_v[0], &f_v[0], n)
             self.last_flags = f_v[n - 1]
+        return u, y, flags
+
+
+cdef class CreepCompensator:
+    """The creep lags of pihyst_creep.h with their state z_i, compensating through a
+    :class:`BoucWenCompensator` (csrc/pihyst_bw_creep.h): each sample's hysteresis target
+    goes to it, and the lags advance by the output it reached."""
+    cdef pihyst_creep c
+    cdef readonly size_t n
+    cdef object _tau, _gain, _alpha, _state
+
+    def __init__(self, tau, gain, double dt, initial_state):
+        cdef const double[::1] tau_v, gain_v, init_v
+        cdef double[::1] alpha_v, state_v
+        self._tau = _vector(tau, "tau").copy()
+        self.n = self._tau.shape[0]
+        self._gain = _vector(gain, "gain").copy()
+        init = _vector(initial_state, "creep state")
+        if self.n == 0 or self._gain.shape[0] != self.n or init.shape[0] != self.n:
+            raise ValueError(f"creep needs one gain and one state per time constant "
+                             f"({self.n})")
+        self._alpha = np.zeros(self.n)
+        self._state = np.zeros(self.n)
+        tau_v, gain_v, init_v = self._tau, self._gain, init
+        alpha_v, state_v = self._alpha, self._state
+        status = pihyst_creep_init(&self.c, self.n, &tau_v[0], &gain_v[0], dt, &alpha_v[0],
+                                   &state_v[0], &init_v[0])
+        if status != PIHYST_CREEP_OK:
+            raise CoreError(pihyst_creep_status_text(status).decode())
+
+    @property
+    def state(self):
+        """A copy of the lag states z_i[t-1]."""
+        return self._state.copy()
+
+    def compensate(self, BoucWenCompensator comp, y_desired, dt=None):
+        """(voltage, output, flags) for a block of desired outputs of the model with creep
+        (intervals ``dt`` per sample, None: the fixed one)."""
+        cdef const double[::1] d_v = _vector(y_desired, "y_desired")
+        cdef Py_ssize_t n = d_v.shape[0]
+        cdef const double[::1] dt_v
+        cdef const double *dt_p = NULL
+        u = np.empty(n)
+        y = np.empty(n)
+        flags = np.zeros(n, dtype=np.uint8)
+        cdef double[::1] u_v = u
+        cdef double[::1] y_v = y
+        cdef pihyst_flags[::1] f_v = flags
+        if dt is not None:
+            dt_v = _vector(dt, "dt")
+            if dt_v.shape[0] != n:
+                raise ValueError(f"dt must have one interval per sample ({n}), got "
+                                 f"{dt_v.shape[0]}")
+            dt_p = &dt_v[0] if n else NULL
+        if n:
+            with nogil:
+                pihyst_bw_creep_compensator_run(&self.c, &comp.c, &d_v[0], dt_p, &u_v[0],
+                                                &y_v[0], &f_v[0], n)
+            comp.last_flags = f_v[n - 1]
         return u, y, flags

@@ -76,7 +76,7 @@ def _small_nnls(G, b):
     return best_v
 
 
-def _columns(x, z, d, negative):
+def boucwen_columns(x, z, d, negative):
     """Regressors of (q_0, q_1, p) for one case (module notes): y - offset = X @ v."""
     # c_1 x + c_2 x^2 = q_0 (x - x^2 / 2) + q_1 x^2 / 2 (+ p D x for the a <= 0 case)
     base0, base1 = x - 0.5 * x * x, 0.5 * x * x
@@ -88,18 +88,23 @@ def _solve_linear(x, z, y, d):
     """(offset, c_1, c_2, a) of the best monotone fit to y for a fixed z."""
     best = None
     for negative in (False, True):
-        X = _columns(x, z, d, negative)
+        X = boucwen_columns(x, z, d, negative)
         Xc, yc = X - X.mean(axis=0), y - y.mean()
         v = _small_nnls(Xc.T @ Xc, Xc.T @ yc)
         rss = float(np.sum((yc - Xc @ v) ** 2))
         if best is None or rss < best[0]:
-            q0, q1, p = v
-            c1 = q0 + p * d if negative else q0
-            c2 = 0.5 * (q1 - q0)
-            a = -p if negative else p
             off = float(y.mean() - X.mean(axis=0) @ v)
-            best = (rss, (off, c1, c2, a))
+            best = (rss, (off, *boucwen_coefficients(v, d, negative)))
     return best[1]
+
+
+def boucwen_coefficients(v, d, negative):
+    """(c_1, c_2, a) from the bounded variables v = (q_0, q_1, p) of one case (module
+    notes): c_1 = q_0 (+ p D), c_1 + 2 c_2 = q_1 (+ p D), a = p (or -p)."""
+    q0, q1, p = (float(e) for e in v)
+    c1 = q0 + p * d if negative else q0
+    c2 = 0.5 * (q1 - q0)
+    return c1, c2, (-p if negative else p)
 
 
 @dataclass(frozen=True)

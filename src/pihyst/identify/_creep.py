@@ -19,6 +19,13 @@ H_prev = Phi w + c until H stops changing (creep is a few percent of H, so two o
 passes; B is :func:`log_t_basis`). The structure (family, thresholds, shape) is chosen by
 the ordinary fit, run again on the record with the estimated creep removed,
 y + sum_i g_i psi_i; the joint QP then refits its weights and the creep gains together.
+
+A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for a fixed
+shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
+(c, c_1, c_2, a) under the monotonicity bound, which becomes plain bounds in two cases
+(a >= 0, a <= 0; identify/_boucwen.py), so each pass solves the same bounded QP in
+(c, c_1, c_2, a, p) once per case and keeps the better; the shape is searched with that
+joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_creep.py).
 """
 
 import functools
@@ -27,10 +34,12 @@ import numpy as np
 
 from pihyst import _core
 from pihyst.exceptions import FitError
+from pihyst.identify._boucwen_creep import fit_shape_and_creep
 from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._family_fit import FramedRecord
 from pihyst.identify._qp import solve_qp
+from pihyst.model._boucwen import BoucWenModel
 from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 
 __all__ = ["fit_with_creep"]
@@ -149,6 +158,42 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
     return hyst, gains, passes
 
 
+def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, rows=None,
+                      fixed_n=None, **_):
+    """Shape, linear part (offset, c_1, c_2, a) and creep gains of the Bouc-Wen
+    ``model`` fitted together on the samples ``rows`` (default every sample from
+    ``start``), the shape searched from ``model``'s (identify/_boucwen_creep.py; the
+    gains tied by :func:`log_t_basis` as for :func:`_joint_qp`). A Bouc-Wen model always
+    fits its offset."""
+    if offset is not True:
+        raise FitError("bouc-wen fits its own offset: a fixed offset is not available "
+                       "with creep")
+    fitted = np.zeros(u.size, dtype=bool)
+    if rows is None:
+        fitted[start:] = True
+    else:
+        fitted[rows] = True
+    tie = log_t_basis(tau.size, int(np.count_nonzero(tau <= duration)))
+    hyst, gains, passes, _ = fit_shape_and_creep(model.replace(creep=None), u, y, dt, tau,
+                                                 tie, fitted, fixed_n=fixed_n)
+    return hyst, gains, passes
+
+
+def _joint_qp_of(model, fixed_n=None):
+    """The joint QP of the model's kind: :func:`_joint_qp` (PI operators) or
+    :func:`_joint_qp_boucwen` (``fixed_n``: the exponent the family was given)."""
+    if isinstance(model, BoucWenModel):
+        return functools.partial(_joint_qp_boucwen, fixed_n=fixed_n)
+    return _joint_qp
+
+
+def _fixed_exponent(family):
+    """The exponent a Bouc-Wen family object among the ``family`` option fixes, or None."""
+    specs = family if isinstance(family, (list, tuple)) else [family]
+    return next((getattr(f, "n", None) for f in specs
+                 if getattr(f, "name", None) == BoucWenModel.family), None)
+
+
 def _free(model):
     """Whether the joint QP may move every weight: not for the regularized kernel basis
     (family kp), whose weights it would overfit without the regularization."""
@@ -195,6 +240,7 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     kwargs["delay"] = d
     ua, ya, dta, ta = u[:u.size - d], y[d:], np.r_[dt[0], dt[d + 1:]], t[d:]
     qp = dict(offset=offset, nonnegative=nonnegative, duration=duration)
+    fixed_n = _fixed_exponent(kwargs.get("family"))
     start_model = _creep_capable(first, kwargs.get("family") is not None or decide)
     rows = None
     if decide:
@@ -207,17 +253,17 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                                           "judge it on (creep=True fits it regardless)"})
         if start_model is None:
             return _without_creep(first, {"kept": False, "reason": f"the chosen family, "
-                                          f"{first.report.chosen}, cannot carry creep (the "
-                                          f"PI families can)"})
+                                          f"{first.report.chosen}, cannot carry creep"})
         rows = rec.layout.indices("fit")
     elif start_model is None:
-        raise FitError(f"a {first.report.chosen} model has no creep: fit creep with a PI "
-                       f"family")
+        raise FitError(f"a {first.report.chosen} model has no creep: fit creep with one of "
+                       f"{', '.join(CREEP_FAMILIES)}")
     start_model = start_model.replace(creep=None, delay=0)
     start = start_model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
     # first creep estimate: every weight free (a kp basis may overfit here; only the
     # creep estimate is kept, the structure and weights are fitted again below)
-    hyst, gains, _ = _joint_qp(start_model, ua, ya, dta, tau, start=start, rows=rows, **qp)
+    hyst, gains, _ = _joint_qp_of(start_model, fixed_n)(start_model, ua, ya, dta, tau,
+                                                        start=start, rows=rows, **qp)
     # the record without its creep: the settled displacement the structure is chosen on
     psi = _lag_deficits(hyst, hyst.predict(ua), dta, tau, hyst.initial_state)
     second_kw = dict(kwargs)
@@ -228,11 +274,12 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     judged = None
     if decide:
         judged = _judge(first, second, ua, ya, ta, dta, tau, start, rows,
-                        rec.layout.indices("held_back"), qp)
+                        rec.layout.indices("held_back"), qp, fixed_n)
         if not judged["kept"]:
             return _without_creep(first, judged)
-    hyst, gains, passes = _joint_qp(second.model.replace(delay=0), ua, ya, dta, tau,
-                                    start=start, free_weights=_free(second.model), **qp)
+    hyst, gains, passes = _joint_qp_of(second.model, fixed_n)(
+        second.model.replace(delay=0), ua, ya, dta, tau, start=start,
+        free_weights=_free(second.model), **qp)
     aligned = hyst.replace(creep=Creep(tau, gains, dt_fixed))
     model = aligned.replace(delay=d, sample_period=dt_fixed if d else None)
     meta = dict(second.model.metadata)
@@ -242,7 +289,9 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
         "creep_total": float(gains.sum()), "qp_passes": passes,
         "rms_without_creep": _rms(first.model.replace(delay=0), ua, ya, None, start),
         "rms_with_creep": _rms(aligned, ua, ya, t[d:], start),
-        "weights": "free" if _free(second.model) else "one scale (regularized kp shape)",
+        "weights": ("shape and linear part (offset, c_1, c_2, a) fitted with the gains"
+                    if isinstance(hyst, BoucWenModel) else
+                    "free" if _free(second.model) else "one scale (regularized kp shape)"),
         "note": ("family and thresholds chosen on the record with the estimated creep "
                  "removed; weights, offset and creep gains fitted together on every "
                  "sample after the settling sweep"),
@@ -285,14 +334,14 @@ def _creep_capable(result, chosen_only):
                            if "settled" in result.model.metadata.get("fit", {}) else {})}})
 
 
-def _judge(first, second, u, y, t, dt, tau, start, fit_rows, held_rows, qp):
+def _judge(first, second, u, y, t, dt, tau, start, fit_rows, held_rows, qp, fixed_n=None):
     """Whether creep generalizes: the structure of ``second`` (chosen on the record with
     its creep removed) with weights and creep gains fitted on the fitted cycles only,
     against the ordinary fit, both on the held-back cycles (the choice's RMS, before any
     refit). Creep is kept when it lowers that RMS by more than the choice's tolerance."""
-    hyst, gains, _ = _joint_qp(second.model.replace(delay=0), u, y, dt, tau, start=start,
-                               rows=fit_rows,
-                               free_weights=_free(second.model), **qp)
+    joint_qp = _joint_qp_of(second.model, fixed_n)
+    hyst, gains, _ = joint_qp(second.model.replace(delay=0), u, y, dt, tau, start=start,
+                              rows=fit_rows, free_weights=_free(second.model), **qp)
     with_creep = hyst.replace(creep=Creep(tau, gains, float(np.median(dt))))
     r = with_creep.predict(u, t=t)[held_rows] - y[held_rows]
     rms_creep = float(np.sqrt(np.mean(r * r)))

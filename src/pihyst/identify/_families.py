@@ -468,8 +468,8 @@ FAMILIES = {cls.name: cls for cls in (Classical, Multislope, MultislopeIdentifie
 FAMILY_NAMES = tuple(FAMILIES)
 # the PI families (models of play-type operators: thresholds, weights, the C export)
 PI_FAMILY_NAMES = tuple(name for name in FAMILIES if name != BoucWen.name)
-# the families whose models can carry creep (docs/theory/creep.md): the PI models
-CREEP_FAMILIES = PI_FAMILY_NAMES
+# the families whose models can carry creep (docs/theory/creep.md): every one
+CREEP_FAMILIES = FAMILY_NAMES
 
 
 def as_family(spec):

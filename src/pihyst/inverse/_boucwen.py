@@ -19,6 +19,16 @@ voltage. The flags are those of :mod:`pihyst.inverse._compensator`, and so is th
 :class:`BoucWenCompensator` runs in the C core (csrc/pihyst_boucwen.c, the same algorithm
 operation for operation); :class:`BoucWenCompensatorTwin` is its Python twin, the
 reference the tests compare it against.
+
+A model with creep (docs/theory/creep.md) is inverted as a PI model with creep is: its
+output y = (1 - beta) H + sum_i g_i (1 - alpha_i) z_i is affine in the Bouc-Wen output H
+at each sample, so each sample first finds the hysteresis target
+
+    H* = (y_d - sum_i g_i (1 - alpha_i) z_i) / (1 - beta)                     (C5)
+
+then the voltage for H* as above (limits, slew and flags unchanged), then advances the
+lags by the H reached (csrc/pihyst_bw_creep.c; the twin: pihyst.model._creep's
+``creep_twin_*``).
 """
 
 import math
@@ -26,6 +36,7 @@ import math
 import numpy as np
 
 from pihyst import _boucwen_core
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse._compensator import (
     FLAG_NAN,
     FLAG_SATURATED_HIGH,
@@ -38,6 +49,8 @@ from pihyst.inverse._compensator import (
 )
 from pihyst.model import InvalidModelError
 from pihyst.model._boucwen import BoucWenModel, advance, slope
+from pihyst.model._creep import creep_twin_step, creep_twin_target, sample_intervals
+from pihyst.model._models import _finite_vector
 
 _EPS = np.finfo(float).eps
 MAX_ITERATIONS = 200
@@ -68,7 +81,7 @@ class BoucWenCompensatorTwin:
     FLAG_SLEW = FLAG_SLEW
 
     def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None):
+                 initial_state=None, creep_state=None):
         if not isinstance(model, BoucWenModel):
             raise TypeError(f"model must be a BoucWenModel, not {type(model).__name__}")
         if not model.is_monotone:
@@ -102,6 +115,7 @@ class BoucWenCompensatorTwin:
         scale = (abs(model.offset) + abs(model.linear) + abs(model.quadratic)
                  + abs(model.hysteretic) * model.z_max)
         self._scale = scale
+        self._start_creep = creep_state
         self.reset()
 
     @property
@@ -121,15 +135,69 @@ class BoucWenCompensatorTwin:
 
     @property
     def displacement(self):
-        """The model's output at the last voltage."""
+        """The model's output at the last voltage (with creep: at the last sample)."""
+        return self._h() if self.model.creep is None else self._output
+
+    def _h(self):
+        """The Bouc-Wen output (without creep) at the last voltage."""
         return self.model.output(self._u, self._z)
+
+    @property
+    def creep_state(self):
+        """The creep lag states (a copy; None for a model without creep)."""
+        return None if self.model.creep is None else np.array(self._lags)
 
     @property
     def last_flags(self):
         return self._flags
 
-    def reset(self, state=None, voltage=None):
-        """Back to the initial state and voltage, or to ``state`` = (u, z)."""
+    def _start_lags(self, creep_state):
+        """With creep: the lag state from ``creep_state``, or settled at the output now."""
+        if self.model.creep is None:
+            if creep_state is not None:
+                raise InvalidArgumentError("the bouc-wen model has no creep: creep_state "
+                                           "does not apply")
+            return
+        n = self.model.creep.n_lags
+        self._output = self._h()
+        z = (np.full(n, self._output) if creep_state is None else
+             _finite_vector(creep_state, "creep_state", n))
+        self._set_lags(z)
+
+    def _set_lags(self, z):
+        self._lags = [float(v) for v in z]
+
+    def _dt(self, dt):
+        """The checked interval of one sample (None: the creep's fixed one)."""
+        if dt is None:
+            return None
+        dt = _number(dt, "dt")
+        if dt < 0:
+            raise InvalidArgumentError(f"dt must be >= 0 s, got {dt:g}")
+        return dt
+
+    def _intervals(self, n, t, t_previous):
+        """Per-sample intervals of a block of n samples at times ``t`` (None: the fixed
+        one), the first ``creep.dt`` after the last sample or ``t[0] - t_previous``."""
+        if t is None:
+            return None
+        first = self.model.creep.dt
+        if t_previous is not None and n:
+            first = float(np.asarray(t, dtype=np.float64)[0]) - float(t_previous)
+        try:
+            return sample_intervals(t, n, first)
+        except ValueError as err:
+            raise InvalidArgumentError(str(err)) from None
+
+    def reset(self, state=None, voltage=None, creep_state=None):
+        """Back to the initial state and voltage, or to ``state`` = (u, z) and ``voltage``
+        (with creep: the lags to ``creep_state``, default settled at the output)."""
+        if state is None and voltage is None and creep_state is None:
+            creep_state = self._start_creep
+        self._reset_hysteresis(state, voltage)
+        self._start_lags(creep_state)
+
+    def _reset_hysteresis(self, state, voltage):
         if state is None:
             self._u, self._z = self._start
         else:
@@ -149,9 +217,20 @@ class BoucWenCompensatorTwin:
         z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
         return m.output(u, z), z
 
-    def step(self, y_desired):
-        """The voltage for one desired output (applied to the state)."""
+    def step(self, y_desired, dt=None):
+        """The voltage for one desired output (applied to the state). With creep, ``dt``
+        is the time since the previous sample (default ``model.creep.dt``)."""
         yd = float(y_desired)
+        creep = self.model.creep
+        if creep is None:
+            return self._step(yd)
+        dt = self._dt(dt)
+        u = self._step(creep_twin_target(creep, self._lags, yd, dt))      # (C5)
+        self._output = creep_twin_step(creep, self._lags, self._h(), dt)
+        return u
+
+    def _step(self, yd):
+        """The voltage for the Bouc-Wen output ``yd`` (applied to the state)."""
         m = self.model
         if math.isnan(yd):
             self._flags = FLAG_NAN
@@ -227,19 +306,28 @@ class BoucWenCompensatorTwin:
                 dx = 0.5 * abs(b - a)
         return b, z_b, 0
 
-    def run(self, y_desired):
-        """Compensate a block of desired outputs; returns a
-        :class:`pihyst.inverse.CompensationResult`."""
+    def run(self, y_desired, t=None, t_previous=None):
+        """Compensate a block of desired outputs, continuing from the current state; with
+        creep, ``t`` and ``t_previous`` as for :meth:`pihyst.Compensator.run` (without
+        creep they are ignored). Returns a :class:`pihyst.inverse.CompensationResult`."""
         yd = _desired(y_desired)
         initial_state, initial_voltage = self.state, self.voltage
+        initial_creep = self.creep_state
+        dt = None if self.model.creep is None else self._intervals(yd.size, t, t_previous)
+        u, y, flags = self._run(yd, dt)
+        return run_result(self, yd, u, y, flags, initial_state, initial_voltage,
+                          initial_creep_state=initial_creep,
+                          final_creep_state=self.creep_state)
+
+    def _run(self, yd, dt):
         u = np.empty(yd.size)
         y = np.empty(yd.size)
         flags = np.zeros(yd.size, dtype=np.uint8)
         for i, v in enumerate(yd.tolist()):
-            u[i] = self.step(v)
+            u[i] = self.step(v, None if dt is None else dt[i])
             y[i] = self.displacement
             flags[i] = self._flags
-        return run_result(self, yd, u, y, flags, initial_state, initial_voltage)
+        return u, y, flags
 
     def __repr__(self):
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
@@ -273,17 +361,23 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
     def voltage(self):
         return self._core_model.state[0]
 
-    @property
-    def displacement(self):
+    def _h(self):
         u, z = self._core_model.state
         return self.model.output(u, z)
+
+    @property
+    def creep_state(self):
+        return None if self.model.creep is None else self._lags.state
 
     @property
     def last_flags(self):
         return self._core.last_flags
 
-    def reset(self, state=None, voltage=None):
-        """Back to the initial state and voltage, or to ``state`` = (u, z)."""
+    def _set_lags(self, z):
+        c = self.model.creep
+        self._lags = _boucwen_core.CreepCompensator(c.tau, c.gain, c.dt, z)
+
+    def _reset_hysteresis(self, state, voltage):
         start = self._start if state is None else self.model._state(state)
         if voltage is not None:
             voltage = _number(voltage, "voltage")
@@ -300,17 +394,25 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
         if voltage is not None:
             self._core.reset(start, voltage)
 
-    def step(self, y_desired):
-        """The voltage for one desired output (applied to the state)."""
-        return self._core.step(float(y_desired))
+    def step(self, y_desired, dt=None):
+        """The voltage for one desired output (applied to the state). With creep, ``dt``
+        is the time since the previous sample (default ``model.creep.dt``)."""
+        yd = float(y_desired)
+        if self.model.creep is None:
+            return self._core.step(yd)
+        dt = self._dt(dt)
+        u, y, _ = self._lags.compensate(self._core, np.array([yd]),
+                                        None if dt is None else np.array([dt]))
+        self._output = float(y[0])
+        return float(u[0])
 
-    def run(self, y_desired):
-        """Compensate a block of desired outputs; returns a
-        :class:`pihyst.inverse.CompensationResult`."""
-        yd = _desired(y_desired)
-        initial_state, initial_voltage = self.state, self.voltage
-        u, y, flags = self._core.run(yd)
-        return run_result(self, yd, u, y, flags, initial_state, initial_voltage)
+    def _run(self, yd, dt):
+        if self.model.creep is None:
+            return self._core.run(yd)
+        u, y, flags = self._lags.compensate(self._core, yd, dt)
+        if y.size:
+            self._output = float(y[-1])
+        return u, y, flags
 
 
 OTHER_COMPENSATORS[BoucWenModel.family] = BoucWenCompensator

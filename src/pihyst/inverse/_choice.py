@@ -2,13 +2,13 @@
 family's own for the others (Bouc-Wen: :class:`pihyst.inverse.BoucWenCompensator`), with
 the same options, so that callers (the CLI, the rig, control) need not know the family."""
 
-from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse._compensator import OTHER_COMPENSATORS, Compensator
 
 
 def compensator_for(model, *, creep_state=None, **options):
     """A compensator of ``model``; ``options`` as for :class:`pihyst.Compensator`
-    (``u_min``, ``u_max``, ``slew_rate``, ``initial_voltage``, ``initial_state``).
+    (``u_min``, ``u_max``, ``slew_rate``, ``initial_voltage``, ``initial_state``);
+    ``creep_state`` for a model with creep.
 
     Examples
     --------
@@ -18,10 +18,5 @@ def compensator_for(model, *, creep_state=None, **options):
     >>> type(comp).__name__, comp.limits
     ('BoucWenCompensator', (0.0, 100.0))
     """
-    cls = OTHER_COMPENSATORS.get(getattr(model, "family", None))
-    if cls is None:
-        return Compensator(model, creep_state=creep_state, **options)
-    if creep_state is not None:
-        raise InvalidArgumentError(f"a {model.family} model has no creep: creep_state does "
-                                   f"not apply")
-    return cls(model, **options)
+    cls = OTHER_COMPENSATORS.get(getattr(model, "family", None), Compensator)
+    return cls(model, creep_state=creep_state, **options)

@@ -362,21 +362,11 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     >>> result.n_saturated, float(result.voltage[-1])   # 50 um is out of reach
     (1, 150.0)
     """
-    cls = OTHER_COMPENSATORS.get(getattr(model, "family", None))
-    if cls is not None:
-        if creep_state is not None:
-            raise InvalidArgumentError(f"a {model.family} model has no creep: "
-                                       f"creep_state does not apply")
-        comp = cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                   initial_voltage=initial_voltage, initial_state=initial_state)
-
-        def run(y, t):           # no creep: t only sets the delay's sample period
-            return comp.run(y)
-    else:
-        comp = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                           initial_voltage=initial_voltage, initial_state=initial_state,
-                           creep_state=creep_state)
-        run = comp.run
+    cls = OTHER_COMPENSATORS.get(getattr(model, "family", None), Compensator)
+    comp = cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+               initial_voltage=initial_voltage, initial_state=initial_state,
+               creep_state=creep_state)
+    run = comp.run
     d = model.delay_at(t=t)
     if d == 0:
         return run(y_desired, t)
@@ -410,9 +400,7 @@ class PreviewRun:
         self._t_last = None
 
     def _run(self, y, t, t_previous):
-        if isinstance(self.comp, Compensator):
-            return self.comp.run(y, t=t, t_previous=t_previous)
-        return self.comp.run(y)
+        return self.comp.run(y, t=t, t_previous=t_previous)
 
     def feed(self, y_desired, t=None, *, last=False):
         """The samples completed by the targets ``y_desired`` (sample times ``t`` for

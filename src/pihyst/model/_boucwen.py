@@ -23,6 +23,13 @@ checks it against the closed form for n = 1).
 
 The model's state is (u, z): the last input and the Bouc-Wen variable.
 
+With creep (docs/theory/creep.md) the output above is the settled displacement H, and
+n first-order lags give the approach to it, exactly as for the PI models
+(:class:`pihyst.model.Creep`, csrc/pihyst_creep.h (C1)-(C3)):
+
+    z_i[t] = z_i[t-1] + alpha_i[t] (H[t] - z_i[t-1]),  alpha_i[t] = 1 - exp(-dt[t]/tau_i),
+    y[t]   = H[t] - sum_i g_i (H[t] - z_i[t]).
+
 Runs (``simulate``, ``predict``, the stepper) go through the C core
 (csrc/pihyst_boucwen.c, the same arithmetic operation for operation); the functions of this
 module are its Python twin, which the tests compare it against (:func:`twin_simulation`).
@@ -36,7 +43,8 @@ import numpy as np
 
 from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
-from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
+from pihyst.model._creep import Creep, creep_twin_run, sample_intervals
 from pihyst.model._delay import (
     DelayLine,
     checked_delay,
@@ -50,6 +58,7 @@ from pihyst.model._models import (
     OTHER_FAMILIES,
     Immutable,
     Response,
+    _finite_vector,
     checked_input,
     checked_metadata,
     checked_units,
@@ -200,6 +209,9 @@ class BoucWenModel(Immutable):
         Input dead time in samples (as for the PI models: y[k] = P[u](k - d)).
     sample_period : float, optional
         The sample period (s) the delay holds at.
+    creep : Creep or dict, optional
+        Creep lags driven by the Bouc-Wen output, which is then the settled
+        displacement (module notes, docs/theory/creep.md); None: rate-independent.
 
     Examples
     --------
@@ -212,11 +224,11 @@ class BoucWenModel(Immutable):
 
     family = FAMILY
     _KEYS = ("beta", "gamma", "n", "hysteretic", "linear", "quadratic", "offset",
-             "input_range", "initial_state", "units", "metadata")
+             "input_range", "initial_state", "units", "metadata", "creep")
 
     def __init__(self, *, beta, gamma, hysteretic, linear, n=1.0, quadratic=0.0, offset=0.0,
                  input_range=None, initial_state=None, units=None, metadata=None, delay=0,
-                 sample_period=None):
+                 sample_period=None, creep=None):
         set_ = object.__setattr__
         for name, value in (("beta", beta), ("gamma", gamma), ("n", n),
                             ("hysteretic", hysteretic), ("linear", linear),
@@ -262,6 +274,8 @@ class BoucWenModel(Immutable):
         set_(self, "metadata", checked_metadata(metadata))
         set_(self, "delay", checked_delay(delay))
         set_(self, "sample_period", checked_sample_period(sample_period))
+        # creep lags (docs/theory/creep.md): None for a rate-independent model
+        set_(self, "creep", None if creep is None else Creep.from_dict(creep))
 
     # ---------------------------------------------------------------- properties
     @property
@@ -296,6 +310,11 @@ class BoucWenModel(Immutable):
         x = self._x(u)
         return self.offset + self.linear * x + self.quadratic * x * x + self.hysteretic * z
 
+    def hysteresis_output(self, state):
+        """The output at the state (u, z) without creep: the settled displacement H."""
+        u, z = state
+        return self.output(float(u), float(z))
+
     # ---------------------------------------------------------------- runs
     def _checked_input(self, u):
         return checked_input(u, self.input_range)
@@ -311,24 +330,37 @@ class BoucWenModel(Immutable):
             return self.initial_state
         return self.replace(initial_state=state).initial_state
 
-    def simulate(self, u, *, initial_state=None, t=None, pending_input=None):
+    def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
+                 pending_input=None):
         """Run over the input ``u`` from ``initial_state`` (default: the model's own);
         returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z). With a
         :attr:`delay` the input is delayed as for the PI models
-        (:meth:`pihyst.model.PIModel.simulate`; ``t`` only checks the sample period)."""
+        (:meth:`pihyst.model.PIModel.simulate`). With :attr:`creep`, ``t`` are the sample
+        times (s; default every ``creep.dt``), ``creep_state`` the lag state (default:
+        settled at the initial output) and the response carries ``final_creep_state``, as
+        for the PI models; without creep ``t`` only checks the sample period."""
         u = self._checked_input(u)
         d = self.delay_at(t=t)
         if d and pending_input is not None:
             pending_input = self._checked_input(pending_input)
         run = delayed_input(u, d, pending_input)
-        core = self._core(self._state(initial_state))
-        y = core.run(run)
-        return Response(input=u, output=y, final_state=np.array(core.state),
-                        pending_input=pending_after(u, d, pending_input) if d else None)
+        state = self._state(initial_state)
+        core = self._core(state)
+        h = core.run(run)
+        pending = pending_after(u, d, pending_input) if d else None
+        if self.creep is None:
+            return Response(input=u, output=h, final_state=np.array(core.state),
+                            pending_input=pending)
+        lags = self._lags(state, creep_state)
+        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        return Response(input=u, output=lags.run(h, dt), final_state=np.array(core.state),
+                        final_creep_state=lags.state, pending_input=pending)
 
-    def twin_simulation(self, u, *, initial_state=None, t=None, pending_input=None):
-        """:meth:`simulate` by the Python twin of the C core (this module's functions):
-        the reference the tests compare the C core against; slow."""
+    def twin_simulation(self, u, *, initial_state=None, t=None, creep_state=None,
+                        pending_input=None):
+        """:meth:`simulate` by the Python twin of the C core (this module's functions and,
+        with creep, :func:`creep_twin_run`): the reference the tests compare the C core
+        against; slow."""
         u = self._checked_input(u)
         d = self.delay_at(t=t)
         if d and pending_input is not None:
@@ -337,23 +369,46 @@ class BoucWenModel(Immutable):
         u0, z0 = self._state(initial_state)
         z = trajectory(self._x(run), self._x(u0), z0, self.beta, self.gamma, self.n)
         final = (float(run[-1]), float(z[-1])) if u.size else (u0, z0)
-        return Response(input=u, output=self.output(run, z), final_state=np.array(final),
-                        pending_input=pending_after(u, d, pending_input) if d else None)
+        h = self.output(run, z)
+        pending = pending_after(u, d, pending_input) if d else None
+        if self.creep is None:
+            return Response(input=u, output=h, final_state=np.array(final),
+                            pending_input=pending)
+        lags = self._lag_state((u0, z0), creep_state)
+        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        y = creep_twin_run(self.creep, lags, h, dt)
+        return Response(input=u, output=y, final_state=np.array(final),
+                        final_creep_state=lags, pending_input=pending)
 
-    def predict(self, u, *, initial_state=None, t=None, pending_input=None):
-        """Displacements for the inputs ``u``."""
-        return self.simulate(u, initial_state=initial_state, t=t,
+    def predict(self, u, *, initial_state=None, t=None, creep_state=None,
+                pending_input=None):
+        """Displacements for the inputs ``u``; ``t``, ``creep_state``: see
+        :meth:`simulate`."""
+        return self.simulate(u, initial_state=initial_state, t=t, creep_state=creep_state,
                              pending_input=pending_input).output
+
+    def _lag_state(self, state, creep_state):
+        """The lag state z_i: ``creep_state`` checked, or settled at the output of the
+        state (u, z)."""
+        if creep_state is None:
+            return np.full(self.creep.n_lags, self.hysteresis_output(state))
+        return np.array(_finite_vector(creep_state, "creep_state", self.creep.n_lags))
+
+    def _lags(self, state, creep_state):
+        """The C creep lags (:meth:`pihyst.model.Creep.lags`) from ``creep_state``
+        (None: settled at the output of the state (u, z))."""
+        return self.creep.lags(self._lag_state(state, creep_state))
 
     def delay_at(self, sample_period=None, *, t=None):
         """The delay in samples at another sample period (see
         :meth:`pihyst.model.PIModel.delay_at`)."""
         return delay_at(self.delay, self.sample_period, sample_period, t)
 
-    def stepper(self, initial_state=None, *, pending_input=None, sample_period=None):
+    def stepper(self, initial_state=None, *, creep_state=None, pending_input=None,
+                sample_period=None):
         """A :class:`BoucWenStepper`: the model sample by sample (with a delay, through
-        a FIFO of d inputs)."""
-        return BoucWenStepper(self, initial_state, pending_input=pending_input,
+        a FIFO of d inputs; with creep, from the lag state ``creep_state``)."""
+        return BoucWenStepper(self, initial_state, creep_state, pending_input=pending_input,
                               sample_period=sample_period)
 
     # ---------------------------------------------------------------- values
@@ -363,7 +418,8 @@ class BoucWenModel(Immutable):
                 "quadratic": self.quadratic, "offset": self.offset,
                 "input_range": self.input_range, "initial_state": self.initial_state,
                 "units": dict(self.units), "metadata": dict(self.metadata),
-                "delay": self.delay, "sample_period": self.sample_period}
+                "delay": self.delay, "sample_period": self.sample_period,
+                "creep": self.creep}
 
     def replace(self, **changes):
         """A copy with some constructor arguments changed."""
@@ -402,6 +458,8 @@ class BoucWenModel(Immutable):
             parts.append(f"delay={self.delay}")
         if self.sample_period is not None:
             parts.append(f"sample_period={self.sample_period:.6g}")
+        if self.creep is not None:
+            parts.append(f"creep={self.creep!r}")
         return f"BoucWenModel({', '.join(parts)})"
 
     def to_dict(self):
@@ -410,8 +468,10 @@ class BoucWenModel(Immutable):
              **{k: getattr(self, k) for k in ("beta", "gamma", "n", "hysteretic", "linear",
                                                 "quadratic", "offset")},
              "input_range": list(self.input_range),
-             "initial_state": list(self.initial_state), "units": dict(self.units),
-             **delay_dict(self)}
+             "initial_state": list(self.initial_state), "units": dict(self.units)}
+        if self.creep is not None:
+            d["creep"] = self.creep.to_dict()
+        d.update(delay_dict(self))
         if self.metadata:
             d["metadata"] = dict(self.metadata)
         return d
@@ -462,10 +522,14 @@ class BoucWenStepper:
     True
     """
 
-    def __init__(self, model, initial_state=None, *, pending_input=None, sample_period=None):
+    def __init__(self, model, initial_state=None, creep_state=None, *, pending_input=None,
+                 sample_period=None):
         self.model = model
         self._initial = model._state(initial_state)
         self._core = model._core(self._initial)
+        # with creep: the lags, settled at the initial output unless given
+        self._initial_creep = creep_state
+        self._lags = None if model.creep is None else model._lags(self._initial, creep_state)
         #: the input dead time in samples (a FIFO of that many inputs)
         self.delay = model.delay_at(sample_period)
         if self.delay and pending_input is not None:
@@ -477,24 +541,47 @@ class BoucWenStepper:
         """(u, z) after the last sample applied (with a delay: d samples back)."""
         return np.array(self._core.state)
 
-    def reset(self, state=None):
-        """Back to ``state`` (default: the initial state), the delay FIFO to its start."""
+    @property
+    def creep_state(self):
+        """The creep lag states z_i (a copy; None for a model without creep)."""
+        return None if self._lags is None else self._lags.state
+
+    def reset(self, state=None, creep_state=None):
+        """Back to ``state`` (default: the initial state); with creep, the lags to
+        ``creep_state`` (default: settled at that state's output, or the stepper's own
+        initial lags when neither is given); the delay FIFO to its start."""
+        if state is None and creep_state is None:
+            creep_state = self._initial_creep
         self._core.state = self._initial if state is None else self.model._state(state)
+        if self._lags is not None:
+            self._lags = self.model._lags(self._core.state, creep_state)
         self._line.reset()
 
     def output_at(self, u):
         """The output if the next sample applied were ``u`` (the state is not changed;
-        with a delay, ``u`` is the input leaving the FIFO)."""
+        with a delay, ``u`` is the input leaving the FIFO; with creep, the settled
+        output H, the lags aside)."""
         m = self.model
         u_p, z_p = self._core.state
         z = self._core.advance(z_p, m._x(u) - m._x(u_p))
         return m.output(u, z)
 
-    def step(self, u):
+    def step(self, u, dt=None):
         """One sample: advance the state by the input ``u`` (with a delay of d samples,
-        by the input of d steps ago), return y."""
-        u = float(u)
+        by the input of d steps ago), return y. With creep, ``dt`` is the time since the
+        previous sample (default ``creep.dt``)."""
+        try:
+            u = float(u)
+        except (TypeError, ValueError, OverflowError):
+            raise InvalidArgumentError(f"input must be a number, got {u!r:.40}") from None
         lo, hi = self.model.input_range
         if not lo <= u <= hi:
             raise InputRangeError(0, u, self.model.input_range)
-        return self._core.step(self._line.push(u))
+        h = self._core.step(self._line.push(u))
+        if self._lags is None:
+            return h
+        if dt is not None:
+            dt = float(dt)
+            if not (math.isfinite(dt) and dt >= 0):
+                raise InvalidArgumentError(f"dt must be a finite interval >= 0 s, got {dt}")
+        return self._lags.step(h, dt)

@@ -13,12 +13,15 @@ with g_i >= 0 and sum_i g_i < 1, so that y[t] = (1 - beta[t]) H[t] + (lag terms)
 sample, and the exact inverse stays exact (each sample solves for H[t], then the voltage).
 """
 
+import math
+
 import numpy as np
 
 from pihyst import _core
 from pihyst.exceptions import InvalidModelError
 
-__all__ = ["Creep", "default_time_constants", "sample_intervals"]
+__all__ = ["Creep", "creep_twin_run", "creep_twin_step", "creep_twin_target",
+           "default_time_constants", "sample_intervals"]
 
 #: Largest sum of the creep gains: the output's slope in H is at least 1 - this.
 MAX_TOTAL_GAIN = 0.9
@@ -174,3 +177,46 @@ def sample_intervals(t, n, first):
         raise ValueError(f"t must be non-decreasing: t[{back[0]}] = {t[back[0]]:g} comes "
                          f"after {t[back[0] - 1]:g}")
     return dt
+
+
+# The plain-Python twin of the lags' C arithmetic (csrc/pihyst_creep.c), operation for
+# operation, for the Python twins of the C paths that use the lags (the Bouc-Wen model
+# and compensator with creep); ``state`` is the lag vector z_i[t-1], a float list or array.
+
+def creep_twin_target(creep, state, y_desired, dt=None):
+    """(C5): the hysteresis output H* that gives ``y_desired`` at the next sample,
+    H* = (y_d - sum_i g_i (1 - alpha_i) z_i) / (1 - beta), as pihyst_creep_target(_dt)."""
+    carry = beta = 0.0
+    if dt is None or dt == creep.dt:
+        for g, tau, z in zip(creep.gain.tolist(), creep.tau.tolist(), state):
+            keep = 1.0 - -math.expm1(-creep.dt / tau)
+            carry += g * keep * z
+            beta += g * keep
+        return (y_desired - carry) / (1.0 - beta)
+    for g, tau, z in zip(creep.gain.tolist(), creep.tau.tolist(), state):
+        keep = g * math.exp(-dt / tau)                  # g_i (1 - alpha_i)
+        carry += keep * z
+        beta += keep
+    return (y_desired - carry) / (1.0 - beta)
+
+
+def creep_twin_step(creep, state, h, dt=None):
+    """(C2)-(C3): advance the lags ``state`` (a list, changed in place) by the hysteresis
+    output ``h``; return y, as pihyst_creep_step(_dt)."""
+    lag = 0.0
+    step = creep.dt if dt is None else dt
+    for i, (g, tau) in enumerate(zip(creep.gain.tolist(), creep.tau.tolist())):
+        state[i] += -math.expm1(-step / tau) * (h - state[i])
+        lag += g * (h - state[i])
+    return h - lag
+
+
+def creep_twin_run(creep, state, h, dt=None):
+    """y[t] for the hysteresis outputs ``h`` (intervals ``dt``, None: the fixed one),
+    advancing the lag array ``state`` in place: the twin of pihyst_creep_run."""
+    z = [float(v) for v in state]
+    y = np.array([creep_twin_step(creep, z, float(v), None if dt is None else float(d))
+                  for v, d in zip(np.asarray(h, dtype=float).tolist(),
+                                  [None] * len(h) if dt is None else dt)])
+    state[:] = z
+    return y
