@@ -367,7 +367,9 @@ class BoucWenModel(Immutable):
             pending_input = self._checked_input(pending_input)
         run = delayed_input(u, d, pending_input)
         u0, z0 = self._state(initial_state)
-        z = trajectory(self._x(run), self._x(u0), z0, self.beta, self.gamma, self.n)
+        # the substep given explicitly: trajectory() would hand one shape to the C core
+        z = trajectory(self._x(run), self._x(u0), z0, self.beta, self.gamma, self.n,
+                       h=substep(self.beta, self.gamma))
         final = (float(run[-1]), float(z[-1])) if u.size else (u0, z0)
         h = self.output(run, z)
         pending = pending_after(u, d, pending_input) if d else None
