@@ -164,3 +164,10 @@ def test_creep_is_decided_with_a_time_column_and_skipped_with_a_broken_one(tmp_p
     assert "creep: " not in captured.out
     warning = [line for line in captured.err.splitlines() if "time column is not used" in line]
     assert len(warning) == 1 and "broken.csv:" in warning[0] and "sample 40" in warning[0]
+    # ... and when the fit then fails, its error is the only line (no warning first)
+    out.unlink()
+    assert main(["fit", str(broken), "--model", "classical", "--thresholds", "0,10,1e9",
+                 "-o", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert len(captured.err.strip().splitlines()) == 1, captured.err
+    assert "time column" not in captured.err and not out.exists()

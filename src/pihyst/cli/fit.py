@@ -189,7 +189,8 @@ def run(args):
     record = read_from_args(args, args.data, need=("voltage", "displacement"),
                             say=not args.json, optional=())
     u, y = record.voltage, record.displacement
-    t = None if args.no_creep else _times_for_creep(args)
+    # an unusable time column is said after the fit: a fit that fails says one line
+    t, time_note = (None, None) if args.no_creep else _times_for_creep(args)
     other = validate = None
     if args.validate is not None:
         other = read_from_args(args, args.validate, need=("voltage", "displacement"),
@@ -221,6 +222,8 @@ def run(args):
                                                  + options_text(args),
                    "record": _plain(record.metadata)}})
     save_model(model, args.output)
+    if time_note is not None:
+        print(f"pihyst: warning: {time_note}", flush=True, file=sys.stderr)
     for w in caught:
         print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)
     print(result.report.to_json() if args.json else result.report)
@@ -231,32 +234,32 @@ def run(args):
 
 
 def _times_for_creep(args):
-    """The record's sample times for creep="auto", or None: a record without a time column
-    is fitted without creep, and so is one whose time column is unusable (a warning says
-    where; the fit itself needs no time)."""
+    """(times, note): the record's sample times for creep="auto", or None: a record
+    without a time column is fitted without creep, and so is one whose time column is
+    unusable (the note, a warning to print once the fit succeeds, says where; the fit
+    itself needs no time)."""
     try:
         # (the time is optional here: a record without one is fitted without creep)
         times = read_from_args(args, args.data, need=("voltage", "displacement"), say=False,
                                optional=("time",))
     except UsageError:
-        return None
+        return None, None
     except RecordError as err:
-        return _unused_time(err)
+        return None, _unused_time(err)
     t = times.time
     if t is None:
-        return None
+        return None, None
     bad = np.flatnonzero(~np.isfinite(t) | np.r_[False, np.diff(t) < 0])
     if bad.size:
         k = int(bad[0])
         what = "is not finite" if not np.isfinite(t[k]) else "runs backwards"
-        return _unused_time(times.error(k, "time", f"time {what} at sample {k}"))
-    return t
+        return None, _unused_time(times.error(k, "time", f"time {what} at sample {k}"))
+    return t, None
 
 
 def _unused_time(err):
-    print(f"pihyst: warning: {err}: the time column is not used, creep is not tried (fix "
-          f"it, or give --no-creep)", flush=True, file=sys.stderr)
-    return None
+    return (f"{err}: the time column is not used, creep is not tried (fix it, or give "
+            f"--no-creep)")
 
 
 def _sample_period(args):
