@@ -6,6 +6,7 @@
 #include "pihyst.h"
 #include "pihyst_boucwen.h"
 #include "pihyst_creep.h"
+#include "pihyst_bw_creep.h"
 
 #include <locale.h>
 #include <math.h>
@@ -50,8 +51,6 @@ const char *pihyst_lib_status_text(int32_t status)
                                            "(pihyst_lib_compensator_start)";
     case PIHYST_LIB_ELENGTH: return "a length is negative or does not match the model";
     case PIHYST_LIB_EINPUT: return "an input sample is NaN or outside the input range";
-    case PIHYST_LIB_ECREEP_BOUCWEN: return "creep of a Bouc-Wen model is not supported by "
-                                           "this library";
     default:
         if (status <= PIHYST_LIB_ECREEP_BASE + PIHYST_CREEP_ENULL &&
             status >= PIHYST_LIB_ECREEP_BASE + PIHYST_CREEP_EDT)
@@ -236,6 +235,7 @@ static double hysteresis_output(const pihyst_lib_model *h)
 {
     size_t k;
     double sum = 0.0;
+    if (h->boucwen) return pihyst_bw_output(&h->bw, h->bw.u, h->bw.z);
     for (k = 0; k < h->n_ops; ++k) sum += h->params.weights[k] * h->state[k];
     return h->params.offset + sum;
 }
@@ -249,7 +249,6 @@ int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const doubl
     pihyst_creep_status s;
     if (!h) return PIHYST_ENULL;
     if (n < 0) return PIHYST_LIB_ELENGTH;
-    if (h->boucwen) return n == 0 ? PIHYST_OK : PIHYST_LIB_ECREEP_BOUCWEN;
     if (n > 0 && (!tau || !gain)) return PIHYST_ENULL;
     if (n == 0) {
         h->comp_started = 0;
@@ -367,6 +366,20 @@ static int read_tail(FILE *f, flat_tail *tail)
     return got == EOF;
 }
 
+/* h with the tail's creep lags (h itself without them); NULL, with the lags' status,
+ * when they are invalid (h is freed). */
+static pihyst_lib_model *with_creep_of(pihyst_lib_model *h, const flat_tail *tail,
+                                       int32_t *status)
+{
+    int32_t s;
+    if (!h || !tail->n_lags) return h;
+    s = pihyst_lib_set_creep(h, tail->lags, tail->lags + tail->n_lags, tail->n_lags, tail->dt);
+    if (s == PIHYST_OK) return h;
+    pihyst_lib_free(h);
+    set_status(status, s);
+    return NULL;
+}
+
 pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
 {
     FILE *f;
@@ -398,15 +411,18 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
         ok = k == 1 && read_numbers(f, bw, 3) && read_numbers(f, bw + 3, 3) &&
              read_numbers(f, bw + 9, 2) && read_tail(f, &tail);
         fclose(f);
-        free(tail.lags);
-        if (!ok || tail.n_lags) {
-            set_status(status, ok ? PIHYST_LIB_ECREEP_BOUCWEN : PIHYST_LIB_EFORMAT);
+        if (!ok) {
+            free(tail.lags);
+            set_status(status, PIHYST_LIB_EFORMAT);
             return NULL;
         }
         bw[6] = head[0];
         bw[7] = head[1];
         bw[8] = head[2];
-        return pihyst_lib_create_boucwen(bw, status);
+        h = pihyst_lib_create_boucwen(bw, status);
+        h = with_creep_of(h, &tail, status);
+        free(tail.lags);
+        return h;
     }
     ok = ok && read_numbers(f, shape, 4);
     if (ok) {
@@ -472,15 +488,7 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status)
         h = pihyst_lib_create(family, k, thr, w, head[0], head[1], head[2], shape, NULL, NULL,
                               NULL, NULL, NULL, NULL, s0, status);
     }
-    if (h && tail.n_lags) {
-        int32_t s = pihyst_lib_set_creep(h, tail.lags, tail.lags + tail.n_lags, tail.n_lags,
-                                         tail.dt);
-        if (s != PIHYST_OK) {
-            pihyst_lib_free(h);
-            h = NULL;
-            set_status(status, s);
-        }
-    }
+    h = with_creep_of(h, &tail, status);
     if (!ok) set_status(status, PIHYST_LIB_EFORMAT);
     free(tail.lags);
     free(thr);
@@ -508,7 +516,8 @@ int32_t pihyst_lib_predict(pihyst_lib_model *h, const double *u, double *y, int3
         for (t = 0; t < n; ++t)
             if (!(u[t] >= h->bw.u_min && u[t] <= h->bw.u_max)) return PIHYST_LIB_EINPUT;
         h->comp_started = 0;
-        pihyst_bw_run(&h->bw, u, y, (size_t)n);
+        if (h->n_lags) pihyst_bw_creep_run(&h->creep, &h->bw, u, NULL, y, (size_t)n);
+        else pihyst_bw_run(&h->bw, u, y, (size_t)n);
         return PIHYST_OK;
     }
     for (t = 0; t < n; ++t)
@@ -541,8 +550,10 @@ int32_t pihyst_lib_reset(pihyst_lib_model *h, const double *state, int32_t n)
         pihyst_status status;
         if (state && n != BOUCWEN_STATE_LEN) return PIHYST_LIB_ELENGTH;
         status = pihyst_bw_reset(&h->bw, s[0], s[1]);
-        if (status == PIHYST_OK) h->comp_started = 0;
-        return status;
+        if (status != PIHYST_OK) return status;
+        h->comp_started = 0;
+        if (h->n_lags) pihyst_creep_settle(&h->creep, hysteresis_output(h));
+        return PIHYST_OK;
     }
     if (state && n != (int32_t)h->n_ops) return PIHYST_LIB_ELENGTH;
     if (state && !all_finite(state, h->n_ops)) return PIHYST_ENONFINITE;
@@ -563,6 +574,7 @@ int32_t pihyst_lib_compensator_start(pihyst_lib_model *h, double u_min, double u
         h->comp_started = 0;
         s = pihyst_bw_compensator_init(&h->bw_comp, &h->bw, u_min, u_max, max_step, u_initial);
         if (s != PIHYST_OK) return s;
+        if (h->n_lags) pihyst_creep_settle(&h->creep, h->bw_comp.y_last);
         h->comp_started = 1;
         return PIHYST_OK;
     }
@@ -585,6 +597,9 @@ int32_t pihyst_lib_compensate(pihyst_lib_model *h, const double *y_desired, doub
     if (!h || (n > 0 && (!y_desired || !u))) return PIHYST_ENULL;
     if (n < 0) return PIHYST_LIB_ELENGTH;
     if (!h->comp_started) return PIHYST_LIB_ENOCOMPENSATOR;
+    if (h->boucwen && h->n_lags)
+        return (int32_t)pihyst_bw_creep_compensator_run(&h->creep, &h->bw_comp, y_desired,
+                                                        NULL, u, NULL, flags, (size_t)n);
     if (h->boucwen)
         return (int32_t)pihyst_bw_compensator_run(&h->bw_comp, y_desired, u, NULL, flags,
                                                   (size_t)n);

@@ -33,7 +33,6 @@ typedef struct pihyst_lib_model pihyst_lib_model; /* opaque */
 #define PIHYST_LIB_ENOCOMPENSATOR (-103) /* pihyst_lib_compensate before _compensator_start */
 #define PIHYST_LIB_ELENGTH (-104)      /* a length argument is negative or does not match */
 #define PIHYST_LIB_EINPUT (-105)       /* an input sample is NaN or outside the input range */
-#define PIHYST_LIB_ECREEP_BOUCWEN (-106) /* creep lags on a Bouc-Wen model (not supported) */
 /* Invalid creep lags: PIHYST_LIB_ECREEP_BASE + the pihyst_creep_status of
  * pihyst_creep.h (-1 ... -6), so -111 ... -116: -114 a time constant not > 0, -115 gains
  * negative or summing to 1 or more, -116 dt negative or not finite, ... */
@@ -75,9 +74,9 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status);
  *  interval dt (seconds, >= 0): every sample of pihyst_lib_predict and
  *  pihyst_lib_compensate is dt after the one before. n = 0 removes the lags (tau, gain
  *  may then be NULL). The lags start at rest at the present hysteresis output; the
- *  compensator, if one was started, is stopped. A Bouc-Wen model refuses creep
- *  (PIHYST_LIB_ECREEP_BOUCWEN); invalid lags give PIHYST_LIB_ECREEP_BASE plus their
- *  pihyst_creep_status, and leave the handle as it was. */
+ *  compensator, if one was started, is stopped. PI and Bouc-Wen models alike (the lags
+ *  are driven by the hysteresis output). Invalid lags give PIHYST_LIB_ECREEP_BASE plus
+ *  their pihyst_creep_status, and leave the handle as it was. */
 int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const double *gain,
                              int32_t n, double dt);
 

@@ -16,7 +16,6 @@ from hypothesis import strategies as st
 import pihyst
 from pihyst.cli import main
 from pihyst.exceptions import InvalidModelError
-from pihyst.inverse import BoucWenCompensator
 from pihyst.io._export import c_header, flat_text
 from pihyst.model import BoucWenModel, Creep
 
@@ -30,6 +29,8 @@ KP_LIKE = pihyst.PiecewiseLinearPI(
      ([0, 150], [5, 155])],
     [6.0, 4.0, 0.2], offset=-1.5, initial_state=[0.0, 0.0, 5.0],
     creep=Creep([0.05, 0.5], [0.1, 0.05], dt=0.002))
+BW_CREEP = BoucWenModel(beta=4.0, gamma=-2.0, n=1.5, hysteretic=5.0, linear=10.0,
+                        quadratic=3.0, input_range=(-20.0, 120.0), creep=CREEP)
 MODELS = {
     "classical": pihyst.ClassicalPI([0, 10, 30, 60], [0.2, 0.05, 0.03, 0.01], offset=0.7,
                                     initial_state=[0, 10, 30, 60], creep=CREEP),
@@ -81,7 +82,8 @@ def core_objects(tmp_path_factory):
     """The C core with its creep lags and the Bouc-Wen model, compiled once with the
     firmware flags."""
     return compile_core(tmp_path_factory, ("pihyst_model.c", "pihyst_inverse.c",
-                                           "pihyst_creep.c", "pihyst_boucwen.c"))
+                                           "pihyst_creep.c", "pihyst_boucwen.c",
+                                           "pihyst_bw_creep.c"))
 
 
 # ---------------------------------------------------------------- the C header
@@ -136,18 +138,6 @@ def test_single_precision_header_of_a_creep_model_is_refused_in_one_line():
 
 
 # ---------------------------------------------------------------- a Bouc-Wen model
-class _BoucWenWithCreep:
-    """A Bouc-Wen model carrying creep lags, as BoucWenModel will (the export is written
-    for any model with ``creep``)."""
-
-    def __init__(self, model, creep):
-        self._model = model
-        self.creep = creep
-
-    def __getattr__(self, name):
-        return getattr(self._model, name)
-
-
 BW_DRIVER = r"""
 #include <stdio.h>
 #include <math.h>
@@ -171,8 +161,7 @@ int main(void)
     if ({name}_creep_init(&cr, c.y_last) != PIHYST_CREEP_OK) return 6;
     for (t = 0; t < n; ++t) {{
         pihyst_flags flags = 0;
-        double volts = pihyst_bw_compensator_step(&c, pihyst_creep_target(&cr, yd[t]), &flags);
-        double y = pihyst_creep_step(&cr, c.y_last);
+        double y, volts = pihyst_bw_creep_compensator_step(&cr, &c, -1.0, yd[t], &y, &flags);
         printf("%.17g %.17g %d\n", volts, y, (int)flags);
     }}
     return 0;
@@ -180,31 +169,22 @@ int main(void)
 """
 
 
-def test_bouc_wen_header_with_creep_runs_the_lags_around_the_bouc_wen_core(tmp_path,
-                                                                          core_objects):
-    # the reference: the Bouc-Wen model's output through the lags (C1)-(C3), and its
-    # compensator given each sample's hysteresis target (C5), the lags advanced by the
-    # output reached
-    bw = BoucWenModel(beta=4.0, gamma=-2.0, n=1.5, hysteretic=5.0, linear=10.0,
-                      quadratic=3.0, input_range=(-20.0, 120.0))
-    model = _BoucWenWithCreep(bw, CREEP)
+def test_bouc_wen_header_with_creep_reproduces_predict_and_compensate(tmp_path,
+                                                                     core_objects):
+    model = BW_CREEP
     exe = compile_driver(tmp_path, "exported.h", c_header(model, "bw_x"),
                          BW_DRIVER.format(header="exported.h", name="bw_x", NAME="BW_X"),
                          core_objects)
-    u, yd = export_signals(bw)
+    u, yd = export_signals(model)
     y_c, volts, y_comp, flags = _run(exe, u, yd)
-    rest = np.full(CREEP.n_lags, bw.output(*bw.initial_state))
-    y_ref = CREEP.lags(rest).run(bw.predict(u))
+    y_ref = model.predict(u)
     scale = np.ptp(y_ref)
     np.testing.assert_allclose(y_c, y_ref, rtol=0, atol=1e-12 * scale)
-    comp = BoucWenCompensator(bw, initial_voltage=bw.input_range[0])
-    lags = CREEP.lags(np.full(CREEP.n_lags, comp.displacement))
-    v_ref, y_ref = [], []
-    for target in yd:
-        v_ref.append(comp.step(lags.target(target)))
-        y_ref.append(lags.step(comp.displacement))
-    np.testing.assert_allclose(volts, v_ref, rtol=0, atol=1e-12 * np.ptp(bw.input_range))
-    np.testing.assert_allclose(y_comp, y_ref, rtol=0, atol=1e-12 * scale)
+    ref = pihyst.compensate(model, yd, initial_voltage=model.input_range[0])
+    np.testing.assert_allclose(volts, ref.voltage, rtol=0,
+                               atol=1e-12 * np.ptp(model.input_range))
+    np.testing.assert_allclose(y_comp, ref.displacement, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_array_equal(flags, ref.flags)
     text = flat_text(model)
     assert text.startswith("pihyst-flat 2\n3 1\n")
     assert text.endswith("\ncreep 3 0.3 3.0 30.0 0.02 0.035 0.015 0.01\n")
@@ -255,9 +235,9 @@ def _from_arrays(lib, model):
     return h
 
 
-@pytest.mark.parametrize("family", sorted(MODELS))
+@pytest.mark.parametrize("family", [*sorted(MODELS), "bouc-wen"])
 def test_library_applies_the_flat_files_creep(lib, family, tmp_path):
-    model = MODELS[family]
+    model = MODELS.get(family, BW_CREEP)
     path = tmp_path / "m.pihyst"
     path.write_text(flat_text(model))
     handles = {"file": _load(lib, path)[0]}
@@ -265,7 +245,7 @@ def test_library_applies_the_flat_files_creep(lib, family, tmp_path):
         handles["arrays"] = _from_arrays(lib, model)
     u, yd = export_signals(model)
     ref_run = model.simulate(u)
-    ref = pihyst.compensate(model, yd)
+    ref = pihyst.compensate(model, yd, initial_voltage=model.input_range[0])
     scale = np.ptp(ref_run.output)
     for source, h in handles.items():
         assert h, source
@@ -390,19 +370,16 @@ def test_library_refuses_bad_creep_in_one_line(lib, tmp_path):
         path.write_text(text)
         h, got = _load(lib, path)
         assert h is None and got == status, text
-    # a Bouc-Wen model's file with a creep line: refused (the library has no Bouc-Wen
-    # creep), with its own status
-    bw = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0, offset=0.3)
-    path.write_text(flat_text(_BoucWenWithCreep(bw, CREEP)))
-    h, got = _load(lib, path)
-    assert h is None and got == -106
-    assert b"Bouc-Wen" in lib.pihyst_lib_status_text(-106)
+    # Bouc-Wen models take creep too, from arrays as from the file
     status = ctypes.c_int32(1)
     params = np.array([5.0, 1.0, 1.0, -8.0, 40.0, 0.0, 0.3, 0.0, 150.0, 0.0, 0.0])
     h = lib.pihyst_lib_create_boucwen(_ptr(params), ctypes.byref(status))
     try:
         tau, gain = np.array([1.0]), np.array([0.1])
-        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain), 1, 0.01) == -106
+        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(gain), 1, 0.01) == 0
+        assert lib.pihyst_lib_n_creep_lags(h) == 1
+        assert lib.pihyst_lib_set_creep(h, _ptr(tau), _ptr(np.array([1.0])), 1, 0.01) == -115
+        assert lib.pihyst_lib_n_creep_lags(h) == 1
     finally:
         lib.pihyst_lib_free(h)
 

@@ -72,20 +72,18 @@ def creep_comment(model, name, *, bouc_wen=False):
              f" * The compensator, after {name}_compensator_init (the lags at rest at the\n",
              " * output of u_initial), with dt = -1.0 for the fixed interval:\n",
              f" *     {name}_creep_init(&cr, c.y_last);\n"]
-    if bouc_wen:
-        lines += [" *     double volts = pihyst_bw_compensator_step(&c,\n",
-                  " *         pihyst_creep_target(&cr, y_desired), &flags);\n",
-                  " *     double y = pihyst_creep_step(&cr, c.y_last);\n"]
-    else:
-        lines += [" *     double volts = pihyst_creep_compensator_step(&cr, &c, -1.0, "
-                  "y_desired, &y, &flags);\n"]
-    lines.append(" * Build with csrc/pihyst_creep.c too.\n")
+    call = "pihyst_bw_creep_compensator_step" if bouc_wen else "pihyst_creep_compensator_step"
+    lines += [f" *     double volts = {call}(&cr, &c, -1.0, y_desired, &y, &flags);\n",
+              " * Build with csrc/pihyst_creep.c" + (" and csrc/pihyst_bw_creep.c" if bouc_wen
+                                                    else "") + " too.\n"]
     return lines
 
 
-def creep_include(model):
+def creep_include(model, *, bouc_wen=False):
     """The extra #include of a header with creep (empty without)."""
-    return "" if creep_of(model) is None else "#include \"pihyst_creep.h\"\n"
+    if creep_of(model) is None:
+        return ""
+    return "#include \"pihyst_bw_creep.h\"\n" if bouc_wen else "#include \"pihyst_creep.h\"\n"
 
 
 def creep_defines(model, name, initial_output, literal):
