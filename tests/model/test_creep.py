@@ -169,8 +169,15 @@ def test_chunks_continue_exactly():
     a = m.simulate(u[:400])
     b = m.simulate(u[400:], initial_state=a.final_state, creep_state=a.final_creep_state)
     np.testing.assert_allclose(np.r_[a.output, b.output], whole.output, atol=1e-12)
-    # irregular times: the stepper, one interval per sample, equals the batch run
+    # irregular times: chunks continue exactly given the previous sample's time
     whole = m.simulate(u, t=t)
+    a = m.simulate(u[:400], t=t[:400])
+    b = m.simulate(u[400:], t=t[400:], t_previous=t[399], initial_state=a.final_state,
+                   creep_state=a.final_creep_state)
+    np.testing.assert_allclose(np.r_[a.output, b.output], whole.output, atol=1e-12)
+    with pytest.raises(ValueError, match="before t_previous"):
+        m.simulate(u[400:], t=t[400:], t_previous=t[401])
+    # irregular times: the stepper, one interval per sample, equals the batch run
     step = m.stepper()
     got = [step.step(u[0])] + [step.step(x, d) for x, d in zip(u[1:], np.diff(t))]
     np.testing.assert_allclose(got, whole.output, atol=1e-12)

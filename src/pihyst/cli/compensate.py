@@ -8,7 +8,7 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
-from pihyst.cli.model_inputs import add_initial_state_option, initial_state
+from pihyst.cli.model_inputs import add_initial_state_option, creep_times, initial_state
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
 from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import ColumnWriter, load_model
@@ -143,16 +143,20 @@ def run(args):
         # behind the targets read, the last d at the end
         preview = PreviewRun(compensator, compensator.delay) if compensator.delay else None
         times = np.empty(0)
+        t_last = None             # with creep: the previous chunk's last sample time
         try:
             for rec in reader.chunks(progress=bar):
                 y_d = rec.displacement
+                at = creep_times(model, rec, t_last)    # a model with creep: its times
+                if at and len(rec):
+                    t_last = rec.time[-1]
                 t = rec.time if rec.time is not None else \
                     np.arange(rec.start, rec.start + len(rec), dtype=float)
                 if preview is None:
-                    result = ahead = compensator.run(y_d)
+                    result = ahead = compensator.run(y_d, **at)
                     skip = 0
                 else:
-                    result = preview.feed(y_d)
+                    result = preview.feed(y_d, at.get("t"))
                     ahead, skip = preview.ahead, preview.skip
                     times = np.concatenate([times, t])
                     t, times = times[:len(result.voltage)], times[len(result.voltage):]

@@ -116,3 +116,21 @@ def settle_end(u, tolerance=0.02):
     top = np.flatnonzero(u >= hi - tol)
     bottom = np.flatnonzero(u <= lo + tol)
     return int(max(top[0], bottom[0])) + 1
+
+
+def creep_times(model, rec, t_last):
+    """The keyword arguments that run a model with creep at a record chunk's sample times:
+    ``t`` (its time column, or none: every ``creep.dt``) and ``t_previous`` (the previous
+    chunk's last time); empty for a model without creep. A time that is not finite or
+    runs backwards is an error at its file, line and column."""
+    if getattr(model, "creep", None) is None or rec.time is None:
+        return {}
+    t = rec.time
+    full = t if t_last is None else np.r_[t_last, t]
+    bad = np.flatnonzero(~np.isfinite(full) | np.r_[False, np.diff(full) < 0])
+    if bad.size:
+        i = int(bad[0]) - (0 if t_last is None else 1)
+        what = "is not a finite time" if not np.isfinite(full[bad[0]]) else "runs backwards"
+        raise rec.error(max(i, 0), "time", f"time_s = {t[max(i, 0)]:g} {what}: the model's "
+                        f"creep needs increasing sample times")
+    return {"t": t, "t_previous": t_last}

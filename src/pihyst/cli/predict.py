@@ -7,7 +7,13 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import check_output
-from pihyst.cli.model_inputs import InputRange, add_initial_state_option, initial_state, settle_end
+from pihyst.cli.model_inputs import (
+    InputRange,
+    add_initial_state_option,
+    creep_times,
+    initial_state,
+    settle_end,
+)
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
 from pihyst.io import ColumnWriter, load_model
 
@@ -45,6 +51,7 @@ def run(args):
             chunks = [reader.read(progress=bar)]
             end = settle_end(chunks[0].voltage)
         pending = None            # a delayed model's inputs carried to the next chunk
+        lags = t_last = None      # with creep: the lag state and time carried likewise
         run_model = limits.run_model
         try:
             for rec in chunks:
@@ -52,8 +59,14 @@ def run(args):
                 if rec.time is not None and pending is None and run_model.delay:
                     # the delay at the record's sample period: converted or refused
                     run_model = run_model.replace(delay=run_model.delay_at(t=rec.time))
-                response = run_model.simulate(u, initial_state=state, pending_input=pending)
+                creep = getattr(run_model, "creep", None) is not None
+                response = run_model.simulate(u, initial_state=state, pending_input=pending,
+                                              **creep_times(run_model, rec, t_last),
+                                              **({"creep_state": lags} if creep else {}))
                 state, pending = response.final_state, response.pending_input
+                if creep:
+                    lags = response.final_creep_state
+                    t_last = rec.time[-1] if rec.time is not None and len(rec) else t_last
                 t = rec.time if rec.time is not None else \
                     np.arange(rec.start, rec.start + len(rec), dtype=float)
                 if writer is None:

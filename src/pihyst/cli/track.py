@@ -14,6 +14,7 @@ from pihyst.cli.compensate import (
     smallest_step,
 )
 from pihyst.cli.errors import UsageError, check_output
+from pihyst.cli.model_inputs import creep_times
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.cli.record_options import add_record_options, read_from_args
 from pihyst.inverse import PreviewRun, compensator_for
@@ -80,8 +81,10 @@ def run(args):
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     # a delayed model: with preview, as pihyst.compensate
-    result = (PreviewRun(compensator, compensator.delay).feed(y_d, last=True)
-              if compensator.delay else compensator.run(y_d))
+    # (a model with creep: at the record's sample times, as the beam runs)
+    at = creep_times(model, rec, None)
+    result = (PreviewRun(compensator, compensator.delay).feed(y_d, at.get("t"), last=True)
+              if compensator.delay else compensator.run(y_d, **at))
     measured = plant.run(result.voltage, t)
     error = measured - y_d
     write_columns(args.output, {

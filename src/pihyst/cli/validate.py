@@ -7,7 +7,13 @@ import os
 import numpy as np
 
 from pihyst.cli.errors import UsageError
-from pihyst.cli.model_inputs import InputRange, add_initial_state_option, initial_state, settle_end
+from pihyst.cli.model_inputs import (
+    InputRange,
+    add_initial_state_option,
+    creep_times,
+    initial_state,
+    settle_end,
+)
 from pihyst.cli.record_options import add_record_options, read_from_args
 from pihyst.io import validate_model
 
@@ -48,7 +54,8 @@ def run(args):
         raise UsageError(f"{args.data}: no samples left after the first sweep "
                          "(--initial-state settle)")
     result = validate_model(limits.run_model, u, rec.displacement,
-                            initial_state=initial_state(model, args.initial_state), first=first)
+                            initial_state=initial_state(model, args.initial_state), first=first,
+                            t=creep_times(limits.run_model, rec, None).get("t"))
     if args.figure:
         _figure(args, rec, result)
     if args.json:

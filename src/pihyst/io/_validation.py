@@ -80,12 +80,13 @@ def cycle_starts(u, band=SCHMITT_BAND):
     return np.array(starts)
 
 
-def validate_model(model, voltage, displacement, *, initial_state=None, first=0):
-    """Predict ``voltage`` with ``model`` (from ``initial_state``, default the model's)
-    and compare with ``displacement`` from sample ``first`` on."""
+def validate_model(model, voltage, displacement, *, initial_state=None, first=0, t=None):
+    """Predict ``voltage`` with ``model`` (from ``initial_state``, default the model's;
+    a model with creep at the sample times ``t``, default every ``creep.dt``) and compare
+    with ``displacement`` from sample ``first`` on."""
     u = np.asarray(voltage, dtype=float)
     y = np.asarray(displacement, dtype=float)
-    predicted = model.predict(u, initial_state=initial_state)
+    predicted = model.predict(u, initial_state=initial_state, **({} if t is None else {"t": t}))
     e = y - predicted
     judged = slice(first, None)
     span = float(np.ptp(y[judged])) if y[judged].size else 0.0

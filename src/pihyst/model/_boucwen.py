@@ -44,7 +44,7 @@ import numpy as np
 from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
-from pihyst.model._creep import Creep, creep_twin_run, sample_intervals
+from pihyst.model._creep import Creep, creep_twin_run, first_interval, sample_intervals
 from pihyst.model._delay import (
     DelayLine,
     checked_delay,
@@ -331,12 +331,13 @@ class BoucWenModel(Immutable):
         return self.replace(initial_state=state).initial_state
 
     def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
-                 pending_input=None):
+                 pending_input=None, t_previous=None):
         """Run over the input ``u`` from ``initial_state`` (default: the model's own);
         returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z). With a
         :attr:`delay` the input is delayed as for the PI models
         (:meth:`pihyst.model.PIModel.simulate`). With :attr:`creep`, ``t`` are the sample
-        times (s; default every ``creep.dt``), ``creep_state`` the lag state (default:
+        times (s; default every ``creep.dt``; ``t_previous``: the time of the sample
+        before, for a following chunk), ``creep_state`` the lag state (default:
         settled at the initial output) and the response carries ``final_creep_state``, as
         for the PI models; without creep ``t`` only checks the sample period."""
         u = self._checked_input(u)
@@ -352,7 +353,8 @@ class BoucWenModel(Immutable):
             return Response(input=u, output=h, final_state=np.array(core.state),
                             pending_input=pending)
         lags = self._lags(state, creep_state)
-        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        dt = None if t is None else sample_intervals(t, u.size,
+                                                     first_interval(self.creep, t, t_previous))
         return Response(input=u, output=lags.run(h, dt), final_state=np.array(core.state),
                         final_creep_state=lags.state, pending_input=pending)
 
@@ -383,11 +385,11 @@ class BoucWenModel(Immutable):
                         final_creep_state=lags, pending_input=pending)
 
     def predict(self, u, *, initial_state=None, t=None, creep_state=None,
-                pending_input=None):
+                pending_input=None, t_previous=None):
         """Displacements for the inputs ``u``; ``t``, ``creep_state``: see
         :meth:`simulate`."""
         return self.simulate(u, initial_state=initial_state, t=t, creep_state=creep_state,
-                             pending_input=pending_input).output
+                             pending_input=pending_input, t_previous=t_previous).output
 
     def _lag_state(self, state, creep_state):
         """The lag state z_i: ``creep_state`` checked, or settled at the output of the

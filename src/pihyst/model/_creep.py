@@ -159,6 +159,22 @@ def default_time_constants(dt, duration, horizon=CREEP_HORIZON_S):
     return lo * 10.0 ** (0.5 * np.arange(n))
 
 
+def first_interval(creep, t, t_previous):
+    """The interval before the first of the sample times ``t`` (s): ``t[0] - t_previous``
+    when the previous sample's time is given (a following chunk of a record), else the
+    lags' own ``creep.dt``."""
+    if t_previous is None or t is None or np.size(t) == 0:
+        return creep.dt
+    try:
+        first = float(np.asarray(t, dtype=np.float64).ravel()[0]) - float(t_previous)
+    except (TypeError, ValueError):
+        raise ValueError(f"t_previous must be a time (s), got {t_previous!r:.40}") from None
+    if not (np.isfinite(first) and first >= 0):
+        raise ValueError(f"the first sample time {np.ravel(t)[0]!r} comes before t_previous "
+                         f"{t_previous!r}")
+    return first
+
+
 def sample_intervals(t, n, first):
     """Per-sample intervals dt[i] = t[i] - t[i-1] (dt[0] = ``first``) of the sample times
     ``t`` (s) of n samples; they must be finite and non-decreasing."""

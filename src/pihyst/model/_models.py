@@ -27,7 +27,7 @@ from pihyst import _core, paper
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
-from pihyst.model._creep import Creep, sample_intervals
+from pihyst.model._creep import Creep, first_interval, sample_intervals
 from pihyst.model._delay import (
     DelayLine,
     checked_delay,
@@ -255,13 +255,14 @@ class PIModel(Immutable, ABC):
         return _finite_vector(initial_state, "initial_state", self.n_operators)
 
     def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
-                 pending_input=None):
+                 pending_input=None, t_previous=None):
         """Run the model over the input ``u`` from ``initial_state`` (default: the
         model's own). Returns a :class:`Response` with the final operator state,
         from which a following chunk continues exactly.
 
         A model with :attr:`creep` also uses the sample times ``t`` (s; default: every
-        ``creep.dt``; the first sample comes ``creep.dt`` after the initial state) and
+        ``creep.dt``; the first sample comes ``creep.dt`` after the initial state, or at
+        ``t[0] - t_previous`` when the previous sample's time is given) and
         the lag state ``creep_state`` (default: settled at the initial output); the
         response then carries ``final_creep_state``. Without creep ``t`` is ignored,
         except to check the sample period of a delayed model.
@@ -285,16 +286,17 @@ class PIModel(Immutable, ABC):
         if self.creep is None:
             return Response(input=u, output=h, final_state=bank.state, pending_input=pending)
         lags = self._lags(state, creep_state)
-        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        dt = None if t is None else sample_intervals(t, u.size,
+                                                     first_interval(self.creep, t, t_previous))
         return Response(input=u, output=lags.run(h, dt), final_state=bank.state,
                         final_creep_state=lags.state, pending_input=pending)
 
     def predict(self, u, *, initial_state=None, t=None, creep_state=None,
-                pending_input=None):
+                pending_input=None, t_previous=None):
         """Displacements for the voltages ``u`` (a NumPy array of the same length);
         ``t``, ``creep_state``, ``pending_input``: see :meth:`simulate`."""
         return self.simulate(u, initial_state=initial_state, t=t, creep_state=creep_state,
-                             pending_input=pending_input).output
+                             pending_input=pending_input, t_previous=t_previous).output
 
     def delay_at(self, sample_period=None, *, t=None):
         """The delay in samples at ``sample_period`` (s) or at the uniform sample times
