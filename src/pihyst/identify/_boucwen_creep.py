@@ -46,7 +46,7 @@ MAX_EVALUATIONS = 150
 SEARCH_ROWS = 5000
 
 
-def _deficits(s, s0, dt, tau):
+def lag_deficits(s, s0, dt, tau):
     """L_i(s)[t] = s[t] - z_i[t] (N x n) for lags driven by ``s`` from rest at ``s0``."""
     lags = _core.Creep(tau, np.zeros(tau.size), 1.0, np.full(tau.size, float(s0)))
     out = np.empty((s.size, tau.size))
@@ -68,8 +68,8 @@ class _Record:
         x = self.x
         self.xf = x[fitted]
         # deficits of x and x^2 from rest at the initial state's input, times the tie
-        self.lx = _deficits(x, self.x0, dt, tau)[fitted] @ tie
-        self.lx2 = _deficits(x * x, self.x0 * self.x0, dt, tau)[fitted] @ tie
+        self.lx = lag_deficits(x, self.x0, dt, tau)[fitted] @ tie
+        self.lx2 = lag_deficits(x * x, self.x0 * self.x0, dt, tau)[fitted] @ tie
         n = tau.size
         p = tie.shape[1]
         self.lower = np.r_[np.zeros(3), -np.inf, np.zeros(p)]
@@ -82,7 +82,7 @@ def joint_linear_fit(model, rec):
     on the fitted rows of ``rec``."""
     hyst = model.replace(creep=None)
     z = hyst._core(hyst.initial_state).trajectory(rec.u)[1]
-    lz = _deficits(z, hyst.initial_state[1], rec.dt, rec.tau)[rec.fitted] @ rec.tie
+    lz = lag_deficits(z, hyst.initial_state[1], rec.dt, rec.tau)[rec.fitted] @ rec.tie
     zf = z[rec.fitted]
     spread = 2.0 * hyst.beta / (hyst.beta + hyst.gamma)          # D
     c1, c2, a = hyst.linear, hyst.quadratic, hyst.hysteretic

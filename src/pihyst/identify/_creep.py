@@ -32,9 +32,8 @@ import functools
 
 import numpy as np
 
-from pihyst import _core
 from pihyst.exceptions import FitError
-from pihyst.identify._boucwen_creep import fit_shape_and_creep
+from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
 from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._family_fit import FramedRecord
@@ -88,13 +87,7 @@ def _times(t, n):
 
 def _lag_deficits(model, h, dt, tau, start_state):
     """psi[t, i] = H[t] - z_i[t] for the lags driven by h from rest at H(initial state)."""
-    lags = _core.Creep(tau, np.zeros(tau.size), 1.0,
-                       np.full(tau.size, model.hysteresis_output(start_state)))
-    out = np.empty((h.size, tau.size))
-    for a in range(0, h.size, CHUNK):
-        b = min(a + CHUNK, h.size)
-        out[a:b] = h[a:b, None] - lags.lag_states(h[a:b], dt[a:b])
-    return out
+    return lag_deficits(h, model.hysteresis_output(start_state), dt, tau)
 
 
 def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=True,
