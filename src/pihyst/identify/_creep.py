@@ -306,12 +306,13 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
 
 
 def _creep_capable(result, chosen_only):
-    """The model to estimate creep with: the chosen one if it can carry creep, else (with
-    ``chosen_only`` False) the PI family with the lowest judged error; None if none.
+    """The model to estimate creep with: the chosen one if it can carry creep (every
+    family of CREEP_FAMILIES, Bouc-Wen included), else (with ``chosen_only`` False) the
+    creep-capable family with the lowest judged error; None if none.
 
     With ``creep="auto"`` only the chosen family is given creep: the family is chosen
-    on the record as it is, and a family that cannot carry creep (Bouc-Wen) keeps the
-    choice. Otherwise the lags of a PI family absorb what its structure lacks (the
+    on the record as it is. Otherwise the lags of a PI family absorb what its structure
+    lacks (the
     drifting minor loops of a Bouc-Wen actuator, docs/theory/creep.md) and win the
     held-back cycles: measured on a random Bouc-Wen actuator with a triangle record,
     modified-pi with creep erred 1.4 % on ramps and staircases, Bouc-Wen alone 0.8 %."""
