@@ -44,7 +44,7 @@ import numpy as np
 from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
-from pihyst.model._creep import Creep, creep_twin_run, first_interval, sample_intervals
+from pihyst.model._creep import Creep, creep_twin_run, sample_intervals
 from pihyst.model._delay import (
     DelayLine,
     checked_delay,
@@ -64,6 +64,7 @@ from pihyst.model._models import (
     checked_units,
     delay_dict,
     delay_from_dict,
+    simulated,
 )
 
 FAMILY = "bouc-wen"
@@ -340,23 +341,13 @@ class BoucWenModel(Immutable):
         before, for a following chunk), ``creep_state`` the lag state (default:
         settled at the initial output) and the response carries ``final_creep_state``, as
         for the PI models; without creep ``t`` only checks the sample period."""
-        u = self._checked_input(u)
-        d = self.delay_at(t=t)
-        if d and pending_input is not None:
-            pending_input = self._checked_input(pending_input)
-        run = delayed_input(u, d, pending_input)
-        state = self._state(initial_state)
-        core = self._core(state)
-        h = core.run(run)
-        pending = pending_after(u, d, pending_input) if d else None
-        if self.creep is None:
-            return Response(input=u, output=h, final_state=np.array(core.state),
-                            pending_input=pending)
-        lags = self._lags(state, creep_state)
-        dt = None if t is None else sample_intervals(t, u.size,
-                                                     first_interval(self.creep, t, t_previous))
-        return Response(input=u, output=lags.run(h, dt), final_state=np.array(core.state),
-                        final_creep_state=lags.state, pending_input=pending)
+        def hysteresis(state, run):
+            core = self._core(state)
+            return core.run(run), np.array(core.state)
+
+        return simulated(self, u, self._state(initial_state), hysteresis, t=t,
+                         creep_state=creep_state, pending_input=pending_input,
+                         t_previous=t_previous)
 
     def twin_simulation(self, u, *, initial_state=None, t=None, creep_state=None,
                         pending_input=None):

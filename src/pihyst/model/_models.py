@@ -95,6 +95,26 @@ def _finite_vector(values, name, length=None):
     return a
 
 
+def simulated(model, u, state, hysteresis, *, t, creep_state, pending_input, t_previous):
+    """The :class:`Response` of ``model`` (a PI or Bouc-Wen model) to the input ``u`` from
+    ``state``: the input delayed by the model's delay (``pending_input`` before it), the
+    hysteresis output ``hysteresis(state, delayed input) -> (output, final state)``, then
+    the creep lags, if any, at the sample times ``t`` (module notes of ``simulate``)."""
+    u = model._checked_input(u)
+    d = model.delay_at(t=t)
+    if d and pending_input is not None:
+        pending_input = model._checked_input(pending_input)
+    h, final = hysteresis(state, delayed_input(u, d, pending_input))
+    pending = pending_after(u, d, pending_input) if d else None
+    if model.creep is None:
+        return Response(input=u, output=h, final_state=final, pending_input=pending)
+    lags = model._lags(state, creep_state)
+    dt = None if t is None else sample_intervals(t, u.size,
+                                                 first_interval(model.creep, t, t_previous))
+    return Response(input=u, output=lags.run(h, dt), final_state=final,
+                    final_creep_state=lags.state, pending_input=pending)
+
+
 def checked_input(u, input_range):
     """``u`` as a contiguous float array, every sample finite and inside ``input_range``
     (InvalidArgumentError, InputRangeError naming the first sample that is not)."""
@@ -274,22 +294,13 @@ class PIModel(Immutable, ABC):
         period than the model's ``sample_period`` convert the delay when exact, else
         InvalidArgumentError (:meth:`delay_at`).
         """
-        u = self._checked_input(u)
-        d = self.delay_at(t=t)
-        if d and pending_input is not None:
-            pending_input = self._checked_input(pending_input)
-        run = delayed_input(u, d, pending_input)
-        state = self._state_or_initial(initial_state)
-        bank = self._new_bank(state)
-        h = bank.run(run)
-        pending = pending_after(u, d, pending_input) if d else None
-        if self.creep is None:
-            return Response(input=u, output=h, final_state=bank.state, pending_input=pending)
-        lags = self._lags(state, creep_state)
-        dt = None if t is None else sample_intervals(t, u.size,
-                                                     first_interval(self.creep, t, t_previous))
-        return Response(input=u, output=lags.run(h, dt), final_state=bank.state,
-                        final_creep_state=lags.state, pending_input=pending)
+        def hysteresis(state, run):
+            bank = self._new_bank(state)
+            return bank.run(run), bank.state
+
+        return simulated(self, u, self._state_or_initial(initial_state), hysteresis, t=t,
+                         creep_state=creep_state, pending_input=pending_input,
+                         t_previous=t_previous)
 
     def predict(self, u, *, initial_state=None, t=None, creep_state=None,
                 pending_input=None, t_previous=None):
