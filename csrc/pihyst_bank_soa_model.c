@@ -8,7 +8,7 @@
  *
  * with the operations of the single model's K <= 16 kernel (run_classical_small in
  * pihyst_model.c) in the same order, so that each lane gives bit for bit what
- * pihyst_model_step gives: the operators padded to 16 (r = 0, w = 0: a padded operator
+ * pihyst_model_step gives: the operators padded to 16 (r = -0, w = 0: a padded operator
  * follows u and adds a zero), the products of operators k, k + 4, k + 8, k + 12 summed
  * as ((p_k + p_{k+4}) + (p_{k+8} + p_{k+12})) for k < 4, and those four as
  * (s_0 + s_2) + (s_1 + s_3), added to the offset. (The same expressions contract to the
@@ -77,7 +77,9 @@ pihyst_status pihyst_modelbank_init(pihyst_modelbank *b, pihyst_model *const *mo
         const int fast = m && has_fast_path(m);
         for (k = 0; k < N_OPS; ++k) {
             const int real_op = fast && k < m->n_ops;
-            ops[(OP_VECTORS * k + OP_R) * L + l] = real_op ? m->thresholds[k] : RC(0.0);
+            /* a padded r is -0, so that u - r is the single model's padded u + 0 (u = -0
+             * then gives +0 in both, and the bits of y agree) */
+            ops[(OP_VECTORS * k + OP_R) * L + l] = real_op ? m->thresholds[k] : RC(-0.0);
             ops[(OP_VECTORS * k + OP_W) * L + l] = real_op ? m->weights[k] : RC(0.0);
             ops[(OP_VECTORS * k + OP_F) * L + l] = real_op ? m->state[k] : RC(0.0);
         }

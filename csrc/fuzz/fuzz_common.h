@@ -116,6 +116,7 @@ typedef struct {
 
 static inline void track(fuzz_params *f, double v)
 {
+    if (isnan(f->big)) return; /* NaN stays NaN: a later number must not clear it */
     if (!(fabs(v) <= f->big)) f->big = fabs(v); /* NaN makes it NaN: not sane */
 }
 

@@ -248,8 +248,44 @@ static void test_modelbank_equals_models(void)
     pihyst_modelbank_sync(&bank);
 }
 
+/* signed zeros: a lane's padded operators must give what the single model's padding
+ * gives (u = -0, offset -0 and weight -0 made the bank answer -0 where the model answers
+ * +0; fuzz/corpus/model/regress-001) */
+static void test_modelbank_signed_zero(void)
+{
+    static real work[PIHYST_MODELBANK_WORK_LEN(1)];
+    const real zeros[2] = {(real)-0.0, (real)0.0};
+    real r[1] = {(real)9.25}, w[1], coef[PIHYST_COEF_LEN(1)], state[1], y_bank, y_one;
+    pihyst_model m;
+    pihyst_model *ch[1] = {&m};
+    pihyst_modelbank bank;
+    pihyst_params p;
+    size_t a, b, c;
+    for (a = 0; a < 2; ++a)         /* weight */
+        for (b = 0; b < 2; ++b)     /* offset */
+            for (c = 0; c < 2; ++c) { /* input */
+                memset(&p, 0, sizeof p);
+                w[0] = zeros[a];
+                p.family = PIHYST_CLASSICAL;
+                p.n_ops = 1;
+                p.thresholds = r;
+                p.weights = w;
+                p.offset = zeros[b];
+                p.u_min = (real)-10.0;
+                p.u_max = (real)10.0;
+                CHECK(pihyst_model_init(&m, &p, coef, state) == PIHYST_OK);
+                y_one = pihyst_model_step(&m, zeros[c]);
+                pihyst_model_reset(&m, NULL);
+                CHECK(pihyst_modelbank_init(&bank, ch, 1, work, sizeof work / sizeof(real)) ==
+                      PIHYST_OK);
+                pihyst_modelbank_step(&bank, &zeros[c], &y_bank);
+                CHECK(memcmp(&y_bank, &y_one, sizeof y_one) == 0);
+            }
+}
+
 void run_bank_soa_tests(void)
 {
+    test_modelbank_signed_zero();
     soa_params();
     test_modelbank_equals_models();
     test_compbank_equals_compensators(0);
