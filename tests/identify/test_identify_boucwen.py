@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pihyst import FitError, compensate, fit
 from pihyst.identify import FAMILY_NAMES, BoucWen
@@ -97,3 +99,30 @@ def test_a_long_record_is_fitted_on_its_extrema_and_evenly_spaced_samples():
     # z at the kept samples is that of the whole record: the model is recovered
     sub = u[:: u.size // 2000]
     assert np.max(np.abs(res.model.predict(sub) - TRUE.predict(sub))) < 2e-3 * np.ptp(y)
+
+
+@given(st.floats(-60.0, 60.0), st.floats(-60.0, 60.0), st.floats(-5.0, 15.0),
+       st.sampled_from([None, 1.0, 2.5]))
+def test_shape_search_points_are_models_or_refused(log_beta, atanh_ratio, n, fixed_n):
+    """Every point of the shape search maps to a shape the model (and its C core)
+    accepts, or to None: tanh rounds to exactly 1 beyond about 19, and gamma = beta
+    once reached the C core from the search and ended the fit in a CoreError."""
+    from pihyst.identify._boucwen import searched_shape
+
+    shape = searched_shape(np.array([log_beta, atanh_ratio, n]), fixed_n)
+    if shape is None:
+        return
+    beta, gamma, nn = shape
+    model = BoucWenModel(beta=beta, gamma=gamma, n=nn, hysteretic=1.0, linear=0.0,
+                         input_range=(0.0, 1.0))
+    assert np.all(np.isfinite(model.predict(np.array([0.0, 1.0, 0.3]))))
+    if fixed_n is not None:
+        assert nn == fixed_n
+
+
+def test_shape_search_refuses_the_rounded_edge():
+    from pihyst.identify._boucwen import searched_shape
+
+    assert searched_shape(np.array([0.0, 30.0, 1.0])) is None     # gamma = beta
+    assert searched_shape(np.array([0.0, -30.0, 1.0])) is None    # gamma = -beta
+    assert searched_shape(np.array([0.0, 0.5, 1.0])) is not None

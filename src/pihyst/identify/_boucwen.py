@@ -52,6 +52,25 @@ SEARCH_SAMPLES = 600    # the shape search runs on about this many samples (+ re
 # Preisach beam, 70 s per fit); the sharpest shape identified on the simulated
 # Bouc-Wen beams has 150 (n = 3.5, docs/theory/bouc-wen.md)
 MAX_SHARPNESS = 200.0
+
+
+def searched_shape(p, n=None):
+    """(beta, gamma, n) of a point p = (log beta, atanh(gamma / beta), n) of the shape
+    search (``n`` fixes the exponent), or None where a model would refuse it.
+
+    beta + |gamma| is capped at MAX_SHARPNESS (flat beyond: an inf stalls Nelder-Mead);
+    tanh rounds to exactly +-1 beyond |p[1]| of about 19, where gamma = +-beta gives
+    unbounded loops (beta > |gamma| fails) or no bound of z (beta + gamma < MIN_SPREAD)."""
+    ratio = float(np.tanh(p[1]))
+    nn = float(np.clip(p[2], 1.0, MAX_EXPONENT)) if n is None else float(n)
+    beta = min(float(np.exp(min(p[0], 50.0))), MAX_SHARPNESS / (1.0 + abs(ratio)))
+    gamma = beta * ratio
+    if not (abs(gamma) < beta and beta + abs(gamma) <= MAX_SHAPE
+            and beta + gamma >= MIN_SPREAD):
+        return None
+    return beta, gamma, nn
+
+
 # the family in fit()'s comparison runs on at most this many samples plus every input
 # extremum: z at a kept sample depends only on the extrema before it (rate-independent),
 # so the kept samples' errors are exact; each sample costs a few microseconds in Python
@@ -243,12 +262,6 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     else:
         b0, g0, n0 = float(shape["beta"]), float(shape["gamma"]), float(shape.get("n", 1))
 
-    def unpack(p):
-        ratio = float(np.tanh(p[1]))
-        nn = float(np.clip(p[2], 1.0, MAX_EXPONENT)) if n is None else float(n)
-        # beta + |gamma| <= MAX_SHARPNESS: flat beyond it (an inf stalls Nelder-Mead)
-        beta = min(float(np.exp(min(p[0], 50.0))), MAX_SHARPNESS / (1.0 + abs(ratio)))
-        return beta, beta * ratio, nn
 
     def linear_fit(beta, gamma, nn, rows):
         z = _z(beta, gamma, nn)
@@ -267,9 +280,10 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         # fitted RMS on the decimated record (reversals kept: z is that of the full one)
         nonlocal evaluations
         evaluations += 1
-        beta, gamma, nn = unpack(p)
-        if not (beta + abs(gamma) <= MAX_SHAPE and beta + gamma >= MIN_SPREAD):
+        shape = searched_shape(p, n)
+        if shape is None:
             return math.inf
+        beta, gamma, nn = shape
         # the model's own arithmetic, in the C core
         x0, z0 = start(beta, gamma, nn)
         zk = trajectory(xk, x0, z0, beta, gamma, nn)
@@ -288,7 +302,7 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         p_best = res.x if res.fun <= objective(p0) else p0
     else:
         p_best = p0
-    beta, gamma, nn = unpack(p_best)
+    beta, gamma, nn = searched_shape(p_best, n) or searched_shape(p0, n)
     z, coef = linear_fit(beta, gamma, nn, fit_i)
 
     def model_of(coef):

@@ -32,9 +32,8 @@ import math
 import numpy as np
 
 from pihyst import _core
-from pihyst.identify._boucwen import MAX_SHARPNESS, boucwen_coefficients, boucwen_columns
+from pihyst.identify._boucwen import boucwen_coefficients, boucwen_columns, searched_shape
 from pihyst.identify._qp import solve_qp
-from pihyst.model._boucwen import MAX_EXPONENT, MAX_SHAPE, MIN_SPREAD
 from pihyst.model._creep import MAX_TOTAL_GAIN
 
 CHUNK = 1 << 15
@@ -133,21 +132,15 @@ def fit_shape_and_creep(model, u, y, dt, tau, tie, fitted, *, fixed_n=None, sear
     full, rec = rec, _Record(model, u, y, dt, tau, tie, sparse)
     best = joint_linear_fit(model, rec)
 
-    def unpack(p):
-        ratio = float(np.tanh(p[1]))
-        nn = float(np.clip(p[2], 1.0, MAX_EXPONENT)) if fixed_n is None else float(fixed_n)
-        # beta + |gamma| <= MAX_SHARPNESS, as the fit without creep (identify/_boucwen.py)
-        beta = min(float(np.exp(min(p[0], 50.0))), MAX_SHARPNESS / (1.0 + abs(ratio)))
-        return beta, beta * ratio, nn
-
     evaluations = 0
 
     def objective(p):
         nonlocal best, evaluations
         evaluations += 1
-        beta, gamma, nn = unpack(p)
-        if not (beta + abs(gamma) <= MAX_SHAPE and beta + gamma >= MIN_SPREAD):
+        shape = searched_shape(p, fixed_n)
+        if shape is None:
             return math.inf
+        beta, gamma, nn = shape
         candidate = joint_linear_fit(model.replace(beta=beta, gamma=gamma, n=nn), rec)
         if candidate[0] < best[0]:
             best = candidate
