@@ -135,6 +135,20 @@ def test_default_fit_with_times_leaves_out_creep_an_actuator_does_not_have(truth
     assert "not kept" in str(res.report) and "%" in decision["reason"]
 
 
+def test_default_fit_with_times_estimates_creep_with_each_kind_of_model(record):
+    """Bouc-Wen and PI operators each estimate creep their own way: the structure chosen
+    on the record without each estimate is judged on the held-back cycles, and the
+    better is kept (here the PI model the record came from)."""
+    t, u, y = record
+    res = pihyst.fit(u, y, t=t, family=["classical", "bouc-wen"])
+    decision = res.report.to_dict()["creep"]
+    tried = decision["creep_estimated_with"]
+    assert sorted(e["family"] for e in tried) == ["bouc-wen", "classical"]
+    best = min(tried, key=lambda e: e["held_back_rms_with"])
+    assert decision["family_with"] == best["family_with"] == res.report.chosen == "classical"
+    assert decision["held_back_rms_with"] == best["held_back_rms_with"]
+
+
 def test_creep_auto_without_held_back_cycles_says_why(record):
     t, u, y = record
     res = pihyst.fit(u, y, t=t, holdout=None, **AUTO_KW)

@@ -114,3 +114,26 @@ def test_population_bouc_wen_actuators_that_creep():
         for task in ("validation", "tracking"):
             assert r.mean(True, task) < 0.1, (r.seed, task, r.errors)
             assert r.mean(False, task) > 0.5, (r.seed, task, r.errors)
+
+
+@pytest.mark.slow
+def test_population_preisach_on_a_triangle_keeps_its_own_creep_estimate():
+    """A Preisach actuator of the population (2 terms, 2.2 %/decade) recorded on the
+    two-cycle triangle, where Bouc-Wen fits the major loop best without creep: creep is
+    estimated with each kind of model (Bouc-Wen and PI operators), and the structure
+    chosen on the record without the PI estimate wins the held-back cycles. The Bouc-Wen
+    estimate alone led to Bouc-Wen with creep: on this shorter record (3000 samples per
+    cycle) 0.97 % of range in validation and 1.16 % in tracking, now 0.43 and 0.44 %
+    (the benchmark's full record: 1.04 / 1.12 % before, 0.22 / 0.21 % now)."""
+    import warnings
+
+    from pihyst.exceptions import PihystWarning
+    from pihyst.study._population import evaluate_plant
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PihystWarning)
+        r = evaluate_plant(28, samples_per_cycle=3000)
+    assert r.description["kind"] == "preisach" and r.record == "triangle"
+    assert r.families[False] == "bouc-wen" and r.families[True] != "bouc-wen"
+    for task in ("validation", "tracking"):
+        assert r.mean(True, task) < 0.6, (task, r.errors)
