@@ -149,6 +149,20 @@ def test_default_fit_with_times_estimates_creep_with_each_kind_of_model(record):
     assert decision["held_back_rms_with"] == best["held_back_rms_with"]
 
 
+def test_other_kind_is_not_tried_where_creep_could_not_make_it_win(record, monkeypatch):
+    """The other kind costs a second creep fit: it is left out, and the report says why,
+    when its held-back RMS without creep exceeds CREEP_REACH times what the chosen
+    family reaches with creep."""
+    from pihyst.identify import _creep
+
+    t, u, y = record
+    monkeypatch.setattr(_creep, "CREEP_REACH", 1.0)
+    decision = pihyst.fit(u, y, t=t, family=["classical", "bouc-wen"]).report.to_dict()["creep"]
+    assert "creep_estimated_with" not in decision
+    assert decision["other_kind_not_tried"].startswith("bouc-wen: its held-back RMS")
+    assert decision["family_with"] == "classical"
+
+
 def test_creep_auto_without_held_back_cycles_says_why(record):
     t, u, y = record
     res = pihyst.fit(u, y, t=t, holdout=None, **AUTO_KW)

@@ -44,6 +44,13 @@ from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 __all__ = ["fit_with_creep"]
 
 CHUNK = 1 << 15
+# Creep estimated with the other kind of model (Bouc-Wen against PI operators) is tried
+# only where it could win: that kind's held-back RMS without creep at most CREEP_REACH
+# times what the chosen family reaches with creep. Creep lowered a family's held-back RMS
+# by up to 10x on the population (benchmarks/bench_population.py: Bouc-Wen actuators
+# 4.9-10.3x, Preisach 2.6-9.1x with their own kind); twice that for margin. The other
+# kind costs a second creep fit (a Bouc-Wen one doubles the fit time).
+CREEP_REACH = 20.0
 MAX_PASSES = 6
 
 
@@ -274,20 +281,29 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
     if decide:
         # each kind of model estimates creep its own way; the structure chosen on the
         # record with one kind's estimate removed is judged against the other's
-        starts, tried = [(start_model, None)] + _other_kind(first, start_model), []
-        for model, families in starts:
+        def judged_structure(model, families=None):
             second = structure_without_creep(model, families)
             start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
-            tried.append((second, start, _judge(first, second, ua, ya, ta, dta, tau, start,
-                                                rows, rec.layout.indices("held_back"), qp,
-                                                fixed_n)))
-        second, start, judged = min(tried, key=lambda x: x[2]["held_back_rms_with"])
-        if len(tried) > 1:
-            judged["creep_estimated_with"] = [
-                {"family": m.metadata.get("fit", {}).get("family", m.family),
-                 "family_with": j["family_with"],
-                 "held_back_rms_with": j["held_back_rms_with"]}
-                for (m, _), (_, _, j) in zip(starts, tried)]
+            return second, start, _judge(first, second, ua, ya, ta, dta, tau, start, rows,
+                                         rec.layout.indices("held_back"), qp, fixed_n)
+
+        second, start, judged = judged_structure(start_model)
+        other = _other_kind(first, start_model)
+        if other is not None:
+            model, families, rms_without = other
+            name = model.metadata["fit"]["family"]
+            if rms_without <= CREEP_REACH * judged["held_back_rms_with"]:
+                alternative = judged_structure(model, families)
+                tried = [dict(family=judged["family_without"], **_with_creep(judged)),
+                         dict(family=name, **_with_creep(alternative[2]))]
+                if alternative[2]["held_back_rms_with"] < judged["held_back_rms_with"]:
+                    second, start, judged = alternative
+                judged["creep_estimated_with"] = tried
+            else:
+                judged["other_kind_not_tried"] = (
+                    f"{name}: its held-back RMS without creep, {rms_without:.4g}, is more "
+                    f"than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
+                    f"{judged['family_with']} reaches with creep")
         if not judged["kept"]:
             return _without_creep(first, judged)
     else:
@@ -350,24 +366,30 @@ def _creep_capable(result, chosen_only):
 
 
 def _other_kind(result, model):
-    """[(model, families)]: the best eligible creep-capable family of ``result`` of the
-    other kind than ``model`` (Bouc-Wen against PI operators) and the eligible families
-    of that kind; [] if there is none.
+    """(model, families, held-back RMS): the best eligible creep-capable family of
+    ``result`` of the other kind than ``model`` (Bouc-Wen against PI operators), the
+    eligible families of that kind and its held-back RMS without creep; None if none.
 
     The creep the joint QP estimates depends on the model it is estimated with, and the
     structure chosen on the record with that creep removed leans to the same kind:
     measured on a random Preisach actuator recorded on a two-cycle triangle
     (benchmarks/bench_population.py, seed 28), creep estimated with Bouc-Wen led to
-    Bouc-Wen with creep (held back 0.23 um, 1.0 % of range on ramps and staircases),
-    while a kp basis with its own creep estimate held back 0.07 um."""
+    Bouc-Wen with creep (held back 0.24 um, 1.0 % of range on ramps and staircases),
+    while the PI estimate led to a kp basis that held back 0.09 um (0.2 %)."""
     bw = isinstance(model, BoucWenModel)
     fams = [f for f in result.report.families
             if f["family"] in CREEP_FAMILIES and f.get("excluded") is None
             and isinstance(result.models.get(f["family"]), BoucWenModel) != bw]
     if not fams:
-        return []
-    best = min(fams, key=lambda f: f["judged_rms"])["family"]
-    return [(_as_start(result, best), [f["family"] for f in fams])]
+        return None
+    best = min(fams, key=lambda f: f["judged_rms"])
+    return (_as_start(result, best["family"]), [f["family"] for f in fams],
+            float(best["errors"]["held_back"]["rms"]))
+
+
+def _with_creep(judged):
+    return {"family_with": judged["family_with"],
+            "held_back_rms_with": judged["held_back_rms_with"]}
 
 
 def _as_start(result, name):
