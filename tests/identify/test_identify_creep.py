@@ -147,6 +147,7 @@ def test_default_fit_with_times_estimates_creep_with_each_kind_of_model(record):
     best = min(tried, key=lambda e: e["held_back_rms_with"])
     assert decision["family_with"] == best["family_with"] == res.report.chosen == "classical"
     assert decision["held_back_rms_with"] == best["held_back_rms_with"]
+    assert "creep estimated with bouc-wen: bouc-wen holds back" in str(res.report)
 
 
 def test_other_kind_is_not_tried_where_creep_could_not_make_it_win(record, monkeypatch):

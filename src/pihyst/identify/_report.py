@@ -233,6 +233,11 @@ class FitReport:
         if creep:
             lines.append(f"creep: {'kept' if creep['kept'] else 'not kept'}, "
                          f"{creep['reason']}")
+            for e in creep.get("creep_estimated_with", []):
+                lines.append(f"  creep estimated with {e['family']}: {e['family_with']} "
+                             f"holds back {e['held_back_rms_with']:.4g} with creep")
+            if creep.get("other_kind_not_tried"):
+                lines.append(f"  other kind not tried: {creep['other_kind_not_tried']}")
         if self._data["undetermined"]:
             lines.append("what the data could not determine:")
             lines += [f"  - {t}" for t in self._data["undetermined"]]
