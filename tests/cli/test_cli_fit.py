@@ -115,7 +115,7 @@ def test_threshold_never_reached_and_bad_options(tmp_path, capsys):
     out = tmp_path / "m.json"
     err = _fails(capsys, ["fit", str(data), "--model", "classical", "--thresholds",
                           "0,10,150", "-o", str(out)], out)
-    assert "never reaches threshold 150" in err and f"{data}:" in err
+    assert "never move the operator of threshold 150" in err and f"{data}:" in err
     assert "not a number" in _fails(capsys, ["fit", str(data), "--thresholds", "0,x",
                                              "-o", str(out)], out)
     assert "--holdout" in _fails(capsys, ["fit", str(data), "--holdout", "2", "-o",

@@ -13,6 +13,7 @@ import pihyst
 from pihyst import ClassicalPI, FitError, MultislopePI, fit
 from pihyst.exceptions import IllConditionedWarning, InfeasibleConstraintsError
 from pihyst.identify import cycled_state
+from pihyst.sim import signals
 
 
 def ramps(levels, n=40):
@@ -331,7 +332,7 @@ def test_bad_input_errors():
     with pytest.raises(FitError, match="output sample 17") as err:
         fit(u, bad)
     assert err.value.index == 17 and err.value.column == "output"
-    with pytest.raises(FitError, match="never reaches threshold 100"):
+    with pytest.raises(FitError, match="never move the operator of threshold 100"):
         fit(u, y, family="classical", thresholds=[0, 10, 100])
     with pytest.raises(FitError, match="same length|samples but"):
         fit(u, y[:-1])
@@ -397,3 +398,16 @@ def test_shape_identification_with_U_keeps_the_operators_valid():
     for v in np.linspace(0, 150, 31):
         R, F = res.model.envelopes(v)
         assert np.all(R <= F + 1e-9)
+
+
+def test_threshold_bound_in_the_error_is_that_of_the_fitted_cycles():
+    """After a settling sweep, with alternate cycles held back, the fitted cycles of
+    decaying triangles (peaks 150, 105, 73.5, ...) reach 73.5 V only: a threshold of 45
+    never moves, and the bound the error suggests is half the fitted span, not half the
+    record's (it said "use thresholds below 75" of a threshold of 45)."""
+    t, u = signals.decaying_triangles(period_s=60.0, dt=0.1)
+    y = ClassicalPI([0.0, 10.0, 25.0, 45.0], [0.15, 0.06, 0.04, 0.03]).predict(u)
+    with pytest.raises(FitError, match=r"threshold 45 \(their input spans 73.5 of the "
+                                       r"range 150\).*below 36.75"):
+        fit(u, y, family="classical", thresholds=[0.0, 10.0, 25.0, 45.0],
+            initial_state="settle")

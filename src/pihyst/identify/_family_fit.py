@@ -297,10 +297,15 @@ class FamilyFitter:
         const = self._constant_columns(parts, len(cand))
         if const.size and explicit:
             r = cand[const[0]]
-            raise FitError(f"{fam.name}: the input never reaches threshold {r:g} (span of "
-                           f"the fitted data {rec.S:g}): that operator's output is constant, "
-                           f"so its weight is undetermined; use thresholds below "
-                           f"{fam.max_threshold(rec.S):g}", column="input")
+            # the fitted cycles' own span: after a settling sweep, or with alternate
+            # cycles held back, it can be far less than the record's
+            fitted = rec.v[rec.layout.indices("fit")]
+            span = float(np.ptp(fitted)) if fitted.size else 0.0
+            raise FitError(f"{fam.name}: the fitted cycles never move the operator of "
+                           f"threshold {r:g} (their input spans {span:g} of the range "
+                           f"{rec.S:g}): its output is constant, so its weight is "
+                           f"undetermined; use thresholds below "
+                           f"{min(fam.max_threshold(rec.S), 0.5 * span):g}", column="input")
         if const.size:
             dropped = [float(cand[i]) for i in const]
             cand = np.delete(cand, const)
