@@ -229,6 +229,45 @@ def test_reader_function_on_the_command_line(tmp_path, capsys):
     assert "python function" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("argv", [
+    ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3"],
+    ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3", "--lag", "1",
+     "--displacement", "3"],
+    ["validate", MULTISLOPE, "{src}", "--skip-until", "3"],
+])
+def test_errors_after_skip_until_name_the_files_line(tmp_path, capsys, argv):
+    src = tmp_path / "in.csv"
+    src.write_text("time_s,voltage_V,displacement_um\n"
+                   + "".join(f"{k},{v},0\n" for k, v in enumerate([0, 10, 20, 30, 40, 160, 60])))
+    assert run(*[a.format(src=src, tmp=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: {src}:7:2: voltage_V = 160 is outside"), err
+
+
+def test_compensate_strict_after_skip_until_names_the_files_line(tmp_path, capsys):
+    src = tmp_path / "desired.csv"
+    src.write_text("time_s,displacement_um\n"
+                   + "".join(f"{k / 10},{d}\n" for k, d in enumerate([0, 1, 2, 3, 4, 5, 99, 6])))
+    assert run("compensate", MULTISLOPE, src, "-o", tmp_path / "o.csv", "--strict",
+               "--skip-until", "0.5") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: {src}:8:2: displacement_um = 99 is out of reach"), err
+
+
+@pytest.mark.parametrize("command", [
+    ["compensate", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--slew-rate", "100"],
+    ["track", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv"],
+])
+def test_time_going_back_after_skip_until_names_the_files_line(tmp_path, capsys, command):
+    src = tmp_path / "desired.csv"
+    src.write_text("time_s,displacement_um\n"
+                   + "".join(f"{t},{k}\n" for k, t in enumerate([0, 1, 2, 3, 4, 3.5, 6])))
+    argv = [a.format(src=src, tmp=tmp_path) for a in command] + ["--skip-until", "2"]
+    assert run(*argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: {src}:7:1: time_s = 3.5 "), err
+
+
 def test_progress_bar_on_a_terminal(monkeypatch):
     pytest.importorskip("tqdm")
     import io

@@ -175,6 +175,8 @@ class RecordReader:
         start = 0
         for raw in self._raw_blocks(block_rows or BLOCK_ROWS, progress):
             out = transform.feed(raw)
+            # kept current while streaming: error() locates a sample of a block through it
+            self.skipped = transform.skipped
             n = max((len(a) for a in out.values() if a is not None), default=0)
             if n:
                 yield Record(**out, source=self.path, metadata=self.metadata(), start=start,
