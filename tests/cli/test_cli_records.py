@@ -229,6 +229,58 @@ def test_reader_function_on_the_command_line(tmp_path, capsys):
     assert "python function" in capsys.readouterr().out
 
 
+READERS = (
+    "import sys\n"
+    "import numpy as np\n"
+    "def raises(path): raise RuntimeError('boom')\n"
+    "def exits(path): sys.exit(3)\n"
+    "def none(path): return None\n"
+    "def matrix(path): return {'voltage': np.zeros((3, 3))}\n"
+    "def ragged(path): return {'voltage': [[1, 2], [3]]}\n"
+    "def words(path): return {'voltage': ['a', 'b']}\n"
+    "def keys(path): return {'voltage': np.zeros(3), 1: 2, 'x': 3}\n"
+    "def meta(path): return {'voltage': np.zeros(3), 'metadata': 5}\n"
+    "def rate(path): return {'voltage': np.zeros(3), 'metadata': {'rate': -5}}\n"
+    "not_a_function = 3\n")
+
+
+@pytest.mark.parametrize("function,message", [
+    ("raises", "the reader {readers}:raises failed: RuntimeError: boom"),
+    ("exits", "the reader {readers}:exits failed: it called sys.exit(3)"),
+    ("none", "the reader returned NoneType"),
+    ("matrix", "the reader's 'voltage' has shape (3, 3)"),
+    ("ragged", "the reader's 'voltage' is not an array of numbers"),
+    ("words", "'voltage' holds <U1 values, not numbers"),
+    ("keys", "the reader returned unknown keys 'x', 1"),
+    ("meta", "the reader's 'metadata' is int, expected a dict"),
+    ("rate", "the reader's metadata 'rate' must be positive, got -5"),
+    ("not_a_function", "'not_a_function' in {readers} is not a function but int"),
+    ("missing", "{readers} has no function 'missing'"),
+])
+def test_a_failing_or_bad_reader_function_is_a_one_line_user_error(tmp_path, capsys,
+                                                                    function, message):
+    readers = tmp_path / "readers.py"
+    readers.write_text(READERS)
+    data = tmp_path / "volts.raw"
+    data.write_text("0\n")
+    assert run("predict", CLASSICAL, data, "--reader", f"{readers}:{function}",
+               "-o", tmp_path / "o.csv") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: {data}: ") and err.count("\n") == 1
+    assert message.format(readers=readers) in err
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_a_reader_module_that_fails_to_load_is_a_one_line_user_error(tmp_path, capsys):
+    (tmp_path / "broken.py").write_text("raise RuntimeError('at import')\n")
+    data = tmp_path / "volts.raw"
+    data.write_text("0\n")
+    assert run("predict", CLASSICAL, data, "--reader", f"{tmp_path / 'broken.py'}:load",
+               "-o", tmp_path / "o.csv") == 2
+    err = capsys.readouterr().err
+    assert "cannot load it (RuntimeError: at import)" in err and err.count("\n") == 1
+
+
 @pytest.mark.parametrize("argv", [
     ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3"],
     ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3", "--lag", "1",

@@ -248,14 +248,23 @@ def function_source(name, result):
                           "or a pihyst.io.Record")
     unknown = set(result) - {"voltage", "displacement", "time", "metadata"}
     if unknown:
-        raise RecordError(name, f"the reader returned unknown keys {sorted(unknown)}")
+        raise RecordError(name, "the reader returned unknown keys "
+                          + ", ".join(sorted(repr(k) for k in unknown)))
+    metadata = result.get("metadata") or {}
+    if not isinstance(metadata, dict):
+        raise RecordError(name, f"the reader's 'metadata' is {type(metadata).__name__}, "
+                          "expected a dict")
     variables = {}
     for key in ("voltage", "displacement", "time"):
         if result.get(key) is not None:
-            a = np.asarray(result[key])
+            try:
+                a = np.asarray(result[key])
+            except (ValueError, TypeError) as err:    # e.g. rows of different lengths
+                raise RecordError(name, f"the reader's {key!r} is not an array of numbers "
+                                  f"({err})") from None
             if a.ndim != 1:
                 raise RecordError(name, f"the reader's {key!r} has shape {a.shape}, "
                                   "expected one dimension")
             variables[key] = a
     return ArraySource(name, "python function", variables,
-                       {"found": dict(result.get("metadata") or {})})
+                       {"found": dict(metadata)})

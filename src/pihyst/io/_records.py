@@ -78,9 +78,11 @@ class RecordReader:
         specs = {"voltage": voltage, "displacement": displacement, "time": time}
         self.refs = self._resolve(specs)
         self.labels = {q: self._label(r) for q, r in self.refs.items()}
-        self.rate = _positive(rate if rate is not None else found.get("rate"), "--rate")
-        self.voltage_gain = _finite(voltage_gain if voltage_gain is not None
-                                    else found.get("voltage_gain", 1.0), "--voltage-gain")
+        self.rate = (_positive(rate, "--rate") if rate is not None else
+                     _positive(found.get("rate"), "the reader's metadata 'rate'"))
+        self.voltage_gain = (
+            _finite(voltage_gain, "--voltage-gain") if voltage_gain is not None else
+            _finite(found.get("voltage_gain", 1.0), "the reader's metadata 'voltage_gain'"))
         if self.voltage_gain == 0:
             raise ValueError("--voltage-gain must not be 0")
         self.unit, self.unit_from = self._unit(displacement_unit, found)
@@ -154,7 +156,9 @@ class RecordReader:
                 unit, where = m.group(1), f"column name {name!r}"
         unit = "um" if unit == "µm" else unit
         if unit not in UNIT_FACTORS:
-            raise ValueError(f"--displacement-unit must be one of m, mm, um, nm; got {unit!r}")
+            option = ("the reader's metadata 'displacement_unit'" if where == "reader"
+                      else "--displacement-unit")
+            raise ValueError(f"{option} must be one of m, mm, um, nm; got {unit!r}")
         return unit, where
 
     # ---------------------------------------------------------------- reading
@@ -381,35 +385,57 @@ def _open_source(path, reader, separator, decimal_comma):
 
 
 def _call_reader(reader, path):
-    """Call a reader given as a function, 'module:function' or 'file.py:function'."""
+    """Call a reader given as a function, 'module:function' or 'file.py:function'.
+    Whatever the user's code raises (on loading or on the call) is a RecordError naming
+    the reader: it is the user's code, not pihyst's."""
     if callable(reader):
-        func, name = reader, getattr(reader, "__name__", "reader")
+        func = reader
+        name = getattr(reader, "__qualname__", None) or getattr(reader, "__name__", "reader")
     else:
-        module, sep, name = str(reader).rpartition(":")
-        if not sep or not module or not name:
+        name = str(reader)
+        module, sep, attr = name.rpartition(":")
+        if not sep or not module or not attr:
             raise ValueError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
                              "FILE.py:FUNCTION")
         try:
-            if module.endswith(".py"):
-                spec = importlib.util.spec_from_file_location("_pihyst_reader", module)
-                if spec is None or not os.path.isfile(module):
-                    raise ImportError(f"no file {module}")
-                mod = importlib.util.module_from_spec(spec)
-                spec.loader.exec_module(mod)
-            else:
-                sys.path.insert(0, os.getcwd())
-                try:
-                    mod = importlib.import_module(module)
-                finally:
-                    sys.path.remove(os.getcwd())
-            func = getattr(mod, name)
-        except (ImportError, AttributeError, SyntaxError) as err:
+            loaded = _load_reader_module(module)
+        except ImportError as err:
             raise ValueError(f"--reader {reader}: cannot load it ({err})") from None
+        except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's module failed
+            raise ValueError(f"--reader {reader}: cannot load it ({_what(err)})") from err
+        func = getattr(loaded, attr, None)
+        if func is None:
+            raise ValueError(f"--reader {reader}: {module} has no function {attr!r}")
+        if not callable(func):
+            raise ValueError(f"--reader {reader}: {attr!r} in {module} is not a function "
+                             f"but {type(func).__name__}")
     try:
         return func(path)
-    except (OSError, ValueError, KeyError, TypeError, IndexError) as err:
-        raise RecordError(path, f"the reader {name} failed: {type(err).__name__}: "
-                          f"{err}") from None
+    except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's function failed
+        raise RecordError(path, f"the reader {name} failed: {_what(err)}") from err
+
+
+def _load_reader_module(module):
+    if module.endswith(".py"):
+        spec = importlib.util.spec_from_file_location("_pihyst_reader", module)
+        if spec is None or not os.path.isfile(module):
+            raise ImportError(f"no file {module}")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod
+    sys.path.insert(0, os.getcwd())
+    try:
+        return importlib.import_module(module)
+    finally:
+        sys.path.remove(os.getcwd())
+
+
+def _what(err):
+    """An exception raised by the user's code, in one line."""
+    if isinstance(err, SystemExit):
+        return f"it called sys.exit({err.code!r})"
+    text = " ".join(str(err).split())
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
 def _positive(value, option):
