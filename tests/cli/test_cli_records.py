@@ -320,6 +320,27 @@ def test_time_going_back_after_skip_until_names_the_files_line(tmp_path, capsys,
     assert err.startswith(f"pihyst: error: {src}:7:1: time_s = 3.5 "), err
 
 
+@pytest.mark.parametrize("command,options,message", [
+    (command, ["--voltage-gain", "1e308"],
+     "{src}:4:2: column 'voltage_V': 10 times the voltage gain 1e+308 is too large")
+    for command in ("predict", "validate")] + [
+    ("validate", ["--displacement-unit", "m"],
+     "{src}:3:3: column 'displacement_um': 1e+303 times 1e+06 (m to um) is too large"),
+] + [
+    (command, ["--rate", "1e-310", "--time", "none"],
+     "{src}: sample 1: its time 1 / --rate 1e-310 Hz is too large for a double")
+    for command in ("predict", "validate")])
+def test_a_scale_option_that_overflows_is_one_line(tmp_path, capsys, command, options,
+                                                   message):
+    src = tmp_path / "in.csv"
+    src.write_text("time_s,voltage_V,displacement_um\n0,0,0\n1,0,1e303\n2,10,0\n3,0,0\n")
+    out = ["-o", tmp_path / "o.csv"] if command == "predict" else []
+    assert run(command, CLASSICAL, src, *out, *options) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("pihyst: error: " + message.format(src=src)), err
+    assert err.count("\n") == 1 and "warning" not in err
+
+
 def test_progress_bar_on_a_terminal(monkeypatch):
     pytest.importorskip("tqdm")
     import io

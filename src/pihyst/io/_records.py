@@ -302,11 +302,20 @@ class _Transform:
         n = len(next(iter(raw.values())))
         block = dict(raw)
         if "voltage" in block and r.voltage_gain != 1.0:
-            block["voltage"] = block["voltage"] * r.voltage_gain
+            block["voltage"] = self._scaled(block["voltage"], "voltage", r.voltage_gain,
+                                            f"the voltage gain {r.voltage_gain:g}")
         if "displacement" in block and r.unit != "um":
-            block["displacement"] = block["displacement"] * UNIT_FACTORS[r.unit]
+            block["displacement"] = self._scaled(
+                block["displacement"], "displacement", UNIT_FACTORS[r.unit],
+                f"{UNIT_FACTORS[r.unit]:g} ({r.unit} to um)")
         if "time" not in block and r.rate is not None:
-            block["time"] = (self.raw_rows + np.arange(n)) / r.rate
+            with np.errstate(over="ignore"):
+                t = (self.raw_rows + np.arange(n)) / r.rate
+            if n and not np.isfinite(t[-1]):       # increasing: the last overflows first
+                k = self.raw_rows + int(np.flatnonzero(~np.isfinite(t))[0])
+                raise RecordError(r.path, f"sample {k}: its time {k} / --rate {r.rate:g} Hz "
+                                  "is too large for a double")
+            block["time"] = t
         self.raw_rows += n
         if r.lag:
             block = self._pair(block)
@@ -319,6 +328,19 @@ class _Transform:
                 self.skipping = False
             block = {q: a[first:] for q, a in block.items()}
         return {q: block.get(q) for q in QUANTITIES} if block else {}
+
+    def _scaled(self, values, quantity, factor, what):
+        """``values * factor``; a product too large for a double is an error at its
+        line and column (not an overflow warning and an infinite sample)."""
+        with np.errstate(over="ignore"):
+            out = values * factor
+        bad = np.flatnonzero(np.isinf(out))
+        if bad.size:
+            i, src, ref = int(bad[0]), self.r.source, self.r.refs[quantity]
+            column = f"column {src.label(ref)}: " if isinstance(src, TextSource) else ""
+            raise src.error(self.raw_rows + i, ref, f"{column}{values[i]:g} times {what} is "
+                            "too large for a double")
+        return out
 
     def _pair(self, block):
         d = block.pop("displacement")
