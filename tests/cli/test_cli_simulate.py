@@ -68,6 +68,9 @@ def test_seed_changes_the_noise_only(tmp_path):
     (["--dt", "0"], "argument --dt: must be a positive number"),
     (["--signal", "decaying-triangles", "--ratio", "2"], "--ratio: must be between 0 and 1"),
     (["--min", "100", "--max", "50"], "with --min below --max"),
+    (["--signal", "staircase", "--step-time", "0.01", "--dt", "1"],
+     "--signal staircase with --steps 10, --step-time 0.01, --dt 1: a step of 0.01 s is "
+     "shorter than dt = 1 s"),
 ])
 def test_bad_options_give_one_line_and_no_file(tmp_path, capsys, args, message):
     status, out = simulate(tmp_path, *args)

@@ -107,6 +107,7 @@ def test_bad_parameters_are_rejected(fn, kwargs, message):
     (lambda: random_ramps(n_ramps=2.5), "n_ramps must be a whole number"),
     (lambda: random_ramps(rate=0.0), "rate must be a positive number"),
     (lambda: staircase(step_s=0.0), "step_s must be a positive number"),
+    (lambda: staircase(step_s=0.01, dt=1.0), "a step of 0.01 s is shorter than dt = 1 s"),
 ])
 def test_bad_shape_parameters_are_rejected(call, message):
     with pytest.raises(ValueError, match=message):

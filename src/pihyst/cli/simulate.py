@@ -51,7 +51,8 @@ def register(sub):
     p.add_argument("--steps", type=count(1, signals.MAX_SAMPLES), default=10, metavar="N",
                    help="staircase: steps up (and as many down) (default 10)")
     p.add_argument("--step-time", type=positive_number, default=10.0, metavar="S",
-                   help="staircase: time per step (default 10 s)")
+                   help="staircase: time per step, rounded to whole samples and at least "
+                        "--dt (default 10 s)")
     p.add_argument("-o", "--output", metavar="DATA.csv", required=True, help="output CSV")
     add_plant_options(p, seed_help="seed of the sensor noise and of random-ramps' levels "
                                    "(default 0)")

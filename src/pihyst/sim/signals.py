@@ -203,7 +203,8 @@ def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT
 def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
               dt=DEFAULT_DT):
     """Steps of (u_max - u_min) / n_steps from u_min up to u_max (and back down if
-    ``down``), each level held for ``step_s`` seconds: creep shows within each step.
+    ``down``), each level held for ``step_s`` seconds (rounded to whole samples; at
+    least ``dt``): creep shows within each step.
 
     Examples
     --------
@@ -214,6 +215,9 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     _check_common(u_min, u_max, dt)
     n_steps = _count(n_steps, "n_steps")
     _positive(step_s, "step_s")
+    if step_s < dt:
+        raise InvalidArgumentError(f"a step of {step_s:g} s is shorter than dt = {dt:g} s: "
+                                   "a step must last at least one sample")
     per_step = max(1.0, round(step_s / dt)) if np.isfinite(step_s / dt) else np.inf
     levels_count = 2 * n_steps + 1 if down else n_steps + 1
     _check_samples(float(levels_count) * per_step, f"{n_steps} steps of {step_s:g} s at "
