@@ -197,7 +197,8 @@ def test_no_progress_bar_in_a_pipe(tmp_path, capsys):
 @pytest.mark.parametrize("argv,message", [
     (["validate", CLASSICAL, "{src}", "--figure", "{tmp}/f.txt"], "use a .png, .svg or .pdf"),
     (["fit", "{src}", "-o", "{tmp}/m.json", "--input-range", "0-150"], "expected LO,HI"),
-    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--lag", "-2"], "--lag must be"),
+    (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--lag", "-2"],
+     "argument --lag: must be at least 0, got -2"),
     (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--rate", "10"],
      "--rate is for records without a time column"),
     (["predict", CLASSICAL, "{src}", "-o", "{tmp}/o.csv", "--reader", "nothing"],
@@ -283,8 +284,7 @@ def test_a_reader_module_that_fails_to_load_is_a_one_line_user_error(tmp_path, c
 
 @pytest.mark.parametrize("argv", [
     ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3"],
-    ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3", "--lag", "1",
-     "--displacement", "3"],
+    ["validate", MULTISLOPE, "{src}", "--skip-until", "3", "--lag", "1"],
     ["validate", MULTISLOPE, "{src}", "--skip-until", "3"],
 ])
 def test_errors_after_skip_until_name_the_files_line(tmp_path, capsys, argv):
@@ -339,6 +339,28 @@ def test_a_scale_option_that_overflows_is_one_line(tmp_path, capsys, command, op
     err = capsys.readouterr().err
     assert err.startswith("pihyst: error: " + message.format(src=src)), err
     assert err.count("\n") == 1 and "warning" not in err
+
+
+@pytest.mark.parametrize("command,option", [
+    *[(c, o) for c in ("compensate", "track")
+      for o in (["--voltage-gain", "20"], ["--lag", "1"], ["--voltage", "2"])],
+    *[("predict", o) for o in (["--lag", "1"], ["--displacement", "2"],
+                               ["--displacement-unit", "nm"])],
+])
+def test_a_record_option_a_command_does_not_use_is_refused(tmp_path, capsys, command, option):
+    src = tmp_path / "in.csv"
+    src.write_text("time_s,voltage_V,displacement_um\n0,0,0\n1,10,1\n2,0,0\n")
+    assert run(command, MULTISLOPE, src, "-o", tmp_path / "o.csv", *option) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: argument {option[0]}: not used by pihyst "
+                          f"{command}: "), err
+    assert err.count("\n") == 1 and not (tmp_path / "o.csv").exists()
+
+
+def test_lag_zero_is_accepted_where_no_lag_applies(tmp_path):
+    src = tmp_path / "in.csv"
+    src.write_text("time_s,voltage_V,displacement_um\n0,0,0\n1,10,1\n2,0,0\n")
+    assert run("compensate", MULTISLOPE, src, "-o", tmp_path / "o.csv", "--lag", "0") == 0
 
 
 def test_progress_bar_on_a_terminal(monkeypatch):

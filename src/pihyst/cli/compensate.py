@@ -9,7 +9,13 @@ import numpy as np
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
 from pihyst.cli.model_inputs import add_initial_state_option, creep_times, initial_state
-from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
+from pihyst.cli.record_options import (
+    NO_VOLTAGE,
+    add_record_options,
+    open_from_args,
+    progress_bar,
+    refuse_unused,
+)
 from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import ColumnWriter, load_model
 
@@ -35,7 +41,7 @@ def register(sub):
                    help="a desired displacement out of reach is an error (exit status 2, no "
                         "output file) instead of a saturated sample")
     add_initial_state_option(p, modes=("model", "bottom", "top", "zero"))
-    add_record_options(p, "DESIRED")
+    add_record_options(p, "DESIRED", unused=NO_VOLTAGE)
     p.set_defaults(run=run)
 
 
@@ -118,6 +124,7 @@ def check_limits(u_min, u_max, model, model_path):
 
 
 def run(args):
+    refuse_unused(args, 'compensate', 'DESIRED', NO_VOLTAGE)
     check_output(args.output)
     model = load_model(args.model)
     check_limits(args.u_min, args.u_max, model, args.model)

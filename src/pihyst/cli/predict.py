@@ -14,7 +14,13 @@ from pihyst.cli.model_inputs import (
     initial_state,
     settle_end,
 )
-from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
+from pihyst.cli.record_options import (
+    NO_DISPLACEMENT,
+    add_record_options,
+    open_from_args,
+    progress_bar,
+    refuse_unused,
+)
 from pihyst.io import ColumnWriter, load_model
 
 
@@ -30,11 +36,12 @@ def register(sub):
                    "present)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     add_initial_state_option(p)
-    add_record_options(p, "INPUT")
+    add_record_options(p, "INPUT", unused=NO_DISPLACEMENT)
     p.set_defaults(run=run)
 
 
 def run(args):
+    refuse_unused(args, 'predict', 'INPUT', NO_DISPLACEMENT)
     check_output(args.output)
     model = load_model(args.model)
     limits = InputRange(model)

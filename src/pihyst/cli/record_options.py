@@ -4,45 +4,54 @@ and the progress bar for long reads. docs/records.md."""
 
 import sys
 
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, count
 from pihyst.io import open_record
 
 UNITS = ("m", "mm", "um", "nm")
 
 
-def add_record_options(p, what="the record"):
+def add_record_options(p, what="the record", unused=None):
+    """The record options; those in ``unused`` (NO_VOLTAGE, NO_DISPLACEMENT) say in their
+    help that the command refuses them (run() calls :func:`refuse_unused`)."""
     g = p.add_argument_group(
         f"reading {what}",
         "Delimited text (comma, semicolon, tab or whitespace; header or not; '#' comments; "
         "decimal comma), .npy, .npz, .mat, .h5, .parquet. Columns by name or 1-based "
         "number (in array files: a variable, NAME:K or K).")
-    g.add_argument("--voltage", metavar="COL",
+    unused = unused or {}
+
+    def add(option, **kwargs):
+        if option in unused:
+            kwargs["help"] = (f"not used by {p.prog}, an error if given: "
+                              + unused[option].format(what=what))
+        g.add_argument(option, **kwargs)
+    add("--voltage", metavar="COL",
                    help="voltage column (default: voltage_V)")
-    g.add_argument("--displacement", metavar="COL",
+    add("--displacement", metavar="COL",
                    help="displacement column (default: displacement_um)")
-    g.add_argument("--time", metavar="COL",
+    add("--time", metavar="COL",
                    help="time column in seconds (default: time_s if present; 'none' to "
                         "ignore it)")
-    g.add_argument("--rate", metavar="HZ", type=float,
+    add("--rate", metavar="HZ", type=float,
                    help="sample rate, for a record without a time column")
-    g.add_argument("--displacement-unit", choices=UNITS, metavar="UNIT",
+    add("--displacement-unit", choices=UNITS, metavar="UNIT",
                    help="unit of the displacement column: m, mm, um, nm (default: from "
                         "the column name, else um)")
-    g.add_argument("--voltage-gain", metavar="G", type=float,
+    add("--voltage-gain", metavar="G", type=float,
                    help="the actuator's voltage is G x the voltage column (a record of an "
                         "amplifier's input)")
-    g.add_argument("--lag", metavar="N", type=int, default=0,
+    add("--lag", metavar="N", type=count(0), default=0,
                    help="the displacement sensor answers N samples late: displacement[k+N] "
                         "goes with voltage[k] (default 0)")
-    g.add_argument("--skip-until", metavar="SECONDS", type=float,
+    add("--skip-until", metavar="SECONDS", type=float,
                    help="drop the samples before this time (e.g. a step at the start)")
-    g.add_argument("--separator", metavar="SEP",
+    add("--separator", metavar="SEP",
                    choices=(",", ";", "tab", "whitespace", "comma", "semicolon", "space"),
                    help="field separator of a text file: ',', ';', tab, whitespace "
                         "(default: found from the file)")
-    g.add_argument("--decimal-comma", action="store_true", default=None,
+    add("--decimal-comma", action="store_true", default=None,
                    help="numbers are written 1,5 (default: found from the file)")
-    g.add_argument("--reader", metavar="MODULE:FUNCTION",
+    add("--reader", metavar="MODULE:FUNCTION",
                    help="read the file with your Python function (MODULE:FUNCTION or "
                         "FILE.py:FUNCTION), called with the file's path and returning a "
                         "dict of arrays voltage, displacement, time and a metadata dict")
@@ -63,6 +72,34 @@ def options_text(args):
     if args.decimal_comma:
         words.append("--decimal-comma")
     return " ".join(words)
+
+
+# the record options that only mean something when a command reads both the voltage and
+# the measured displacement of a record (fit, validate, report)
+NO_VOLTAGE = {
+    "--voltage": "it reads no voltage from {what}",
+    "--voltage-gain": "it reads no voltage from {what} and writes the actuator's voltage "
+                      "(voltage_V); for an amplifier's input, divide it by the amplifier's "
+                      "gain",
+    "--lag": "{what} has no measured displacement to pair with a voltage (a model's own "
+             "input-output delay is in the model file, delay_samples)",
+}
+NO_DISPLACEMENT = {
+    "--displacement": "it reads no displacement from {what}",
+    "--displacement-unit": "it reads no displacement from {what}",
+    "--lag": "it reads no measured displacement from {what} to pair with the voltage (a "
+             "model's own input-output delay is in the model file, delay_samples)",
+}
+
+
+def refuse_unused(args, command, what, unused):
+    """A UsageError for the first of the ``unused`` record options given (a mapping of
+    option to why ``command`` has no use for it): an option is never silently ignored."""
+    for option, why in unused.items():
+        value = getattr(args, option[2:].replace("-", "_"))
+        if value is not None and not (option == "--lag" and value == 0):
+            raise UsageError(f"argument {option}: not used by pihyst {command}: "
+                             + why.format(what=what))
 
 
 def open_from_args(args, path, need, optional=("time",)):

@@ -16,7 +16,12 @@ from pihyst.cli.compensate import (
 from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.model_inputs import creep_times
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
-from pihyst.cli.record_options import add_record_options, read_from_args
+from pihyst.cli.record_options import (
+    NO_VOLTAGE,
+    add_record_options,
+    read_from_args,
+    refuse_unused,
+)
 from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import load_model, write_columns
 from pihyst.sim.signals import MAX_SAMPLES
@@ -40,7 +45,7 @@ def register(sub):
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     add_limit_options(p, default_range="the model's and the beam's range")
     add_plant_options(p, seed_help="seed of the beam's sensor noise (default 0)")
-    add_record_options(p, "DESIRED")
+    add_record_options(p, "DESIRED", unused=NO_VOLTAGE)
     p.set_defaults(run=run)
 
 
@@ -56,6 +61,7 @@ def _limits(args, model, plant):
 
 
 def run(args):
+    refuse_unused(args, 'track', 'DESIRED', NO_VOLTAGE)
     check_output(args.output)
     model = load_model(args.model)
     check_limits(args.u_min, args.u_max, model, args.model)
