@@ -12,8 +12,12 @@ The package is laid out as the pipeline (docs/architecture.md):
 - :mod:`pihyst.fleet`: many records fitted at once, serially or on a Dask cluster;
 - :mod:`pihyst.cli`: the ``pihyst`` command.
 
-The names below are the public API of the README.
+The names below are the public API of the README. The sub-packages are attributes too
+(``pihyst.sim.make_plant``, ``pihyst.dynamics.fit_hammerstein``), imported on first use
+so that ``import pihyst`` stays fast.
 """
+
+from importlib import import_module as _import_module
 
 from pihyst._version import __version__
 from pihyst.exceptions import (
@@ -68,3 +72,17 @@ __all__ = [
     "load_model",
     "save_model",
 ]
+
+# imported on first access (PEP 562): they bring SciPy, matplotlib or optional extras
+_SUBPACKAGES = ("control", "dynamics", "fleet", "identify", "inverse", "io", "model", "rig",
+               "sim", "study", "cli")
+
+
+def __getattr__(name):
+    if name in _SUBPACKAGES:
+        return _import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_SUBPACKAGES))

@@ -47,7 +47,7 @@ def register(sub):
         epilog="example (emulated instruments): pihyst rig record --config "
                "examples/rig/emulated.toml -o loop.csv && pihyst fit loop.csv --model "
                "multislope -o model.json && pihyst rig track model.json "
-               "examples/triangle_desired.csv --config examples/rig/emulated.toml "
+               "examples/rig/desired_triangle.csv --config examples/rig/emulated.toml "
                "--feedback 1,10 -o run.csv")
     rig_sub = p.add_subparsers(dest="rig_command", metavar="ACTION", required=True)
 
