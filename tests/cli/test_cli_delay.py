@@ -46,6 +46,21 @@ def test_fit_adopts_the_lag_by_default_and_the_file_carries_it(tmp_path, capsys)
     assert "delay='auto'" in capsys.readouterr().out     # the note on the lag it ignored
 
 
+@pytest.mark.parametrize("delay", [100, "n - 1", "n"])
+def test_fit_with_a_delay_past_the_last_cycles(tmp_path, capsys, delay):
+    data, u, y = lagged_record(tmp_path)
+    out = tmp_path / "m.json"
+    delay = {"n - 1": u.size - 1, "n": u.size}.get(delay, delay)
+    status = main(["fit", str(data), "-o", str(out), "--model", "classical", "--delay",
+                   str(delay)])
+    err = capsys.readouterr().err
+    assert status == 2 and not out.exists() and len(err.splitlines()) == 1
+    if delay == 100:             # the record lags by 3, not 100: a poor fit, said so
+        assert "the displacement does not follow the voltage" in err
+    else:
+        assert f"a delay of {delay} samples is too large for a record of {u.size}" in err
+
+
 def test_predict_carries_the_pending_inputs_across_blocks(tmp_path, monkeypatch):
     data, u, y = lagged_record(tmp_path)
     model_path = tmp_path / "m.json"

@@ -232,6 +232,24 @@ def test_delay_is_found_and_removed():
     assert given.model.delay == 3 and given.model.sample_period == pytest.approx(1e-3)
 
 
+def test_a_delay_past_the_last_turning_points_is_fitted():
+    u = with_minor_loops(seed=3)
+    d = 100                          # more samples than the last cycles: cut off with them
+    y = TRUE.replace(delay=d).predict(u)
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45], delay=d)
+    assert res.model.delay == d
+    np.testing.assert_allclose(res.model.weights, TRUE.weights, atol=1e-9)
+
+
+@pytest.mark.parametrize("extra", [-5, 0, 7])
+def test_a_delay_as_long_as_the_record_is_a_fit_error(extra):
+    u = with_minor_loops(seed=3)
+    d = u.size + extra
+    with pytest.raises(FitError, match=f"^a delay of {d} samples is too large for a record "
+                                       f"of {u.size} samples"):
+        fit(u, TRUE.predict(u), family="classical", delay=d)
+
+
 def test_default_delay_stays_zero_without_a_lag():
     u = with_minor_loops(seed=3)
     res = fit(u, TRUE.predict(u) + 0.01 * np.sin(u / 5), family="classical",
