@@ -87,6 +87,54 @@ def test_predict_at_another_sample_period(tmp_path, capsys):
     assert "not a whole number of samples at 0.0007 s" in err and len(err.splitlines()) == 1
 
 
+def record_at(tmp_path, period, lag):
+    """A record sampled every ``period`` s whose displacement lags by ``lag`` samples."""
+    u = ramps([0, 150, 0, 110, 40, 150, 0, 90, 20, 150, 0])
+    y = TRUE.replace(delay=lag).predict(u)
+    path = tmp_path / f"at_{period:g}.csv"
+    write_columns(path, {"time_s": period * np.arange(u.size), "voltage_V": u,
+                         "displacement_um": y})
+    return path, u, y
+
+
+def test_validate_compensate_and_track_convert_the_delay_to_the_record_period(tmp_path,
+                                                                             capsys):
+    model_path = tmp_path / "m.json"
+    model = TRUE.replace(delay=D, sample_period=1e-3)
+    model.save(model_path)
+    data, u, y = record_at(tmp_path, 5e-4, 2 * D)        # twice the rate: 2 D samples
+    assert main(["validate", str(model_path), str(data)]) == 0
+    as_is = next(line for line in capsys.readouterr().out.splitlines()
+                 if "as the model is" in line)
+    assert as_is.split()[4:] == ["0", "0", "0", "0", "%", "0", "%", "0", "%"]   # exact
+    at_rate = TRUE.replace(delay=2 * D)
+    ref = pihyst.compensate(at_rate, y)
+    out = tmp_path / "c.csv"
+    assert main(["compensate", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["voltage_V"])
+    np.testing.assert_allclose(cols["voltage_V"], ref.voltage, rtol=0, atol=1e-12)
+    assert main(["track", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["voltage_V"])
+    np.testing.assert_allclose(cols["voltage_V"], ref.voltage, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("command", ["predict", "validate", "compensate", "track"])
+def test_a_delay_that_is_no_whole_number_of_samples_is_refused_naming_the_record(
+        tmp_path, capsys, command):
+    model_path = tmp_path / "m.json"
+    TRUE.replace(delay=2, sample_period=0.1).save(model_path)
+    data, _, _ = record_at(tmp_path, 0.3, 0)
+    out = tmp_path / "out.csv"
+    args = [command, str(model_path), str(data)] + ([] if command == "validate" else
+                                                    ["-o", str(out)])
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err == (f"pihyst: error: {data}: the model's delay of 2 samples at 0.1 s (0.2 s) "
+                   f"is not a whole number of samples at 0.3 s: run it at 0.1 s or "
+                   f"resample\n")
+    assert not out.exists()
+
+
 def test_compensate_previews_across_blocks(tmp_path, monkeypatch, capsys):
     data, u, y = lagged_record(tmp_path)
     model = TRUE.replace(delay=D)

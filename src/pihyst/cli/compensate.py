@@ -8,7 +8,12 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
-from pihyst.cli.model_inputs import add_initial_state_option, creep_times, initial_state
+from pihyst.cli.model_inputs import (
+    add_initial_state_option,
+    creep_times,
+    delay_for_run,
+    initial_state,
+)
 from pihyst.cli.record_options import add_record_options, open_from_args, progress_bar
 from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import ColumnWriter, load_model
@@ -128,6 +133,12 @@ def run(args):
             check_slew_rate(args.slew_rate, args.desired)
             max_step = args.slew_rate * smallest_step(reader.chunks(), args.desired)
             max_step = max_step if np.isfinite(max_step) else None
+        if model.delay:
+            # the delay at the record's sample period (its first block's, as predict):
+            # converted or refused
+            first = next(reader.chunks(), None)
+            model = delay_for_run(model, args.desired,
+                                  t=None if first is None else first.time)
         state = initial_state(model, args.initial_state)
         try:
             compensator = compensator_for(model, u_min=args.u_min, u_max=args.u_max,
