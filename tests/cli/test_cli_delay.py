@@ -46,6 +46,19 @@ def test_fit_adopts_the_lag_by_default_and_the_file_carries_it(tmp_path, capsys)
     assert "delay='auto'" in capsys.readouterr().out     # the note on the lag it ignored
 
 
+@pytest.mark.parametrize("time_column", [False, True])
+def test_fit_with_a_rate_carries_its_sample_period(tmp_path, time_column):
+    data, u, y = lagged_record(tmp_path)
+    if not time_column:
+        write_columns(data, {"voltage_V": u, "displacement_um": y})
+    out = tmp_path / "m.json"
+    assert main(["fit", str(data), "-o", str(out), "--model", "classical", "--rate", "500",
+                 "--no-creep"] + (["--time", "none"] if time_column else [])) == 0
+    model = pihyst.load_model(out)
+    assert model.delay == D and model.sample_period == 1 / 500     # exactly
+    assert model.delay_at(1e-3) == 2 * D          # converted at another rate
+
+
 @pytest.mark.parametrize("delay", [100, "n - 1", "n"])
 def test_fit_with_a_delay_past_the_last_cycles(tmp_path, capsys, delay):
     data, u, y = lagged_record(tmp_path)
