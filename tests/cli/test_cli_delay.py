@@ -165,6 +165,23 @@ def test_compensate_previews_across_blocks(tmp_path, monkeypatch, capsys):
     assert f"wrote {u.size} samples" in capsys.readouterr().out
 
 
+def test_compensate_says_a_delayed_models_reach_as_the_undelayed_ones(tmp_path, capsys):
+    desired = tmp_path / "far.csv"
+    write_columns(desired, {"displacement_um": np.linspace(0, 120, 50)})   # past the top
+    lines = {}
+    for d in (0, D):
+        model_path = tmp_path / f"m{d}.json"
+        TRUE.replace(delay=d).save(model_path)
+        assert main(["compensate", str(model_path), str(desired), "-o",
+                     str(tmp_path / "c.csv")]) == 0
+        lines[d] = [line for line in capsys.readouterr().out.splitlines()
+                    if "reach" in line]
+    assert lines[D] == lines[0]
+    assert lines[D][0].startswith("reachable displacement: [8.5, 81.5] um")
+    assert any("the trajectory spans 120 um, more than the 73 um the model reaches" in line
+               for line in lines[D])
+
+
 def test_fit_many_takes_the_delay_option(tmp_path, capsys):
     folder = tmp_path / "records"
     folder.mkdir()

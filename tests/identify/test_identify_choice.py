@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pihyst import ClassicalPI, FitError, fit
+from pihyst.identify import _latency
 from pihyst.identify._assess import ValidationRecord, interior_reversals
 from pihyst.identify._choice import TOLERANCE, Candidate, choose
 from pihyst.identify._latency import Latency, measure_latency
@@ -301,6 +302,19 @@ def test_latency_is_measured_on_both_trajectories():
     lat = measure_latency(TRUE)
     assert 0 < lat.typical < 1e-2 and 0 < lat.worst < 1e-2
     assert set(lat.to_dict()) == {"typical_us", "worst_us", "measured"}
+
+
+def test_a_delayed_models_latency_is_timed_on_its_major_loop(monkeypatch):
+    spans = []            # of the trajectories timed: tracking, then random jumps
+
+    def timed(comp, make):
+        spans.append(float(np.ptp(make(1000))))
+        return 1e-6
+
+    monkeypatch.setattr(_latency, "_time", timed)
+    measure_latency(TRUE)
+    measure_latency(TRUE.replace(delay=3))
+    assert spans[0] > 0 and spans[2:] == spans[:2]
 
 
 def test_long_record_paths_subsample_and_still_find_the_delay(monkeypatch):

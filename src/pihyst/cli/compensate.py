@@ -86,6 +86,8 @@ def smallest_step(records, path):
 def reachable(model, state, lo, hi):
     """(lowest, highest) displacement the model reaches with voltages in [lo, hi]: at lo
     after coming down from hi, and at hi after going up from lo."""
+    # without the delay: a delayed model's output would still be the held first input
+    model = model.replace(delay=0)
     down = model.simulate(np.array([hi, lo]), initial_state=state).output[-1]
     up = model.simulate(np.array([lo, hi]), initial_state=state).output[-1]
     return float(down), float(up)
