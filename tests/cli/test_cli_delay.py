@@ -182,6 +182,22 @@ def test_compensate_says_a_delayed_models_reach_as_the_undelayed_ones(tmp_path, 
                for line in lines[D])
 
 
+@pytest.mark.parametrize("mode", ["bottom", "top"])
+def test_a_delayed_model_starts_at_rest_as_the_undelayed_one(tmp_path, mode):
+    data, u, _ = lagged_record(tmp_path)
+    model_path = tmp_path / "m.json"
+    TRUE.replace(delay=D).save(model_path)
+    out = tmp_path / "p.csv"
+    assert main(["predict", str(model_path), str(data), "-o", str(out), "--initial-state",
+                 mode]) == 0
+    cols, _ = read_columns(out, ["displacement_um"])
+    path = [0, 150, 0] if mode == "bottom" else [150, 0, 150]
+    at_rest = TRUE.simulate(np.array(path, dtype=float),
+                            initial_state=np.zeros(3)).final_state
+    expected = TRUE.replace(delay=D).predict(u, initial_state=at_rest)
+    np.testing.assert_allclose(cols["displacement_um"], expected, rtol=0, atol=1e-12)
+
+
 def test_fit_many_takes_the_delay_option(tmp_path, capsys):
     folder = tmp_path / "records"
     folder.mkdir()

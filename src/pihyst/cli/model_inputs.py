@@ -101,6 +101,8 @@ def initial_state(model, mode):
         return model.initial_state
     if mode == "zero":
         return zero
+    # cycled without the delay: a delayed model would not yet see the last inputs
+    model = model.replace(delay=0)
     if mode == "bottom":
         return model.simulate(np.array([lo, hi, lo]), initial_state=zero).final_state
     if mode == "top":
