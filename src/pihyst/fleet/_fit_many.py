@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.exceptions import CSVError, FitError
+from pihyst.exceptions import CSVError, FitError, InvalidArgumentError
 from pihyst.identify import FitReport, FitResult, fit
 from pihyst.io import column_number, read_columns
 from pihyst.model import PIModel
@@ -318,13 +318,13 @@ def _load(record):
     try:
         u, y = record
     except (TypeError, ValueError):
-        raise TypeError(f"a record is a (u, y) pair of arrays or the path of a CSV file, "
-                        f"not {type(record).__name__}") from None
+        raise InvalidArgumentError(f"a record is a (u, y) pair of arrays or the path of a CSV "
+                                   f"file, not {type(record).__name__}") from None
     try:
         u = np.asarray(u, dtype=np.float64)
         y = np.asarray(y, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError("u and y must be arrays of numbers") from None
+        raise InvalidArgumentError("u and y must be arrays of numbers") from None
     return u, y, None, None
 
 
@@ -332,8 +332,8 @@ def _named(records):
     if isinstance(records, dict) or hasattr(records, "keys"):
         named = [(str(k), records[k]) for k in records.keys()]
     elif isinstance(records, (str, os.PathLike)) or not hasattr(records, "__iter__"):
-        raise TypeError("records must be a mapping name -> record or a sequence of "
-                        f"records, not {type(records).__name__}")
+        raise InvalidArgumentError("records must be a mapping name -> record or a sequence of "
+                                   f"records, not {type(records).__name__}")
     else:
         named = [(os.path.basename(os.fspath(r)) if _is_path(r) else str(i), r)
                  for i, r in enumerate(records)]
