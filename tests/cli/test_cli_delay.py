@@ -204,7 +204,8 @@ def test_fit_many_takes_the_delay_option(tmp_path, capsys):
     data, _, _ = lagged_record(folder)
     models = tmp_path / "models"
     assert main(["fit-many", str(folder), "-o", str(models), "--model", "classical"]) == 0
-    assert pihyst.load_model(models / "lagged.json").delay == D
+    model = pihyst.load_model(models / "lagged.json")
+    assert model.delay == D and model.sample_period == pytest.approx(1e-3)  # the record's
     assert main(["fit-many", str(folder), "-o", str(models), "--model", "classical",
                  "--delay", "0"]) == 0
     assert pihyst.load_model(models / "lagged.json").delay == 0
