@@ -138,7 +138,9 @@ def run(args):
         if model.delay:
             # the delay at the record's sample period (its first block's, as predict):
             # converted or refused
-            first = next(reader.chunks(), None)
+            blocks = reader.chunks()
+            first = next(blocks, None)
+            blocks.close()
             model = delay_for_run(model, args.desired,
                                   t=None if first is None else first.time)
         state = initial_state(model, args.initial_state)

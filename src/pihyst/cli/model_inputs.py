@@ -157,4 +157,3 @@ def delay_for_run(model, path, *, t=None, period=None):
         period = float(np.median(steps))
     # the converted delay holds at the run's period (a later conversion is the identity)
     return model.replace(delay=d, sample_period=period)
-

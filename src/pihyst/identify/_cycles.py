@@ -231,4 +231,3 @@ def _holdout_fraction(holdout):
         raise FitError(f"holdout must be 'alternate', a fraction in (0, 1) or None, got "
                        f"{holdout!r:.40}")
     return float(holdout)
-
