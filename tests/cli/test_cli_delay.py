@@ -46,6 +46,34 @@ def test_fit_adopts_the_lag_by_default_and_the_file_carries_it(tmp_path, capsys)
     assert "delay='auto'" in capsys.readouterr().out     # the note on the lag it ignored
 
 
+@pytest.mark.parametrize("time_column", [False, True])
+def test_fit_with_a_rate_carries_its_sample_period(tmp_path, time_column):
+    data, u, y = lagged_record(tmp_path)
+    if not time_column:
+        write_columns(data, {"voltage_V": u, "displacement_um": y})
+    out = tmp_path / "m.json"
+    assert main(["fit", str(data), "-o", str(out), "--model", "classical", "--rate", "500",
+                 "--no-creep"] + (["--time", "none"] if time_column else [])) == 0
+    model = pihyst.load_model(out)
+    assert model.delay == D and model.sample_period == 1 / 500     # exactly
+    assert model.delay_at(1e-3) == 2 * D          # converted at another rate
+
+
+@pytest.mark.parametrize("delay", [100, "n - 1", "n"])
+def test_fit_with_a_delay_past_the_last_cycles(tmp_path, capsys, delay):
+    data, u, y = lagged_record(tmp_path)
+    out = tmp_path / "m.json"
+    delay = {"n - 1": u.size - 1, "n": u.size}.get(delay, delay)
+    status = main(["fit", str(data), "-o", str(out), "--model", "classical", "--delay",
+                   str(delay)])
+    err = capsys.readouterr().err
+    assert status == 2 and not out.exists() and len(err.splitlines()) == 1
+    if delay == 100:             # the record lags by 3, not 100: a poor fit, said so
+        assert "the displacement does not follow the voltage" in err
+    else:
+        assert f"a delay of {delay} samples is too large for a record of {u.size}" in err
+
+
 def test_predict_carries_the_pending_inputs_across_blocks(tmp_path, monkeypatch):
     data, u, y = lagged_record(tmp_path)
     model_path = tmp_path / "m.json"
@@ -72,6 +100,54 @@ def test_predict_at_another_sample_period(tmp_path, capsys):
     assert "not a whole number of samples at 0.0007 s" in err and len(err.splitlines()) == 1
 
 
+def record_at(tmp_path, period, lag):
+    """A record sampled every ``period`` s whose displacement lags by ``lag`` samples."""
+    u = ramps([0, 150, 0, 110, 40, 150, 0, 90, 20, 150, 0])
+    y = TRUE.replace(delay=lag).predict(u)
+    path = tmp_path / f"at_{period:g}.csv"
+    write_columns(path, {"time_s": period * np.arange(u.size), "voltage_V": u,
+                         "displacement_um": y})
+    return path, u, y
+
+
+def test_validate_compensate_and_track_convert_the_delay_to_the_record_period(tmp_path,
+                                                                             capsys):
+    model_path = tmp_path / "m.json"
+    model = TRUE.replace(delay=D, sample_period=1e-3)
+    model.save(model_path)
+    data, u, y = record_at(tmp_path, 5e-4, 2 * D)        # twice the rate: 2 D samples
+    assert main(["validate", str(model_path), str(data)]) == 0
+    as_is = next(line for line in capsys.readouterr().out.splitlines()
+                 if "as the model is" in line)
+    assert as_is.split()[4:] == ["0", "0", "0", "0", "%", "0", "%", "0", "%"]   # exact
+    at_rate = TRUE.replace(delay=2 * D)
+    ref = pihyst.compensate(at_rate, y)
+    out = tmp_path / "c.csv"
+    assert main(["compensate", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["voltage_V"])
+    np.testing.assert_allclose(cols["voltage_V"], ref.voltage, rtol=0, atol=1e-12)
+    assert main(["track", str(model_path), str(data), "-o", str(out)]) == 0
+    cols, _ = read_columns(out, ["voltage_V"])
+    np.testing.assert_allclose(cols["voltage_V"], ref.voltage, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("command", ["predict", "validate", "compensate", "track"])
+def test_a_delay_that_is_no_whole_number_of_samples_is_refused_naming_the_record(
+        tmp_path, capsys, command):
+    model_path = tmp_path / "m.json"
+    TRUE.replace(delay=2, sample_period=0.1).save(model_path)
+    data, _, _ = record_at(tmp_path, 0.3, 0)
+    out = tmp_path / "out.csv"
+    args = [command, str(model_path), str(data)] + ([] if command == "validate" else
+                                                    ["-o", str(out)])
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err == (f"pihyst: error: {data}: the model's delay of 2 samples at 0.1 s (0.2 s) "
+                   f"is not a whole number of samples at 0.3 s: run it at 0.1 s or "
+                   f"resample\n")
+    assert not out.exists()
+
+
 def test_compensate_previews_across_blocks(tmp_path, monkeypatch, capsys):
     data, u, y = lagged_record(tmp_path)
     model = TRUE.replace(delay=D)
@@ -89,13 +165,47 @@ def test_compensate_previews_across_blocks(tmp_path, monkeypatch, capsys):
     assert f"wrote {u.size} samples" in capsys.readouterr().out
 
 
+def test_compensate_says_a_delayed_models_reach_as_the_undelayed_ones(tmp_path, capsys):
+    desired = tmp_path / "far.csv"
+    write_columns(desired, {"displacement_um": np.linspace(0, 120, 50)})   # past the top
+    lines = {}
+    for d in (0, D):
+        model_path = tmp_path / f"m{d}.json"
+        TRUE.replace(delay=d).save(model_path)
+        assert main(["compensate", str(model_path), str(desired), "-o",
+                     str(tmp_path / "c.csv")]) == 0
+        lines[d] = [line for line in capsys.readouterr().out.splitlines()
+                    if "reach" in line]
+    assert lines[D] == lines[0]
+    assert lines[D][0].startswith("reachable displacement: [8.5, 81.5] um")
+    assert any("the trajectory spans 120 um, more than the 73 um the model reaches" in line
+               for line in lines[D])
+
+
+@pytest.mark.parametrize("mode", ["bottom", "top"])
+def test_a_delayed_model_starts_at_rest_as_the_undelayed_one(tmp_path, mode):
+    data, u, _ = lagged_record(tmp_path)
+    model_path = tmp_path / "m.json"
+    TRUE.replace(delay=D).save(model_path)
+    out = tmp_path / "p.csv"
+    assert main(["predict", str(model_path), str(data), "-o", str(out), "--initial-state",
+                 mode]) == 0
+    cols, _ = read_columns(out, ["displacement_um"])
+    path = [0, 150, 0] if mode == "bottom" else [150, 0, 150]
+    at_rest = TRUE.simulate(np.array(path, dtype=float),
+                            initial_state=np.zeros(3)).final_state
+    expected = TRUE.replace(delay=D).predict(u, initial_state=at_rest)
+    np.testing.assert_allclose(cols["displacement_um"], expected, rtol=0, atol=1e-12)
+
+
 def test_fit_many_takes_the_delay_option(tmp_path, capsys):
     folder = tmp_path / "records"
     folder.mkdir()
     data, _, _ = lagged_record(folder)
     models = tmp_path / "models"
     assert main(["fit-many", str(folder), "-o", str(models), "--model", "classical"]) == 0
-    assert pihyst.load_model(models / "lagged.json").delay == D
+    model = pihyst.load_model(models / "lagged.json")
+    assert model.delay == D and model.sample_period == pytest.approx(1e-3)  # the record's
     assert main(["fit-many", str(folder), "-o", str(models), "--model", "classical",
                  "--delay", "0"]) == 0
     assert pihyst.load_model(models / "lagged.json").delay == 0

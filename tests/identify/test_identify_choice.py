@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pihyst import ClassicalPI, FitError, fit
+from pihyst.identify import _latency
 from pihyst.identify._assess import ValidationRecord, interior_reversals
 from pihyst.identify._choice import TOLERANCE, Candidate, choose
 from pihyst.identify._latency import Latency, measure_latency
@@ -232,6 +233,24 @@ def test_delay_is_found_and_removed():
     assert given.model.delay == 3 and given.model.sample_period == pytest.approx(1e-3)
 
 
+def test_a_delay_past_the_last_turning_points_is_fitted():
+    u = with_minor_loops(seed=3)
+    d = 100                          # more samples than the last cycles: cut off with them
+    y = TRUE.replace(delay=d).predict(u)
+    res = fit(u, y, family="classical", thresholds=[0, 20, 45], delay=d)
+    assert res.model.delay == d
+    np.testing.assert_allclose(res.model.weights, TRUE.weights, atol=1e-9)
+
+
+@pytest.mark.parametrize("extra", [-5, 0, 7])
+def test_a_delay_as_long_as_the_record_is_a_fit_error(extra):
+    u = with_minor_loops(seed=3)
+    d = u.size + extra
+    with pytest.raises(FitError, match=f"^a delay of {d} samples is too large for a record "
+                                       f"of {u.size} samples"):
+        fit(u, TRUE.predict(u), family="classical", delay=d)
+
+
 def test_default_delay_stays_zero_without_a_lag():
     u = with_minor_loops(seed=3)
     res = fit(u, TRUE.predict(u) + 0.01 * np.sin(u / 5), family="classical",
@@ -283,6 +302,19 @@ def test_latency_is_measured_on_both_trajectories():
     lat = measure_latency(TRUE)
     assert 0 < lat.typical < 1e-2 and 0 < lat.worst < 1e-2
     assert set(lat.to_dict()) == {"typical_us", "worst_us", "measured"}
+
+
+def test_a_delayed_models_latency_is_timed_on_its_major_loop(monkeypatch):
+    spans = []            # of the trajectories timed: tracking, then random jumps
+
+    def timed(comp, make):
+        spans.append(float(np.ptp(make(1000))))
+        return 1e-6
+
+    monkeypatch.setattr(_latency, "_time", timed)
+    measure_latency(TRUE)
+    measure_latency(TRUE.replace(delay=3))
+    assert spans[0] > 0 and spans[2:] == spans[:2]
 
 
 def test_long_record_paths_subsample_and_still_find_the_delay(monkeypatch):

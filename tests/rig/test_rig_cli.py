@@ -119,4 +119,5 @@ def test_track_refuses_a_delay_that_is_no_whole_number_of_ticks(tmp_path, capsys
                  "-o", str(out)]) == 2
     line = error_line(capsys)
     assert "delay of 3 samples at 0.0123 s" in line and "not a whole number" in line
+    assert line.startswith(f"pihyst: error: {cfg}: the model's delay")   # names the rate's file
     assert not out.exists()

@@ -6,6 +6,7 @@ import pytest
 
 import pihyst
 from pihyst.exceptions import InvalidArgumentError, ResourceLimitError
+from pihyst.model import Creep
 from pihyst.sim import make_plant, signals
 
 CLASSICAL = {"thresholds": [0, 10], "weights": [0.5, 0.2]}
@@ -152,3 +153,45 @@ def test_running_models_with_bad_arguments(call):
 def test_a_missing_input_sample_is_out_of_range():
     with pytest.raises(pihyst.InputRangeError, match="sample 1"):
         pihyst.ClassicalPI(**CLASSICAL).predict([0.0, None])
+
+
+BOUC_WEN = {"beta": 0.01, "gamma": 0.005, "hysteretic": 1.0, "linear": 0.5, "n": 1}
+LOOPS_Y = pihyst.ClassicalPI([0, 20, 50], [0.2, 0.1, 0.05]).predict(LOOPS)
+
+
+@pytest.mark.parametrize("call, exception, says", [
+    (lambda: pihyst.fit(LOOPS, LOOPS_Y, family="classical", holdout=5), pihyst.FitError,
+     "^holdout must be 'alternate', a fraction in \\(0, 1\\) or None, got 5$"),
+    (lambda: pihyst.fit(LOOPS, LOOPS_Y, family="classical", holdout="half"),
+     pihyst.FitError, "^holdout must be"),
+    (lambda: pihyst.fit(LOOPS, LOOPS_Y, family="classical", bounds="x"), pihyst.FitError,
+     "^bounds must be a pair \\(lower, upper\\), got 'x'$"),
+    (lambda: pihyst.fit(LOOPS, LOOPS_Y, family="classical", bounds=(0, "1")),
+     pihyst.FitError, "^bounds: the upper bound must be a number"),
+    (lambda: pihyst.fit(LOOPS, LOOPS_Y, family="classical", bounds=(0, 1, 2)),
+     pihyst.FitError, "^bounds must be a pair"),
+    (lambda: pihyst.ClassicalPI(**CLASSICAL).envelopes("x"), InvalidArgumentError,
+     "^u must be one input value"),
+    (lambda: pihyst.ClassicalPI(**CLASSICAL).envelopes(True), InvalidArgumentError,
+     "^u must be one input value"),
+    (lambda: pihyst.load_model(5), InvalidArgumentError,
+     "^load_model needs a file path or a dict, got int$"),
+    (lambda: pihyst.fit_many("notalist"), InvalidArgumentError, "^records must be"),
+    (lambda: pihyst.compensate(pihyst.ClassicalPI(**CLASSICAL), [1, 2], u_max="100"),
+     InvalidArgumentError, "^u_max must be a number, got '100'$"),
+    (lambda: pihyst.BoucWenModel(**{**BOUC_WEN, "n": "1"}), pihyst.InvalidModelError,
+     "^n must be a number, got '1'$"),
+    (lambda: pihyst.compensate(pihyst.BoucWenModel(**BOUC_WEN), [1, 2], u_max="100"),
+     InvalidArgumentError, "^u_max must be a number"),
+    (lambda: pihyst.BoucWenCompensator(pihyst.BoucWenModel(**BOUC_WEN), u_min=100,
+                                       u_max=50), InvalidArgumentError, "^voltage limits"),
+    (lambda: pihyst.BoucWenCompensator(pihyst.ClassicalPI(**CLASSICAL)),
+     InvalidArgumentError, "^model must be a BoucWenModel"),
+    (lambda: pihyst.ClassicalPI(**CLASSICAL, creep=Creep([0.1], [0.01], 1e-3)).predict(
+        [0, 1, 2], t=[0, 1]), InvalidArgumentError, "^t must be one sample time"),
+])
+def test_arguments_of_the_wrong_kind_raise_pihysts_own_exceptions(call, exception, says):
+    with pytest.raises(exception, match=says) as err:
+        call()
+    assert type(err.value).__module__ == "pihyst.exceptions"
+    assert "\n" not in str(err.value)

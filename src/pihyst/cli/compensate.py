@@ -8,7 +8,12 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
-from pihyst.cli.model_inputs import add_initial_state_option, creep_times, initial_state
+from pihyst.cli.model_inputs import (
+    add_initial_state_option,
+    creep_times,
+    delay_for_run,
+    initial_state,
+)
 from pihyst.cli.record_options import (
     NO_VOLTAGE,
     add_record_options,
@@ -87,6 +92,8 @@ def smallest_step(records, path):
 def reachable(model, state, lo, hi):
     """(lowest, highest) displacement the model reaches with voltages in [lo, hi]: at lo
     after coming down from hi, and at hi after going up from lo."""
+    # without the delay: a delayed model's output would still be the held first input
+    model = model.replace(delay=0)
     down = model.simulate(np.array([hi, lo]), initial_state=state).output[-1]
     up = model.simulate(np.array([lo, hi]), initial_state=state).output[-1]
     return float(down), float(up)
@@ -135,6 +142,14 @@ def run(args):
             check_slew_rate(args.slew_rate, args.desired)
             max_step = args.slew_rate * smallest_step(reader.chunks(), args.desired)
             max_step = max_step if np.isfinite(max_step) else None
+        if model.delay:
+            # the delay at the record's sample period (its first block's, as predict):
+            # converted or refused
+            blocks = reader.chunks()
+            first = next(blocks, None)
+            blocks.close()
+            model = delay_for_run(model, args.desired,
+                                  t=None if first is None else first.time)
         state = initial_state(model, args.initial_state)
         try:
             compensator = compensator_for(model, u_min=args.u_min, u_max=args.u_max,

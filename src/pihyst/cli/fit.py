@@ -264,8 +264,10 @@ def _unused_time(err):
 
 def _sample_period(args):
     """The record's sample period (s), which a fitted delay holds at: the median step of
-    its time (read only now, and only the time: a fit without a delay needs none); None
-    when the record has no usable time."""
+    its time, its time column's or the one --rate defines (read only now: a fit without
+    a delay needs none); None when the record has no usable time."""
+    if args.rate is not None:       # no time column (the reader refuses both): k / rate
+        return 1.0 / args.rate
     try:
         times = read_from_args(args, args.data, need=("time",), say=False, optional=())
     except (RecordError, UsageError):

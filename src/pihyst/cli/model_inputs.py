@@ -11,7 +11,7 @@ how far, and over which span the model was fitted. A voltage farther out is an e
 import numpy as np
 
 from pihyst.cli.errors import UsageError
-from pihyst.exceptions import InvalidModelError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 
 TOLERANCE = 0.01
 INITIAL_STATES = ("model", "bottom", "top", "zero", "settle")
@@ -101,6 +101,8 @@ def initial_state(model, mode):
         return model.initial_state
     if mode == "zero":
         return zero
+    # cycled without the delay: a delayed model would not yet see the last inputs
+    model = model.replace(delay=0)
     if mode == "bottom":
         return model.simulate(np.array([lo, hi, lo]), initial_state=zero).final_state
     if mode == "top":
@@ -134,3 +136,24 @@ def creep_times(model, rec, t_last):
         raise rec.error(max(i, 0), "time", f"time_s = {t[max(i, 0)]:g} {what}: the model's "
                         f"creep needs increasing sample times")
     return {"t": t, "t_previous": t_last}
+
+
+def delay_for_run(model, path, *, t=None, period=None):
+    """``model`` with its delay in samples of a run at the sample times ``t`` (s) or the
+    sample period ``period`` (s): converted when exact (docs/interfaces.md), unchanged
+    without a delay or a period known on both sides. A delay that is not a whole number
+    of the run's samples is a UsageError naming ``path``, the file that sets the run's
+    period (the record, or the rig's configuration)."""
+    if not model.delay or model.sample_period is None or (t is None and period is None):
+        return model
+    try:
+        d = model.delay_at(period, t=t)
+    except InvalidArgumentError as err:
+        raise UsageError(f"{path}: {err}") from None
+    if period is None:
+        steps = np.diff(np.asarray(t, dtype=np.float64))
+        if steps.size == 0:
+            return model
+        period = float(np.median(steps))
+    # the converted delay holds at the run's period (a later conversion is the identity)
+    return model.replace(delay=d, sample_period=period)

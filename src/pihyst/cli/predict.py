@@ -11,6 +11,7 @@ from pihyst.cli.model_inputs import (
     InputRange,
     add_initial_state_option,
     creep_times,
+    delay_for_run,
     initial_state,
     settle_end,
 )
@@ -63,9 +64,9 @@ def run(args):
         try:
             for rec in chunks:
                 u = limits.check(rec.voltage, rec)
-                if rec.time is not None and pending is None and run_model.delay:
+                if pending is None:
                     # the delay at the record's sample period: converted or refused
-                    run_model = run_model.replace(delay=run_model.delay_at(t=rec.time))
+                    run_model = delay_for_run(run_model, args.input, t=rec.time)
                 creep = getattr(run_model, "creep", None) is not None
                 response = run_model.simulate(u, initial_state=state, pending_input=pending,
                                               **creep_times(run_model, rec, t_last),

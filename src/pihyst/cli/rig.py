@@ -12,6 +12,7 @@ import sys
 import numpy as np
 
 from pihyst.cli.errors import UsageError
+from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
 
@@ -272,9 +273,8 @@ def run_track(args):
     config = _config(args)
     r = config.rig
     model = load_model(args.model)
-    if model.delay:
-        # the delay in the rig's ticks: converted when exact, else a one-line error
-        model = model.replace(delay=model.delay_at(1.0 / r.rate_hz))
+    # the delay in the rig's ticks: converted when exact, else a one-line error
+    model = delay_for_run(model, args.config, period=1.0 / r.rate_hz)
     gains = _gains(args.feedback) if args.feedback is not None else None
     desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
     max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz

@@ -14,7 +14,7 @@ from pihyst.cli.compensate import (
     smallest_step,
 )
 from pihyst.cli.errors import UsageError, check_output
-from pihyst.cli.model_inputs import creep_times
+from pihyst.cli.model_inputs import creep_times, delay_for_run
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.cli.record_options import (
     NO_VOLTAGE,
@@ -82,6 +82,8 @@ def run(args):
         check_slew_rate(args.slew_rate, args.desired)
         max_step = args.slew_rate * smallest_step([rec], args.desired)
         max_step = max_step if np.isfinite(max_step) else None
+    # a delayed model: its delay at the record's sample period, converted or refused
+    model = delay_for_run(model, args.desired, t=t)
     try:
         compensator = compensator_for(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
     except ValueError as err:

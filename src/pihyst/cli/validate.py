@@ -11,6 +11,7 @@ from pihyst.cli.model_inputs import (
     InputRange,
     add_initial_state_option,
     creep_times,
+    delay_for_run,
     initial_state,
     settle_end,
 )
@@ -53,9 +54,11 @@ def run(args):
     if first >= len(u):
         raise UsageError(f"{args.data}: no samples left after the first sweep "
                          "(--initial-state settle)")
-    result = validate_model(limits.run_model, u, rec.displacement,
+    # a delayed model: its delay at the record's sample period, converted or refused
+    run_model = delay_for_run(limits.run_model, args.data, t=rec.time)
+    result = validate_model(run_model, u, rec.displacement,
                             initial_state=initial_state(model, args.initial_state), first=first,
-                            t=creep_times(limits.run_model, rec, None).get("t"))
+                            t=creep_times(run_model, rec, None).get("t"))
     if args.figure:
         _figure(args, rec, result)
     if args.json:

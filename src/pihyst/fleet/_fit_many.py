@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.exceptions import CSVError, FitError
+from pihyst.exceptions import CSVError, FitError, InvalidArgumentError
 from pihyst.identify import FitReport, FitResult, fit
 from pihyst.io import column_number, read_columns
 from pihyst.model import PIModel
@@ -29,6 +29,7 @@ __all__ = ["FleetResult", "RecordOutcome", "fit_many", "INPUT_COLUMN", "OUTPUT_C
 
 INPUT_COLUMN = "voltage_V"
 OUTPUT_COLUMN = "displacement_um"
+TIME_COLUMN = "time_s"
 _COLUMN_OF = {"input": INPUT_COLUMN, "output": OUTPUT_COLUMN}
 _FIT_PARAMETERS = inspect.signature(fit).parameters
 # the keyword options fit() names (None: it takes any keyword, so fit() checks them)
@@ -202,8 +203,8 @@ def fit_many(records, client=None, *, progress=None, **options):
     """
     unknown = [] if _FIT_OPTIONS is None else sorted(set(options) - _FIT_OPTIONS)
     if unknown:
-        raise TypeError(f"fit_many() got options that pihyst.fit does not take: "
-                        f"{', '.join(unknown)}")
+        raise InvalidArgumentError(f"fit_many() got options that pihyst.fit does not take: "
+                                   f"{', '.join(unknown)}")
     named = _named(records)
     start = time.perf_counter()
     outcomes = {}
@@ -211,20 +212,20 @@ def fit_many(records, client=None, *, progress=None, **options):
     for name, record in named:
         t0 = time.perf_counter()
         try:
-            u, y, source, lines = _load(record)
+            u, y, source, lines, period = _load(record)
         except (CSVError, ValueError, TypeError) as err:
             where = os.fspath(record) if _is_path(record) else None
             outcomes[name] = RecordOutcome(name, "failed", error=str(err), source=where,
                                            seconds=time.perf_counter() - t0)
             _report(progress, outcomes[name])
             continue
-        jobs.append((name, u, y, source, lines, time.perf_counter() - t0))
+        jobs.append((name, u, y, source, lines, period, time.perf_counter() - t0))
 
     if client is None:
         scheduler = "serial"
-        for name, u, y, source, lines, read_time in jobs:
+        for name, u, y, source, lines, period, read_time in jobs:
             outcomes[name] = _outcome(_fit_one(u, y, options), name, source, lines,
-                                      read_time)
+                                      read_time, period)
             _report(progress, outcomes[name])
     else:
         scheduler = _describe(client)
@@ -237,13 +238,13 @@ def _run_on(client, jobs, options, outcomes, progress):
     from distributed import as_completed
 
     futures = {}
-    for name, u, y, source, lines, read_time in jobs:
+    for name, u, y, source, lines, period, read_time in jobs:
         fut = client.submit(_fit_one, u, y, options, pure=False, key=_key(name))
-        futures[fut] = (name, source, lines, read_time)
+        futures[fut] = (name, source, lines, read_time, period)
     for fut in as_completed(list(futures)):
-        name, source, lines, read_time = futures[fut]
+        name, source, lines, read_time, period = futures[fut]
         if fut.status == "finished":
-            outcome = _outcome(fut.result(), name, source, lines, read_time)
+            outcome = _outcome(fut.result(), name, source, lines, read_time, period)
         elif fut.status == "cancelled":   # e.g. the client or the cluster went away
             outcome = RecordOutcome(name, "failed", source=source, seconds=read_time,
                                     error="cancelled: the cluster dropped the task")
@@ -280,7 +281,7 @@ def _fit_one(u, y, options):
             "seconds": time.perf_counter() - t0}
 
 
-def _outcome(out, name, source, lines, read_time):
+def _outcome(out, name, source, lines, read_time, period=None):
     seconds = read_time + out["seconds"]
     if out["status"] == "failed":
         error = out["error"]
@@ -288,11 +289,16 @@ def _outcome(out, name, source, lines, read_time):
             error = _located(error, out.get("index"), out.get("column"), source, lines)
         return RecordOutcome(name, "failed", error=error, seconds=seconds, source=source,
                              traceback=out.get("traceback"))
-    result = FitResult(model=PIModel.from_dict(out["model"]),
-                       report=FitReport(out["report"]),
-                       models={k: PIModel.from_dict(d) for k, d in out["models"].items()})
+    # a delay holds at the record's sample period (its time column's), as with pihyst fit
+    models = {k: _at_period(PIModel.from_dict(d), period) for k, d in out["models"].items()}
+    result = FitResult(model=_at_period(PIModel.from_dict(out["model"]), period),
+                       report=FitReport(out["report"]), models=models)
     return RecordOutcome(name, "fitted", result=result, warnings=tuple(out["warnings"]),
                          seconds=seconds, source=source)
+
+
+def _at_period(model, period):
+    return model.replace(sample_period=period) if model.delay and period else model
 
 
 def _located(message, index, column, path, lines):
@@ -310,30 +316,36 @@ def _is_path(record):
 
 
 def _load(record):
-    """(u, y, source, lines) of one record: a CSV path (read here) or a (u, y) pair."""
+    """(u, y, source, lines, sample period) of one record: a CSV path (read here; the
+    period is the median step of its time_s column, None without one) or a (u, y) pair
+    (period None)."""
     if _is_path(record):
         path = os.fspath(record)
-        columns, lines = read_columns(path, [INPUT_COLUMN, OUTPUT_COLUMN])
-        return columns[INPUT_COLUMN], columns[OUTPUT_COLUMN], path, lines
+        columns, lines = read_columns(path, [INPUT_COLUMN, OUTPUT_COLUMN],
+                                      optional=(TIME_COLUMN,))
+        steps = np.diff(columns.get(TIME_COLUMN, np.empty(0)))
+        steps = steps[steps > 0]
+        period = float(np.median(steps)) if steps.size else None
+        return columns[INPUT_COLUMN], columns[OUTPUT_COLUMN], path, lines, period
     try:
         u, y = record
     except (TypeError, ValueError):
-        raise TypeError(f"a record is a (u, y) pair of arrays or the path of a CSV file, "
-                        f"not {type(record).__name__}") from None
+        raise InvalidArgumentError(f"a record is a (u, y) pair of arrays or the path of a CSV "
+                                   f"file, not {type(record).__name__}") from None
     try:
         u = np.asarray(u, dtype=np.float64)
         y = np.asarray(y, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError("u and y must be arrays of numbers") from None
-    return u, y, None, None
+        raise InvalidArgumentError("u and y must be arrays of numbers") from None
+    return u, y, None, None, None
 
 
 def _named(records):
     if isinstance(records, dict) or hasattr(records, "keys"):
         named = [(str(k), records[k]) for k in records.keys()]
     elif isinstance(records, (str, os.PathLike)) or not hasattr(records, "__iter__"):
-        raise TypeError("records must be a mapping name -> record or a sequence of "
-                        f"records, not {type(records).__name__}")
+        raise InvalidArgumentError("records must be a mapping name -> record or a sequence of "
+                                   f"records, not {type(records).__name__}")
     else:
         named = [(os.path.basename(os.fspath(r)) if _is_path(r) else str(i), r)
                  for i, r in enumerate(records)]

@@ -16,6 +16,7 @@ fitted and which are held back to judge the fit.
   boundary.
 """
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -205,9 +206,7 @@ def layout(v, span, *, settle, holdout):
             roles = ["fit"] * len(pieces)
         description = "alternate cycles"
     elif holdout:
-        f = float(holdout)
-        if not 0 < f < 1:
-            raise ValueError(f"holdout fraction must be in (0, 1), got {f}")
+        f = _holdout_fraction(holdout)
         target = settle_end + (1 - f) * (n - settle_end)
         bounds = [a for a, _ in pieces[1:]]
         if bounds:
@@ -223,3 +222,12 @@ def layout(v, span, *, settle, holdout):
                   n_minor=int(len(major) - sum(major)), settle_end=settle_end,
                   holdout=description if "held_back" in roles else "none", kinds=kinds,
                   points=points)
+
+
+def _holdout_fraction(holdout):
+    """``holdout`` as a fraction in (0, 1); a FitError naming it otherwise."""
+    if isinstance(holdout, (str, bytes, bool, np.bool_)) or \
+            not isinstance(holdout, numbers.Real) or not 0 < holdout < 1:
+        raise FitError(f"holdout must be 'alternate', a fraction in (0, 1) or None, got "
+                       f"{holdout!r:.40}")
+    return float(holdout)

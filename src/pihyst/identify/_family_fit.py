@@ -91,6 +91,9 @@ class FramedRecord:
         y[k + delay]), cut at sample ``stop``: the same cycles (the layout follows the
         input), the last ones shortened. A FitError if nothing is left to fit."""
         n = self.u.size - delay if stop is None else min(stop, self.u.size - delay)
+        if n < MIN_SAMPLES:
+            raise FitError(f"a delay of {delay} samples is too large for a record of "
+                           f"{self.u.size} samples: too little is left to fit")
         out = copy.copy(self)
         out.u, out.v = self.u[:n], self.v[:n]
         out.y = self.y[delay:delay + n]
@@ -99,10 +102,15 @@ class FramedRecord:
         lay = self.layout
         kept = [((a, min(z, n), r), k) for (a, z, r), k in zip(lay.segments, lay.kinds)
                 if a < n]
-        out.layout = replace(lay, segments=[s for s, _ in kept], kinds=[k for _, k in kept])
+        # the turning points and the settling sweep past the cut are not in this record
+        out.layout = replace(lay, segments=[s for s, _ in kept], kinds=[k for _, k in kept],
+                             settle_end=min(lay.settle_end, n),
+                             points=None if lay.points is None else
+                             [p for p in lay.points if p[0] < n])
         out.has_held_back = out.layout.count("held_back") > 0
         if out.layout.count("fit") < MIN_SAMPLES:
-            raise FitError(f"with a delay of {delay} samples too little is left to fit")
+            raise FitError(f"a delay of {delay} samples is too large for a record of "
+                           f"{self.u.size} samples: too little is left to fit")
         late = [i for i in self.through if i >= n]
         if late:
             raise FitError(f"through: sample {late[0]} is beyond the record once the output "

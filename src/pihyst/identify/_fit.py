@@ -219,6 +219,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     if n_operators is not None and (int(n_operators) != n_operators or n_operators < 1):
         raise FitError(f"n_operators must be a positive integer, got {n_operators}")
     _check_bounds(max_operators, max_latency, delay)
+    _check_weight_bounds(bounds)
 
     def fitter_of(r):
         return FamilyFitter(r, thresholds=thresholds, candidates=candidates,
@@ -351,6 +352,23 @@ def _check_bounds(max_operators, max_latency, delay):
         raise FitError(f"max_latency must be a positive number of seconds, got {max_latency!r}")
     if delay != "auto" and not (isinstance(delay, (int, np.integer)) and delay >= 0):
         raise FitError(f"delay must be a number of samples >= 0 or 'auto', got {delay!r}")
+
+
+def _check_weight_bounds(bounds):
+    """``bounds`` as fit takes it: None, or (lower, upper) with each None, a number or
+    one number per operator (their count is checked once the operators are known)."""
+    if bounds is None:
+        return
+    if not isinstance(bounds, (list, tuple, np.ndarray)) or np.ndim(bounds) == 0 or \
+            len(bounds) != 2:
+        raise FitError(f"bounds must be a pair (lower, upper), got {bounds!r:.40}")
+    for name, value in zip(("lower", "upper"), bounds):
+        if value is None:
+            continue
+        a = np.asarray(value)
+        if a.dtype.kind not in "iuf" or a.ndim > 1 or np.isnan(a).any():
+            raise FitError(f"bounds: the {name} bound must be a number or one number per "
+                           f"operator (None: no bound), got {value!r:.40}")
 
 
 def _delay_choice(rec, fitter_of, delay, family):

@@ -15,6 +15,7 @@ exactly as before."""
 import numpy as np
 
 from pihyst import _core
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse._compensator import Compensator
 from pihyst.model._bank import refuse_delayed
 
@@ -22,7 +23,7 @@ from pihyst.model._bank import refuse_delayed
 def _per_channel(value, n, name):
     if isinstance(value, (list, tuple, np.ndarray)):
         if len(value) != n:
-            raise ValueError(f"{name} must be one value or {n} values, got {len(value)}")
+            raise InvalidArgumentError(f"{name} must be one value or {n} values, got {len(value)}")
         return list(value)
     return [value] * n
 
@@ -136,8 +137,8 @@ class CompensatorBank:
         """One tick: the N voltages for N desired displacements (any values)."""
         y_desired = np.ascontiguousarray(y_desired, dtype=np.float64)
         if y_desired.shape != (len(self),):
-            raise ValueError(f"y_desired must have {len(self)} values, got shape "
-                             f"{y_desired.shape}")
+            raise InvalidArgumentError(f"y_desired must have {len(self)} values, got shape "
+                                       f"{y_desired.shape}")
         self._array.step_into(y_desired, self._u, self._y, self._flags)
         self._stale = self.fast
         return self._u.copy()
@@ -147,8 +148,8 @@ class CompensatorBank:
         each (T, N)."""
         y_desired = np.ascontiguousarray(y_desired, dtype=np.float64)
         if y_desired.ndim != 2 or y_desired.shape[1] != len(self):
-            raise ValueError(f"y_desired must have shape (T, {len(self)}), got "
-                             f"{y_desired.shape}")
+            raise InvalidArgumentError(f"y_desired must have shape (T, {len(self)}), got "
+                                       f"{y_desired.shape}")
         result = self._array.run(y_desired)
         self._stale = self.fast
         return result

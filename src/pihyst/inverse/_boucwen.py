@@ -83,7 +83,7 @@ class BoucWenCompensatorTwin:
     def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
                  initial_state=None, creep_state=None):
         if not isinstance(model, BoucWenModel):
-            raise TypeError(f"model must be a BoucWenModel, not {type(model).__name__}")
+            raise InvalidArgumentError(f"model must be a BoucWenModel, not {type(model).__name__}")
         if not model.is_monotone:
             raise InvalidModelError(f"compensation needs a monotone model: the slope bound "
                                     f"min(c_1, c_1 + 2 c_2) + min(a, 0) D is "
@@ -93,21 +93,22 @@ class BoucWenCompensatorTwin:
         u_min = lo if u_min is None else _number(u_min, "u_min")
         u_max = hi if u_max is None else _number(u_max, "u_max")
         if not lo <= u_min < u_max <= hi:
-            raise ValueError(f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min < "
-                             f"u_max inside the model's input range [{lo:g}, {hi:g}]")
+            raise InvalidArgumentError(f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min "
+                                       f"< u_max inside the model's input range [{lo:g}, {hi:g}]")
         self.limits = (u_min, u_max)
         if slew_rate is not None:
             slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
             if not slew_rate > 0:
-                raise ValueError(f"slew_rate must be > 0 volts per sample, got {slew_rate:g}")
+                raise InvalidArgumentError(f"slew_rate must be > 0 volts per sample, got "
+                                           f"{slew_rate:g}")
         self.slew_rate = slew_rate
         u0, z0 = model._state(initial_state)
         if initial_voltage is None:
             initial_voltage = min(max(0.0, u_min), u_max)
         initial_voltage = _number(initial_voltage, "initial_voltage")
         if not u_min <= initial_voltage <= u_max:
-            raise ValueError(f"initial_voltage {initial_voltage:g} is outside the voltage "
-                             f"limits [{u_min:g}, {u_max:g}]")
+            raise InvalidArgumentError(f"initial_voltage {initial_voltage:g} is outside the "
+                                       f"voltage limits [{u_min:g}, {u_max:g}]")
         # the initial voltage is applied to the initial state
         z0 = advance(z0, model._x(initial_voltage) - model._x(u0), model.beta, model.gamma,
                      model.n)
@@ -206,7 +207,8 @@ class BoucWenCompensatorTwin:
             voltage = _number(voltage, "voltage")
             lo, hi = self.limits
             if not lo <= voltage <= hi:
-                raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+                raise InvalidArgumentError(f"voltage {voltage:g} is outside the limits [{lo:g}, "
+                                           f"{hi:g}]")
             m = self.model
             self._z = advance(self._z, m._x(voltage) - m._x(self._u), m.beta, m.gamma, m.n)
             self._u = voltage
@@ -383,7 +385,8 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
             voltage = _number(voltage, "voltage")
             lo, hi = self.limits
             if not lo <= voltage <= hi:
-                raise ValueError(f"voltage {voltage:g} is outside the limits [{lo:g}, {hi:g}]")
+                raise InvalidArgumentError(f"voltage {voltage:g} is outside the limits [{lo:g}, "
+                                           f"{hi:g}]")
         if not hasattr(self, "_core"):
             slew = math.inf if self.slew_rate is None else self.slew_rate
             self._core_model = self.model._core(self._start)

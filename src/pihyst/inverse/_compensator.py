@@ -462,6 +462,8 @@ def _with_flag_arrays(result):
 
 
 def _number(value, name, allow_inf=False, allow_nan=False):
+    if isinstance(value, (str, bytes, bool, np.bool_)):     # float() would take "100"
+        raise InvalidArgumentError(f"{name} must be a number, got {value!r:.40}")
     try:
         v = float(value)
     except (TypeError, ValueError, OverflowError):

@@ -26,7 +26,7 @@ and column.
 import json
 import os
 
-from pihyst.exceptions import InvalidModelError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 from pihyst.model import PIModel
 
 
@@ -42,7 +42,11 @@ def load_model(path_or_dict):
     """
     if isinstance(path_or_dict, dict):
         return PIModel.from_dict(path_or_dict)
-    path = os.fspath(path_or_dict)
+    try:
+        path = os.fspath(path_or_dict)
+    except TypeError:
+        raise InvalidArgumentError(f"load_model needs a file path or a dict, got "
+                                   f"{type(path_or_dict).__name__}") from None
     try:
         with open(path, "rb") as f:
             raw = f.read()

@@ -8,7 +8,7 @@ channels of up to 16 operators several at a time, with the same bits."""
 import numpy as np
 
 from pihyst import _core
-from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._models import PIModel
 
 
@@ -46,14 +46,15 @@ class ModelBank:
         models = tuple(models)
         for i, m in enumerate(models):
             if not isinstance(m, PIModel):
-                raise TypeError(f"models[{i}] must be a pihyst model, not {type(m).__name__}")
+                raise InvalidArgumentError(f"models[{i}] must be a pihyst model, not "
+                                           f"{type(m).__name__}")
         refuse_delayed(models)
         if initial_states is None:
             initial_states = [None] * len(models)
         initial_states = list(initial_states)
         if len(initial_states) != len(models):
-            raise ValueError(f"initial_states must have {len(models)} entries, got "
-                             f"{len(initial_states)}")
+            raise InvalidArgumentError(f"initial_states must have {len(models)} entries, got "
+                                       f"{len(initial_states)}")
         self.models = models
         self._channels = tuple(m.stepper(s) for m, s in zip(models, initial_states, strict=True))
         banks = [s._bank for s in self._channels]
@@ -88,7 +89,7 @@ class ModelBank:
         None entries: the channel's initial state)."""
         states = [None] * len(self) if states is None else list(states)
         if len(states) != len(self):
-            raise ValueError(f"states must have {len(self)} entries, got {len(states)}")
+            raise InvalidArgumentError(f"states must have {len(self)} entries, got {len(states)}")
         for s, state in zip(self._channels, states, strict=True):
             s.reset(state)
         if self.fast:
@@ -98,7 +99,7 @@ class ModelBank:
     def _checked(self, u):
         u = np.ascontiguousarray(u, dtype=np.float64)
         if u.ndim != 2 or u.shape[1] != len(self):
-            raise ValueError(f"input must have shape (T, {len(self)}), got {u.shape}")
+            raise InvalidArgumentError(f"input must have shape (T, {len(self)}), got {u.shape}")
         ok = (u >= self._lo) & (u <= self._hi)  # NaN fails too
         if not ok.all():
             t, i = np.argwhere(~ok)[0]
@@ -110,7 +111,7 @@ class ModelBank:
         """One tick: advance channel i by the input u[i]; returns the N outputs."""
         u = np.asarray(u, dtype=np.float64)
         if u.shape != (len(self),):
-            raise ValueError(f"input must have {len(self)} values, got shape {u.shape}")
+            raise InvalidArgumentError(f"input must have {len(self)} values, got shape {u.shape}")
         y = self._array.run(self._checked(u[None, :]))[0]
         self._stale = self.fast
         return y

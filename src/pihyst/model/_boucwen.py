@@ -77,6 +77,8 @@ MIN_SPREAD = 1e-9    # beta + gamma below this: z_max = (beta + gamma)^(-1/n) is
 
 
 def _number(value, name):
+    if isinstance(value, (str, bytes, bool, np.bool_)):     # float() would take "1"
+        raise InvalidModelError(f"{name} must be a number, got {value!r:.40}")
     try:
         x = float(value)
     except (TypeError, ValueError, OverflowError):

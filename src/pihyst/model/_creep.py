@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from pihyst import _core
-from pihyst.exceptions import InvalidModelError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 
 __all__ = ["Creep", "creep_twin_run", "creep_twin_step", "creep_twin_target",
            "default_time_constants", "sample_intervals"]
@@ -168,10 +168,11 @@ def first_interval(creep, t, t_previous):
     try:
         first = float(np.asarray(t, dtype=np.float64).ravel()[0]) - float(t_previous)
     except (TypeError, ValueError):
-        raise ValueError(f"t_previous must be a time (s), got {t_previous!r:.40}") from None
+        raise InvalidArgumentError(f"t_previous must be a time (s), got "
+                                   f"{t_previous!r:.40}") from None
     if not (np.isfinite(first) and first >= 0):
-        raise ValueError(f"the first sample time {np.ravel(t)[0]!r} comes before t_previous "
-                         f"{t_previous!r}")
+        raise InvalidArgumentError(f"the first sample time {np.ravel(t)[0]!r} comes before "
+                                   f"t_previous {t_previous!r}")
     return first
 
 
@@ -180,18 +181,18 @@ def sample_intervals(t, n, first):
     ``t`` (s) of n samples; they must be finite and non-decreasing."""
     t = np.ascontiguousarray(t, dtype=np.float64)
     if t.ndim != 1 or t.size != n:
-        raise ValueError(f"t must be one sample time per input sample ({n}), got shape "
-                         f"{t.shape}")
+        raise InvalidArgumentError(f"t must be one sample time per input sample ({n}), got shape "
+                                   f"{t.shape}")
     if not np.all(np.isfinite(t)):
-        raise ValueError("t must be finite sample times (s)")
+        raise InvalidArgumentError("t must be finite sample times (s)")
     dt = np.empty(n)
     if n:
         dt[0] = first
         dt[1:] = np.diff(t)
     back = np.flatnonzero(dt < 0)
     if back.size:
-        raise ValueError(f"t must be non-decreasing: t[{back[0]}] = {t[back[0]]:g} comes "
-                         f"after {t[back[0] - 1]:g}")
+        raise InvalidArgumentError(f"t must be non-decreasing: t[{back[0]}] = {t[back[0]]:g} comes"
+                                   f" after {t[back[0] - 1]:g}")
     return dt
 
 

@@ -336,7 +336,14 @@ class PIModel(Immutable, ABC):
 
     def envelopes(self, u):
         """(R_k(u), F_k(u)) of every operator at one input value."""
-        return self._bank.envelopes(float(u))
+        try:
+            if isinstance(u, (str, bytes, bool, np.bool_)):      # float() would take "3"
+                raise TypeError
+            value = float(u)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(f"u must be one input value (a number), got "
+                                       f"{u!r:.40}") from None
+        return self._bank.envelopes(value)
 
     def stepper(self, initial_state=None, *, creep_state=None, pending_input=None,
                 sample_period=None):
@@ -596,7 +603,7 @@ class Stepper:
         if dt is not None:
             dt = float(dt)
             if not (np.isfinite(dt) and dt >= 0):
-                raise ValueError(f"dt must be a finite interval >= 0 s, got {dt}")
+                raise InvalidArgumentError(f"dt must be a finite interval >= 0 s, got {dt}")
         return self._lags.step(h, dt)
 
 

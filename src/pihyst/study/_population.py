@@ -95,7 +95,8 @@ def evaluate_plant(seed, samples_per_cycle=10_000):
         creeps = getattr(model, "creep", None) is not None
         if creeps:
             result.creep_gain = float(model.creep.gain.sum())
-        rise = model.predict(np.array([0.0, model.input_range[1]]))
+        # the rise without the delay, whose output would still be the held first input
+        rise = model.replace(delay=0).predict(np.array([0.0, model.input_range[1]]))
         lo, hi = rise[0] + 0.02 * (rise[1] - rise[0]), rise[0] + 0.95 * (rise[1] - rise[0])
         desired = judged_signals(seed, desc["rate_hz"], period, lo, hi)
         for name in JUDGED:
