@@ -185,8 +185,10 @@ def run(args):
     print(f"wrote {n} samples to {args.output} (voltage {stats.u_lo:.4g} .. {stats.u_hi:.4g} V)")
     print(f"reachable displacement: [{y_lo:.4g}, {y_hi:.4g}] {unit} with the voltage in "
           f"[{lo:g}, {hi:g}] V")
-    print(f"saturated: {stats.saturated} of {n} samples ({stats.low} at {lo:g} V, "
-          f"{stats.high} at {hi:g} V)"
+    # with a slew limit an out-of-reach sample may still be on its way to the limit
+    at = "at" if max_step is None else "at or toward"
+    print(f"saturated: {stats.saturated} of {n} samples ({stats.low} {at} {lo:g} V, "
+          f"{stats.high} {at} {hi:g} V)"
           + ("" if max_step is None else f"; slew-limited: {stats.slew}"))
     if stats.saturated:
         print(f"the desired displacement spans [{stats.d_lo:.4g}, {stats.d_hi:.4g}] {unit}: "

@@ -276,9 +276,16 @@ class BoucWenCompensatorTwin:
                 y_end, z_end = self._y(end)
                 if (y_end - yd) * s <= 0:      # out of reach (or just reached) at the end
                     limit = self.limits[1] if s > 0 else self.limits[0]
-                    flags = 0 if y_end == yd else (
-                        (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
-                        if end == limit else FLAG_SLEW)
+                    saturated = FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW
+                    if y_end == yd:
+                        flags = 0
+                    elif end == limit:
+                        flags = saturated
+                    else:
+                        # cut short by the slew limit; out of reach too if the voltage
+                        # limit itself misses yd (out of reach does not depend on the slew)
+                        flags = FLAG_SLEW | (saturated if (self._y(limit)[0] - yd) * s < 0
+                                             else 0)
                     return end, z_end, flags
                 b, z_b = end, z_end
             if b is not None and not min(a, b) < u < max(a, b):

@@ -48,6 +48,9 @@ __all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLA
 OTHER_COMPENSATORS = {}
 
 #: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
+#: Out of reach means beyond what the model gives at the voltage limit, whatever the slew
+#: limit: a sample cut short by the slew limit on its way to an out-of-reach value has
+#: both bits, FLAG_SATURATED_* | FLAG_SLEW.
 FLAG_SATURATED_LOW = _core.FLAG_SATURATED_LOW    # out of reach below: voltage at u_min
 FLAG_SATURATED_HIGH = _core.FLAG_SATURATED_HIGH  # out of reach above: voltage at u_max
 FLAG_NAN = _core.FLAG_NAN                        # desired value NaN: last voltage held
@@ -71,7 +74,9 @@ class CompensationResult:
         Per-sample bits ``FLAG_SATURATED_LOW | FLAG_SATURATED_HIGH | FLAG_NAN |
         FLAG_SLEW``; 0 where the desired value was reached.
     saturated, saturated_low, saturated_high, slew_limited, nan_held : ndarray of bool
-        The flags per sample; ``saturated`` is low or high.
+        The flags per sample; ``saturated`` is low or high: the desired value is out of
+        reach within the voltage limits (the voltage at the limit, or on its way there
+        when ``slew_limited`` too).
     initial_state, initial_voltage : ndarray, float
         Where the run started (the state has the initial voltage applied).
     final_state, final_voltage : ndarray, float
@@ -102,7 +107,7 @@ class CompensationResult:
 
     @property
     def n_saturated(self):
-        """Samples out of reach (voltage at a limit)."""
+        """Samples out of reach within the voltage limits (whatever the slew limit)."""
         return int(np.count_nonzero(self.saturated))
 
     @property
