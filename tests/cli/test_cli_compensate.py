@@ -136,3 +136,22 @@ def test_strict_with_a_slew_rate_accepts_what_is_in_reach(tmp_path, capsys):
     cols, _ = read_columns(out, ["saturated", "slew_limited"])
     np.testing.assert_array_equal(cols["saturated"], [0, 0, 0, 0])
     np.testing.assert_array_equal(cols["slew_limited"], [0, 1, 1, 1])
+
+
+def test_initial_state_top_starts_at_rest_at_the_top(tmp_path):
+    src = tmp_path / "mid.csv"
+    src.write_text("time_s,displacement_um\n0,20\n1,21\n")
+    first = {}
+    for mode in ("bottom", "top"):
+        out = tmp_path / f"{mode}.csv"
+        assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state",
+                   mode) == 0
+        first[mode] = read_columns(out, ["voltage_V"])[0]["voltage_V"][0]
+    assert first["top"] < first["bottom"] - 20      # 20 um on the falling branch
+    out = tmp_path / "slew.csv"
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state", "top",
+               "--slew-rate", "5") == 0
+    np.testing.assert_array_equal(read_columns(out, ["voltage_V"])[0]["voltage_V"], [145, 140])
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state", "top",
+               "--slew-rate", "5", "--u-max", "120") == 0
+    np.testing.assert_array_equal(read_columns(out, ["voltage_V"])[0]["voltage_V"], [115, 110])

@@ -329,3 +329,32 @@ def test_out_of_reach_is_flagged_when_the_slew_limit_cuts_the_sample_short(model
     assert comp.step(hi_y + 5) == 2.0 and comp.last_flags == FLAG_SATURATED_HIGH | FLAG_SLEW
     assert comp.step(lo_y - 1) == 0.0 and comp.last_flags == FLAG_SATURATED_LOW
 
+
+
+@pytest.mark.parametrize("model", [PAPER_CLASSICAL, PAPER_MULTISLOPE,
+                                   pihyst.BoucWenModel(beta=0.5, gamma=0.2, hysteretic=10.0,
+                                                       linear=30.0)], ids=lambda m: m.family)
+def test_a_state_at_rest_at_the_top_starts_there(model):
+    top = model.simulate([0.0, 150.0, 0.0, 150.0]).final_state
+    comp = pihyst.inverse.compensator_for(model, initial_state=top, slew_rate=5.0)
+    assert comp.voltage == 150.0
+    np.testing.assert_array_equal(comp.state, top)
+    y_top = float(model.simulate([150.0], initial_state=top).output[0])
+    assert comp.displacement == pytest.approx(y_top, abs=1e-12)
+    mid = float(model.simulate([75.0], initial_state=top).output[-1])
+    result = compensate(model, [mid] * 40, initial_state=top, slew_rate=5.0)
+    assert result.initial_voltage == 150.0 and result.voltage[0] == 145.0
+    assert result.voltage[-1] == pytest.approx(75.0, abs=1e-9)    # the falling branch
+    free = compensate(model, [mid], initial_state=top, initial_voltage=0.0)
+    assert free.initial_voltage == 0.0                             # as asked: applied
+
+
+def test_the_rest_voltage_of_a_state_is_nearest_the_default_and_inside_the_limits():
+    from pihyst.inverse._compensator import rest_voltage
+    m = pihyst.ClassicalPI([10.0, 30.0], [0.5, 0.5], input_range=(0.0, 150.0))
+    top = m.simulate([0.0, 150.0]).final_state                     # [140, 120]: rests on [130, 150]
+    assert rest_voltage(m, top, 0.0, 0.0, 150.0) == 130.0
+    assert rest_voltage(m, top, 0.0, 0.0, 100.0) == 0.0            # not at rest within the limits
+    assert rest_voltage(m, np.zeros(2), 0.0, 0.0, 150.0) == 0.0
+    assert rest_voltage(m, np.array([140.0, 0.0]), 0.0, 0.0, 150.0) == 0.0   # rests nowhere
+    assert Compensator(m, initial_state=top, u_max=140.0).voltage == 130.0

@@ -60,7 +60,9 @@ NEWTON_FIRST = 8      # Newton steps from u_p before the reachable end must be e
 class BoucWenCompensatorTwin:
     """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
     limits and a slew limit; the same interface as :class:`pihyst.Compensator`. In
-    Python: the twin of the C core's :class:`BoucWenCompensator`.
+    Python: the twin of the C core's :class:`BoucWenCompensator`. Given an
+    ``initial_state`` (u, z) without an ``initial_voltage``, it starts at that state's u
+    (within the limits).
 
     Examples
     --------
@@ -103,7 +105,8 @@ class BoucWenCompensatorTwin:
         self.slew_rate = slew_rate
         u0, z0 = model._state(initial_state)
         if initial_voltage is None:
-            initial_voltage = min(max(0.0, u_min), u_max)
+            # a state given is at rest at its own voltage: 0 V applied would move it
+            initial_voltage = min(max(0.0 if initial_state is None else u0, u_min), u_max)
         initial_voltage = _number(initial_voltage, "initial_voltage")
         if not u_min <= initial_voltage <= u_max:
             raise ValueError(f"initial_voltage {initial_voltage:g} is outside the voltage "
