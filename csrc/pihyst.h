@@ -70,6 +70,8 @@ typedef enum {
 /** Per-sample flags of the compensator (bits; 0 = desired output reached). The one type
  *  of pihyst_compensator_step's and _run's flags. */
 typedef uint8_t pihyst_flags;
+/* out of reach: beyond the output at the voltage limit, whatever the slew limit; a sample
+ * the slew limit cut short on its way there has PIHYST_COMP_SLEW too */
 #define PIHYST_COMP_SAT_LOW ((pihyst_flags)1u)  /**< out of reach below: voltage at u_min */
 #define PIHYST_COMP_SAT_HIGH ((pihyst_flags)2u) /**< out of reach above: voltage at u_max */
 #define PIHYST_COMP_NAN ((pihyst_flags)4u)      /**< desired value NaN: last voltage held */

@@ -284,10 +284,18 @@ static real solve(const pihyst_bw_compensator *c, real a, real end, real yd, rea
                 real z_end;
                 const real y_end = output_after(m, end, &z_end);
                 if ((y_end - yd) * s <= RC(0.0)) { /* out of reach (or just reached) */
-                    if (y_end != yd)
-                        *flags = end == (s > RC(0.0) ? c->u_max : c->u_min)
-                                     ? (s > RC(0.0) ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW)
+                    if (y_end != yd) {
+                        const real limit = s > RC(0.0) ? c->u_max : c->u_min;
+                        const pihyst_flags sat =
+                            s > RC(0.0) ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW;
+                        real z_limit;
+                        /* cut short by the slew limit, and out of reach too if the voltage
+                         * limit itself misses yd (out of reach does not depend on the slew) */
+                        *flags = end == limit ? sat
+                                 : (output_after(m, limit, &z_limit) - yd) * s < RC(0.0)
+                                     ? (pihyst_flags)(sat | PIHYST_COMP_SLEW)
                                      : PIHYST_COMP_SLEW;
+                    }
                     *z_out = z_end;
                     return end;
                 }

@@ -27,7 +27,8 @@
  * else the bracket is bisected. It stops at |Y(u) - y_d| <= 4 eps (|y_d| + |offset| +
  * |c_1| + |c_2| + |a| z_max) or when the bracket is two adjacent numbers; eps is that of
  * the precision. Out of reach: the voltage stops at the bracket's end, flagged
- * PIHYST_COMP_SAT_LOW/HIGH at a limit or PIHYST_COMP_SLEW at the slew bound; NaN holds
+ * PIHYST_COMP_SAT_LOW/HIGH at a limit or PIHYST_COMP_SLEW at the slew bound (with
+ * PIHYST_COMP_SAT_LOW/HIGH too if the limit itself would miss y_d); NaN holds
  * the last voltage (PIHYST_COMP_NAN). Every voltage lies in [u_min, u_max] and within
  * max_step of the previous one, whatever y_d is.
  */

@@ -55,8 +55,13 @@ typedef double real;
 
 #ifdef PIHYST_BUILD_F32
 #define pihyst_internal_weighted_sum pihyst_internal_weighted_sum_f32
+#define pihyst_internal_output_at pihyst_internal_output_at_f32
 #endif
 /* offset + sum_k w_k f_k exactly as the model step sums it (pihyst_model.c) */
 real pihyst_internal_weighted_sum(size_t K, const real *w, const real *f, real offset);
+/* the output the model would give for the next sample u, its state left as it is
+ * (pihyst_model.c; summed in order, so it may differ from pihyst_model_step's in the last
+ * bits) */
+real pihyst_internal_output_at(const pihyst_model *m, real u);
 
 #endif /* PIHYST_INTERNAL_H */

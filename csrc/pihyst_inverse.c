@@ -1238,7 +1238,16 @@ static PIHYST_INLINE pihyst_flags step(pihyst_compensator *c, real y_desired)
             }
         } else {
             u = end;
-            fl = slew ? PIHYST_COMP_SLEW : (up ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW);
+            fl = up ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW;
+            if (slew) {
+                /* cut short by the slew limit; out of reach too if the voltage limit
+                 * itself misses y_desired (out of reach does not depend on the slew) */
+                const real y_limit =
+                    pihyst_internal_output_at(&c->work_model, up ? c->u_max : c->u_min);
+                const real short_by = up ? y_desired - y_limit : y_limit - y_desired;
+                fl = short_by > c->tol ? (pihyst_flags)(fl | PIHYST_COMP_SLEW)
+                                       : PIHYST_COMP_SLEW;
+            }
         }
         if (u != u_p) apply(c, u);
         /* at the window's end the model may meet y_d after all, to rounding: not a miss */

@@ -563,6 +563,32 @@ real pihyst_internal_weighted_sum(size_t K, const real *w, const real *f, real o
     return weighted_sum(K, w, f, offset);
 }
 
+real pihyst_internal_output_at(const pihyst_model *m, real u)
+{
+    size_t k, K = m->n_ops;
+    const real *c = m->coef, *f = m->state;
+    real y = m->offset;
+    for (k = 0; k < K; ++k) {
+        real rise, fall;
+        switch (m->family) {
+        case PIHYST_CLASSICAL:
+            rise = u + c[k];
+            fall = u + c[K + k];
+            break;
+        case PIHYST_MULTISLOPE:
+            rise = max2(m->shape.a * u + c[k], m->shape.b * u + c[K + k]);
+            fall = min2(m->shape.b * u, m->shape.a * u + c[2 * K + k]);
+            break;
+        default:
+            rise = rise_pwl(&m->pwl, k, u);
+            fall = fall_pwl(&m->pwl, k, u);
+            break;
+        }
+        y += m->weights[k] * max2(rise, min2(fall, f[k]));
+    }
+    return y;
+}
+
 static void run_pwl(pihyst_model *m, const real *u, real *y, size_t n)
 {
     size_t t;

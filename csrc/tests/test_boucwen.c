@@ -171,8 +171,10 @@ static void check_compensator(double beta, double gamma, double n, double a, dou
         in_limits &= volts >= 10.0 && volts <= 140.0;
         in_slew &= fabs(volts - prev) <= 7.5;
         if (r < 0.05) exact_flags &= f == PIHYST_COMP_NAN && volts == prev;
-        else if (r < 0.1) exact_flags &= f == PIHYST_COMP_SAT_HIGH || f == PIHYST_COMP_SLEW;
-        else if (r < 0.15) exact_flags &= f == PIHYST_COMP_SAT_LOW || f == PIHYST_COMP_SLEW;
+        else if (r < 0.1) exact_flags &= f == PIHYST_COMP_SAT_HIGH ||
+                                          f == (PIHYST_COMP_SAT_HIGH | PIHYST_COMP_SLEW);
+        else if (r < 0.15) exact_flags &= f == PIHYST_COMP_SAT_LOW ||
+                                           f == (PIHYST_COMP_SAT_LOW | PIHYST_COMP_SLEW);
         else if (f == 0) exact_flags &= fabs((double)c.y_last - (double)v) <=
                                          TOL(1e-10, 2e-4) * (hi - lo);
         prev = volts;

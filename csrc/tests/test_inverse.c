@@ -253,6 +253,16 @@ static void test_limits_and_slew(void)
     CHECK(pihyst_compensator_step(&c, NAN, &fl) == 120.0 && fl == PIHYST_COMP_NAN);
     CHECK(pihyst_compensator_step(&c, -1e300, &fl) == 10.0 && fl == PIHYST_COMP_SAT_LOW);
     CHECK(pihyst_compensator_step(&c, -INFINITY, &fl) == 10.0 && fl == PIHYST_COMP_SAT_LOW);
+    /* cut short by the slew limit: out of reach (beyond the voltage limit) is flagged too */
+    CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, 3.7, 10.0, scratch, LEN(scratch)) ==
+          PIHYST_OK);
+    CHECK(pihyst_compensator_step(&c, 1e300, &fl) < 14.0 &&
+          fl == (PIHYST_COMP_SAT_HIGH | PIHYST_COMP_SLEW));
+    CHECK(pihyst_compensator_step(&c, 31.0, &fl) < 18.0 &&
+          fl == (PIHYST_COMP_SAT_HIGH | PIHYST_COMP_SLEW));  /* 30.39 um at 120 V */
+    CHECK(pihyst_compensator_step(&c, 20.0, &fl) < 22.0 && fl == PIHYST_COMP_SLEW);
+    CHECK(pihyst_compensator_step(&c, -1.0, &fl) < 19.0 &&
+          fl == (PIHYST_COMP_SAT_LOW | PIHYST_COMP_SLEW));
     for (pass = 0; pass < 2; ++pass) {
         real prev, step = pass ? 0.1 : 3.7;
         CHECK(pihyst_compensator_init(&c, &m, 10.0, 120.0, step, 10.0, scratch, LEN(scratch)) ==
@@ -265,7 +275,7 @@ static void test_limits_and_slew(void)
             CHECK(u >= 10.0 && u <= 120.0);
             CHECK(fabs(u - prev) <= step);
             if (isnan(yd)) CHECK(u == prev && fl == PIHYST_COMP_NAN);
-            if (fl == PIHYST_COMP_SLEW) CHECK(fabs(u - prev) >= step - TOL(1e-12 * step, F32_ULPS(2, 128)));
+            if (fl & PIHYST_COMP_SLEW) CHECK(fabs(u - prev) >= step - TOL(1e-12 * step, F32_ULPS(2, 128)));
             prev = u;
         }
     }

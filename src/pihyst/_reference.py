@@ -246,7 +246,13 @@ class Compensator:
             if reached.size == 0:
                 u = hi if up else lo
                 slew = slew_hi if up else slew_lo
-                flags = FLAG_SLEW if slew else (FLAG_SATURATED_HIGH if up else FLAG_SATURATED_LOW)
+                flags = FLAG_SATURATED_HIGH if up else FLAG_SATURATED_LOW
+                if slew:
+                    # out of reach too if the voltage limit itself misses y_d
+                    limit = self.limits[1] if up else self.limits[0]
+                    y_limit = float(self._output_at(np.array([limit]), f)[0])
+                    short_by = y_d - y_limit if up else y_limit - y_d
+                    flags = FLAG_SLEW | (flags if short_by > self.tolerance else 0)
             elif reached[0] == 0:
                 u = u_p
             else:

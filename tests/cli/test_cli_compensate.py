@@ -57,7 +57,7 @@ def test_limits_and_slew_rate_in_volts_per_second(tmp_path, capsys):
     assert np.all(np.abs(np.diff(np.r_[5.0, u])) <= 20.0)  # 40 V/s x 0.5 s
     assert cols["slew_limited"].any()
     text = capsys.readouterr().out
-    assert "slew-limited:" in text and "at 120 V" in text
+    assert "slew-limited:" in text and "at or toward 120 V" in text
 
 
 def test_without_time_column_uses_sample_index(tmp_path):
@@ -107,3 +107,51 @@ def test_model_with_negative_weights_is_a_one_line_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "non-negative weights" in err and err.count("\n") == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("far", ["100", "1e308", "-5"])
+def test_strict_refuses_out_of_reach_whatever_the_slew_rate(tmp_path, capsys, far):
+    src = tmp_path / "d.csv"
+    src.write_text(f"time_s,displacement_um\n0,0\n1,{far}\n2,{far}\n3,{far}\n")
+    out = tmp_path / "out.csv"
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--slew-rate", "2",
+               "--strict") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: {src}:3:2: displacement_um = {float(far):g} is out "
+                          f"of reach: the model reaches [0, 41.38] um")
+    assert err.count("\n") == 1 and not out.exists()
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--slew-rate", "2") == 0
+    cols, _ = read_columns(out, ["saturated", "slew_limited"])
+    np.testing.assert_array_equal(cols["saturated"], [0, 1, 1, 1])
+    text = capsys.readouterr().out
+    assert "saturated: 3 of 4 samples" in text and "3 samples lie outside" in text
+
+
+def test_strict_with_a_slew_rate_accepts_what_is_in_reach(tmp_path, capsys):
+    src = tmp_path / "d.csv"
+    src.write_text("time_s,displacement_um\n0,0\n1,30\n2,30\n3,30\n")
+    out = tmp_path / "out.csv"
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--slew-rate", "2",
+               "--strict") == 0
+    cols, _ = read_columns(out, ["saturated", "slew_limited"])
+    np.testing.assert_array_equal(cols["saturated"], [0, 0, 0, 0])
+    np.testing.assert_array_equal(cols["slew_limited"], [0, 1, 1, 1])
+
+
+def test_initial_state_top_starts_at_rest_at_the_top(tmp_path):
+    src = tmp_path / "mid.csv"
+    src.write_text("time_s,displacement_um\n0,20\n1,21\n")
+    first = {}
+    for mode in ("bottom", "top"):
+        out = tmp_path / f"{mode}.csv"
+        assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state",
+                   mode) == 0
+        first[mode] = read_columns(out, ["voltage_V"])[0]["voltage_V"][0]
+    assert first["top"] < first["bottom"] - 20      # 20 um on the falling branch
+    out = tmp_path / "slew.csv"
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state", "top",
+               "--slew-rate", "5") == 0
+    np.testing.assert_array_equal(read_columns(out, ["voltage_V"])[0]["voltage_V"], [145, 140])
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state", "top",
+               "--slew-rate", "5", "--u-max", "120") == 0
+    np.testing.assert_array_equal(read_columns(out, ["voltage_V"])[0]["voltage_V"], [115, 110])

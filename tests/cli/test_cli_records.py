@@ -84,6 +84,24 @@ def test_validate_a_model_on_its_own_prediction_and_a_shifted_record(tmp_path, c
     assert figure.read_text().lstrip().startswith("<?xml")
 
 
+def test_validate_settle_on_triangles_judges_from_the_top_of_the_first_sweep(tmp_path, capsys):
+    u = np.r_[np.tile(np.r_[np.linspace(0, 150, 51), np.linspace(150, 0, 51)[1:-1]], 3), 0.0]
+    src = tmp_path / "tri.csv"
+    model = pihyst.load_model(MULTISLOPE)
+    pihyst.io.write_columns(src, {"voltage_V": u, "displacement_um": model.predict(u) + 0.1})
+    assert run("validate", MULTISLOPE, src, "--initial-state", "settle", "--json") == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["first_judged_sample"] == 50 and len(result["cycles"]) == 3
+    assert result["errors"]["samples"] == u.size - 50
+    assert result["errors"]["max_abs_um"] == pytest.approx(0.1)
+    ramp = tmp_path / "ramp.csv"
+    pihyst.io.write_columns(ramp, {"voltage_V": np.linspace(0, 150, 11),
+                                   "displacement_um": np.zeros(11)})
+    assert run("validate", MULTISLOPE, ramp, "--initial-state", "settle") == 2
+    err = capsys.readouterr().err
+    assert "no samples left after the first sweep" in err and err.count("\n") == 1
+
+
 # ------------------------------------------------------------------ compensate
 def test_compensate_prints_reach_and_strict_refuses(tmp_path, capsys):
     src = tmp_path / "d.csv"

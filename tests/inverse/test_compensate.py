@@ -143,10 +143,15 @@ def test_limits_and_slew_hold_for_any_input(desired, lo, width, slew, start, mod
     nan = np.isnan(y_d)
     np.testing.assert_array_equal(result.nan_held, nan)
     np.testing.assert_array_equal(u[nan], previous[nan])
-    assert np.all(u[result.saturated_high] == hi) and np.all(u[result.saturated_low] == lo)
-    assert np.all(y_d[result.saturated_high] > result.displacement[result.saturated_high])
-    assert np.all(y_d[result.saturated_low] < result.displacement[result.saturated_low])
     slewed = result.slew_limited
+    # out of reach: at the limit, or moving toward it when the slew limit cut it short
+    high, low = result.saturated_high, result.saturated_low
+    assert np.all(u[high & ~slewed] == hi) and np.all(u[low & ~slewed] == lo)
+    assert np.all(u[high & slewed] > previous[high & slewed])
+    assert np.all(u[low & slewed] < previous[low & slewed])
+    assert not (high & low).any()
+    assert np.all(y_d[high] > result.displacement[high])
+    assert np.all(y_d[low] < result.displacement[low])
     if slew is None:
         assert not slewed.any()
     else:  # moved by the full slew limit, to the rounding of the voltages
@@ -154,7 +159,7 @@ def test_limits_and_slew_hold_for_any_input(desired, lo, width, slew, start, mod
         assert np.all(np.abs(u - previous)[slewed] >= (slew - 4 * ulp)[slewed])
     reached = result.reached
     np.testing.assert_allclose(result.displacement[reached], y_d[reached], rtol=0, atol=1e-9)
-    assert result.n_saturated + result.n_slew_limited + result.n_nan == np.count_nonzero(
+    assert np.count_nonzero(result.saturated | slewed | result.nan_held) == np.count_nonzero(
         result.flags)
 
 
@@ -305,3 +310,51 @@ def test_empty_and_zero_weight_models():
     result = compensate(flat, [2.0, 3.0, 1.0])
     np.testing.assert_array_equal(result.voltage, [0.0, 150.0, 0.0])
     np.testing.assert_array_equal(result.flags, [0, FLAG_SATURATED_HIGH, FLAG_SATURATED_LOW])
+
+
+@pytest.mark.parametrize("model", [PAPER_CLASSICAL, PAPER_MULTISLOPE,
+                                   pihyst.BoucWenModel(beta=0.5, gamma=0.2, hysteretic=10.0,
+                                                       linear=30.0)], ids=lambda m: m.family)
+def test_out_of_reach_is_flagged_when_the_slew_limit_cuts_the_sample_short(model):
+    lo_y, hi_y = (float(v) for v in model.simulate([0.0, 150.0]).output)  # from the start
+    desired = [lo_y, hi_y + 5, 1e308, np.inf, (lo_y + hi_y) / 2, lo_y - 5, -1e308]
+    result = compensate(model, desired, slew_rate=2.0)
+    assert np.all(np.abs(np.diff(np.r_[0.0, result.voltage])) <= 2.0)
+    np.testing.assert_array_equal(result.slew_limited, [0, 1, 1, 1, 1, 1, 1])
+    np.testing.assert_array_equal(result.saturated_high, [0, 1, 1, 1, 0, 0, 0])
+    np.testing.assert_array_equal(result.saturated_low, [0, 0, 0, 0, 0, 1, 1])
+    assert result.n_saturated == 5 and result.flags[1] == FLAG_SATURATED_HIGH | FLAG_SLEW
+    comp = Compensator(model, slew_rate=2.0) if model.family != "bouc-wen" else \
+        pihyst.BoucWenCompensator(model, slew_rate=2.0)
+    assert comp.step(hi_y + 5) == 2.0 and comp.last_flags == FLAG_SATURATED_HIGH | FLAG_SLEW
+    assert comp.step(lo_y - 1) == 0.0 and comp.last_flags == FLAG_SATURATED_LOW
+
+
+
+@pytest.mark.parametrize("model", [PAPER_CLASSICAL, PAPER_MULTISLOPE,
+                                   pihyst.BoucWenModel(beta=0.5, gamma=0.2, hysteretic=10.0,
+                                                       linear=30.0)], ids=lambda m: m.family)
+def test_a_state_at_rest_at_the_top_starts_there(model):
+    top = model.simulate([0.0, 150.0, 0.0, 150.0]).final_state
+    comp = pihyst.inverse.compensator_for(model, initial_state=top, slew_rate=5.0)
+    assert comp.voltage == 150.0
+    np.testing.assert_array_equal(comp.state, top)
+    y_top = float(model.simulate([150.0], initial_state=top).output[0])
+    assert comp.displacement == pytest.approx(y_top, abs=1e-12)
+    mid = float(model.simulate([75.0], initial_state=top).output[-1])
+    result = compensate(model, [mid] * 40, initial_state=top, slew_rate=5.0)
+    assert result.initial_voltage == 150.0 and result.voltage[0] == 145.0
+    assert result.voltage[-1] == pytest.approx(75.0, abs=1e-9)    # the falling branch
+    free = compensate(model, [mid], initial_state=top, initial_voltage=0.0)
+    assert free.initial_voltage == 0.0                             # as asked: applied
+
+
+def test_the_rest_voltage_of_a_state_is_nearest_the_default_and_inside_the_limits():
+    from pihyst.inverse._compensator import rest_voltage
+    m = pihyst.ClassicalPI([10.0, 30.0], [0.5, 0.5], input_range=(0.0, 150.0))
+    top = m.simulate([0.0, 150.0]).final_state                     # [140, 120]: rests on [130, 150]
+    assert rest_voltage(m, top, 0.0, 0.0, 150.0) == 130.0
+    assert rest_voltage(m, top, 0.0, 0.0, 100.0) == 0.0            # not at rest within the limits
+    assert rest_voltage(m, np.zeros(2), 0.0, 0.0, 150.0) == 0.0
+    assert rest_voltage(m, np.array([140.0, 0.0]), 0.0, 0.0, 150.0) == 0.0   # rests nowhere
+    assert Compensator(m, initial_state=top, u_max=140.0).voltage == 130.0

@@ -1,6 +1,7 @@
 """Model JSON: load_model from path or dict, save, round trip, errors."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -82,3 +83,55 @@ def test_model_file_with_byte_order_mark(tmp_path):
     p.write_bytes(b"\xef\xbb\xbf" + json.dumps({"family": "classical", "thresholds": [0],
                                                    "weights": [1]}).encode())
     assert pihyst.load_model(p).n_operators == 1
+
+
+# ------------------------------------------------------------------ metadata in JSON
+def _plain(value):
+    """Whether ``value`` is made of JSON's own Python types only."""
+    if isinstance(value, dict):
+        return all(type(k) is str and _plain(v) for k, v in value.items())
+    if isinstance(value, list):
+        return all(_plain(v) for v in value)
+    return value is None or type(value) in (str, int, float, bool)
+
+
+@pytest.mark.filterwarnings("ignore::pihyst.PihystWarning")   # a record of 11 levels
+@pytest.mark.parametrize("family", ["classical", "multislope", "multislope-identified",
+                                    "modified-pi", "kp", "bouc-wen"])
+def test_a_model_fitted_with_settle_saves_and_loads(tmp_path, family):
+    # a staircase up and down that never turns up again: its first sweep ends at the
+    # first sample of the top step
+    u = np.repeat([0.0, 30, 60, 90, 120, 150, 120, 90, 60, 30, 0], 10)
+    y = pihyst.load_model("examples/paper_table1_classical.json").predict(u)
+    model = pihyst.fit(u, y, family=family, initial_state="settle").model
+    assert _plain(dict(model.metadata)), model.metadata
+    path = tmp_path / "m.json"
+    pihyst.save_model(model, path)
+    loaded = pihyst.load_model(path)
+    assert loaded == model and loaded.metadata == model.to_dict()["metadata"]
+    assert loaded.metadata["fit"]["settled"]["sample"] > 0
+
+
+def test_numpy_values_in_metadata_are_saved_as_json_numbers_and_lists(tmp_path):
+    metadata = {"n": np.int64(3), "x": np.float32(0.5), "ok": np.bool_(True),
+                "v": np.arange(3), "t": (np.float64(1.0), 2), np.int16(7): "seven",
+                "nested": {"m": np.eye(2), "nan": np.float64("nan"), "inf": float("inf")}}
+    for model in (pihyst.load_model("examples/paper_table1_multislope.json"),
+                  pihyst.BoucWenModel(beta=0.5, gamma=0.2, hysteretic=10.0, linear=30.0)):
+        path = tmp_path / f"{model.family}.json"
+        model.replace(metadata=metadata).save(path)
+        assert pihyst.load_model(path).metadata == {
+            "n": 3, "x": 0.5, "ok": True, "v": [0, 1, 2], "t": [1.0, 2], "7": "seven",
+            "nested": {"m": [[1.0, 0.0], [0.0, 1.0]], "nan": None, "inf": None}}
+
+
+@pytest.mark.parametrize("metadata, where", [
+    ({"fit": {"s": {1, 2}}}, "metadata['fit']['s']: a set cannot be written as JSON"),
+    ({"z": [1, 2j]}, "metadata['z'][1]: a complex cannot be written as JSON"),
+    ({(1, 2): 0}, "metadata: key (1, 2) is not a JSON key")])
+def test_metadata_json_cannot_hold_is_an_invalid_model_error(tmp_path, metadata, where):
+    model = pihyst.load_model("examples/paper_table1_classical.json").replace(metadata=metadata)
+    path = tmp_path / "m.json"
+    with pytest.raises(pihyst.InvalidModelError, match=re.escape(where)):
+        pihyst.save_model(model, path)
+    assert not path.exists()

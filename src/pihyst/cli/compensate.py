@@ -34,7 +34,8 @@ def register(sub):
                     "those voltages, with a 'saturated' column (1 where the desired value was "
                     "out of reach within the limits; with --slew-rate also 'slew_limited'). "
                     "Prints the displacement range the model can reach. The voltage starts "
-                    "at 0 V (or the nearer limit) with the model's initial state.",
+                    "at 0 V (or the nearer limit) with the model's initial state; with "
+                    "--initial-state bottom / top at that end of the input range.",
         epilog="example: pihyst compensate examples/paper_table1_multislope.json "
                "desired.csv -o voltages.csv --slew-rate 10")
     p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
@@ -153,7 +154,8 @@ def run(args):
         state = initial_state(model, args.initial_state)
         try:
             compensator = compensator_for(model, u_min=args.u_min, u_max=args.u_max,
-                                          slew_rate=max_step, initial_state=state)
+                                          slew_rate=max_step, initial_state=state,
+                                          initial_voltage=_rest_voltage(args, model))
         except ValueError as err:
             raise UsageError(f"{args.model}: {err}") from None
         lo, hi = compensator.limits
@@ -207,8 +209,10 @@ def run(args):
     print(f"wrote {n} samples to {args.output} (voltage {stats.u_lo:.4g} .. {stats.u_hi:.4g} V)")
     print(f"reachable displacement: [{y_lo:.4g}, {y_hi:.4g}] {unit} with the voltage in "
           f"[{lo:g}, {hi:g}] V")
-    print(f"saturated: {stats.saturated} of {n} samples ({stats.low} at {lo:g} V, "
-          f"{stats.high} at {hi:g} V)"
+    # with a slew limit an out-of-reach sample may still be on its way to the limit
+    at = "at" if max_step is None else "at or toward"
+    print(f"saturated: {stats.saturated} of {n} samples ({stats.low} {at} {lo:g} V, "
+          f"{stats.high} {at} {hi:g} V)"
           + ("" if max_step is None else f"; slew-limited: {stats.slew}"))
     if stats.saturated:
         print(f"the desired displacement spans [{stats.d_lo:.4g}, {stats.d_hi:.4g}] {unit}: "
@@ -217,6 +221,19 @@ def run(args):
               + " (--strict makes this an error)")
     if stats.err_max is not None:
         print(f"reached samples: largest |predicted - desired| {stats.err_max:.3g} {unit}")
+
+
+def _rest_voltage(args, model):
+    """The voltage before the first sample for --initial-state bottom / top: the end of the
+    input range the actuator rests at (within --u-min / --u-max); None (the compensator's
+    default) for the other modes."""
+    ends = {"bottom": 0, "top": 1}
+    if args.initial_state not in ends:
+        return None
+    lo, hi = model.input_range
+    lo = lo if args.u_min is None else args.u_min
+    hi = hi if args.u_max is None else args.u_max
+    return min(max(model.input_range[ends[args.initial_state]], lo), hi)
 
 
 def _write(writer, t, result, max_step):

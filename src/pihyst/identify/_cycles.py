@@ -174,7 +174,7 @@ def layout(v, span, *, settle, holdout):
         valleys = [i for i, kind in points if kind < 0 and i >= swept]
         # settle up to the first valley after both ends were reached, or just past the
         # second end if the record never turns up again
-        settle_end = (valleys[0] if valleys else swept) + 1
+        settle_end = int(valleys[0] if valleys else swept) + 1
         if n - settle_end < MIN_SAMPLES:
             raise FitError(f"the record does not start at rest, and after its first full "
                            f"sweep of the input range, which settles the operator states, "

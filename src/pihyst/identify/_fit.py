@@ -311,7 +311,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         # pending_input=pending_input) with a delay)
         end = rec.layout.settle_end
         fit_summary["settled"] = {
-            "sample": end, "state": model.simulate(rec.u[:end]).final_state.tolist()}
+            "sample": int(end), "state": model.simulate(rec.u[:end]).final_state.tolist()}
     # the models carry the delay they were fitted with (u[k] -> y[k + d]), and the
     # sample period it holds at when the sample times are known
     lag = _carried_delay(delay_info["samples"], t, rec.u.size + delay_info["samples"])

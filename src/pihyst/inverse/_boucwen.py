@@ -60,7 +60,9 @@ NEWTON_FIRST = 8      # Newton steps from u_p before the reachable end must be e
 class BoucWenCompensatorTwin:
     """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
     limits and a slew limit; the same interface as :class:`pihyst.Compensator`. In
-    Python: the twin of the C core's :class:`BoucWenCompensator`.
+    Python: the twin of the C core's :class:`BoucWenCompensator`. Given an
+    ``initial_state`` (u, z) without an ``initial_voltage``, it starts at that state's u
+    (within the limits).
 
     Examples
     --------
@@ -104,7 +106,8 @@ class BoucWenCompensatorTwin:
         self.slew_rate = slew_rate
         u0, z0 = model._state(initial_state)
         if initial_voltage is None:
-            initial_voltage = min(max(0.0, u_min), u_max)
+            # a state given is at rest at its own voltage: 0 V applied would move it
+            initial_voltage = min(max(0.0 if initial_state is None else u0, u_min), u_max)
         initial_voltage = _number(initial_voltage, "initial_voltage")
         if not u_min <= initial_voltage <= u_max:
             raise InvalidArgumentError(f"initial_voltage {initial_voltage:g} is outside the "
@@ -278,9 +281,16 @@ class BoucWenCompensatorTwin:
                 y_end, z_end = self._y(end)
                 if (y_end - yd) * s <= 0:      # out of reach (or just reached) at the end
                     limit = self.limits[1] if s > 0 else self.limits[0]
-                    flags = 0 if y_end == yd else (
-                        (FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW)
-                        if end == limit else FLAG_SLEW)
+                    saturated = FLAG_SATURATED_HIGH if s > 0 else FLAG_SATURATED_LOW
+                    if y_end == yd:
+                        flags = 0
+                    elif end == limit:
+                        flags = saturated
+                    else:
+                        # cut short by the slew limit; out of reach too if the voltage
+                        # limit itself misses yd (out of reach does not depend on the slew)
+                        flags = FLAG_SLEW | (saturated if (self._y(limit)[0] - yd) * s < 0
+                                             else 0)
                     return end, z_end, flags
                 b, z_b = end, z_end
             if b is not None and not min(a, b) < u < max(a, b):

@@ -48,6 +48,9 @@ __all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLA
 OTHER_COMPENSATORS = {}
 
 #: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
+#: Out of reach means beyond what the model gives at the voltage limit, whatever the slew
+#: limit: a sample cut short by the slew limit on its way to an out-of-reach value has
+#: both bits, FLAG_SATURATED_* | FLAG_SLEW.
 FLAG_SATURATED_LOW = _core.FLAG_SATURATED_LOW    # out of reach below: voltage at u_min
 FLAG_SATURATED_HIGH = _core.FLAG_SATURATED_HIGH  # out of reach above: voltage at u_max
 FLAG_NAN = _core.FLAG_NAN                        # desired value NaN: last voltage held
@@ -71,7 +74,9 @@ class CompensationResult:
         Per-sample bits ``FLAG_SATURATED_LOW | FLAG_SATURATED_HIGH | FLAG_NAN |
         FLAG_SLEW``; 0 where the desired value was reached.
     saturated, saturated_low, saturated_high, slew_limited, nan_held : ndarray of bool
-        The flags per sample; ``saturated`` is low or high.
+        The flags per sample; ``saturated`` is low or high: the desired value is out of
+        reach within the voltage limits (the voltage at the limit, or on its way there
+        when ``slew_limited`` too).
     initial_state, initial_voltage : ndarray, float
         Where the run started (the state has the initial voltage applied).
     final_state, final_voltage : ndarray, float
@@ -102,7 +107,7 @@ class CompensationResult:
 
     @property
     def n_saturated(self):
-        """Samples out of reach (voltage at a limit)."""
+        """Samples out of reach within the voltage limits (whatever the slew limit)."""
         return int(np.count_nonzero(self.saturated))
 
     @property
@@ -135,11 +140,13 @@ class Compensator:
         none.
     initial_voltage : float, optional
         The voltage before the first sample (default 0 V, or the nearer limit if 0 V
-        is outside the limits).
+        is outside the limits; with ``initial_state`` given, the voltage within the limits
+        nearest that at which the state is at rest, e.g. the top of the range for a state
+        at rest there, if there is one).
     initial_state : array_like, optional
         Operator state before the first sample (default: the model's initial state).
-        The initial voltage is applied to it (a no-op for a state the model reached
-        with that voltage).
+        The initial voltage is applied to it (a no-op for a state at rest at that
+        voltage).
     creep_state : array_like, optional
         For a model with creep: the lag states before the first sample (default:
         settled at the model's output at the initial voltage).
@@ -194,14 +201,18 @@ class Compensator:
                 raise InvalidArgumentError(f"slew_rate must be > 0 volts per sample, got "
                                            f"{slew_rate:g}")
         self.slew_rate = slew_rate
+        state = (model.initial_state if initial_state is None else
+                 _finite_vector(initial_state, "initial_state", model.n_operators))
         if initial_voltage is None:
             initial_voltage = min(max(0.0, u_min), u_max)
+            if initial_state is not None:
+                # 0 V applied to a state at rest elsewhere (at the top of the range) would
+                # wipe it out, and the slew limit would start from the wrong voltage
+                initial_voltage = rest_voltage(model, state, initial_voltage, u_min, u_max)
         initial_voltage = _number(initial_voltage, "initial_voltage")
         if not u_min <= initial_voltage <= u_max:
             raise InvalidArgumentError(f"initial_voltage {initial_voltage:g} is outside the "
                                        f"voltage limits [{u_min:g}, {u_max:g}]")
-        state = (model.initial_state if initial_state is None else
-                 _finite_vector(initial_state, "initial_state", model.n_operators))
         self._start = (np.array(state), initial_voltage, creep_state)
         self._core = _core.Compensator(model._new_bank(state), u_min, u_max,
                                        np.inf if slew_rate is None else slew_rate,
@@ -312,6 +323,33 @@ class Compensator:
         slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
         return (f"Compensator({type(self.model).__name__}, limits=[{self.limits[0]:g}, "
                 f"{self.limits[1]:g}]{slew}, voltage={self.voltage:g})")
+
+
+def rest_voltage(model, state, preferred, lo, hi):
+    """The voltage in [lo, hi] nearest ``preferred`` at which operator ``state`` is at rest
+    (applying it leaves every operator as it is); ``preferred`` if there is none there.
+
+    Applying u lowers some operator exactly when u is below the voltages the state rests
+    at, and raises one exactly when u is above them: each side is found by bisection."""
+    bank = model._new_bank(state)
+
+    def moves(u, sign):
+        bank.state = state
+        bank.step(u)
+        return bool(np.any(sign * (bank.state - state) > 0))
+
+    falls, rises = moves(preferred, -1), moves(preferred, 1)
+    if falls == rises:          # at rest there, or at rest nowhere
+        return preferred
+    sign, a, b = (-1, preferred, hi) if falls else (1, preferred, lo)
+    if moves(b, sign):
+        return preferred
+    for _ in range(2100):       # a moves, b does not; halve until they are adjacent floats
+        m = a + (b - a) / 2
+        if m == a or m == b:
+            break
+        a, b = (m, b) if moves(m, sign) else (a, m)
+    return b if not moves(b, -sign) else preferred
 
 
 def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,

@@ -15,7 +15,8 @@ Schema (docs/interfaces.md; only ``family``, ``weights`` and, except for ``pwl``
       "initial_state": [f_0, ...],                 # operator outputs before the first
                                                    # sample (default: zeros)
       "units": {"input": "V", "output": "um"},
-      "metadata": {...}                            # free-form, kept as is (fit reports...)
+      "metadata": {...}                            # free-form (fit reports...); NumPy values
+                                                   # written as numbers and lists
     }
 
 Each model class reads and writes its own keys (``to_dict``/``from_dict``); this module

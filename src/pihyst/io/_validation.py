@@ -5,6 +5,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
+
 SCHMITT_BAND = 0.1
 
 
@@ -69,7 +71,9 @@ def cycle_starts(u, band=SCHMITT_BAND):
         return np.array([0])
     held = level[idx]
     ups = idx[1:][(held[1:] == 1) & (held[:-1] == -1)]
-    if held[0] == 1:   # the record starts high: its first rise is cut too
+    if held[0] == 1 and idx[0] > 0:
+        # the record starts inside the band and rises: the valley before that rise
+        # starts a cycle too (a record that starts high has no valley before its fall)
         ups = np.r_[idx[0], ups]
     starts, previous = [0], 0
     for up in ups:
@@ -86,6 +90,9 @@ def validate_model(model, voltage, displacement, *, initial_state=None, first=0,
     with ``displacement`` from sample ``first`` on."""
     u = np.asarray(voltage, dtype=float)
     y = np.asarray(displacement, dtype=float)
+    if not 0 <= first < u.size:
+        raise InvalidArgumentError(f"first = {first}: no sample of the {u.size} to judge "
+                                   f"from there")
     predicted = model.predict(u, initial_state=initial_state, **({} if t is None else {"t": t}))
     e = y - predicted
     judged = slice(first, None)

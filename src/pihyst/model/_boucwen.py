@@ -64,6 +64,7 @@ from pihyst.model._models import (
     checked_units,
     delay_dict,
     delay_from_dict,
+    metadata_json,
     simulated,
 )
 
@@ -470,7 +471,7 @@ class BoucWenModel(Immutable):
             d["creep"] = self.creep.to_dict()
         d.update(delay_dict(self))
         if self.metadata:
-            d["metadata"] = dict(self.metadata)
+            d["metadata"] = metadata_json(self.metadata)
         return d
 
     @classmethod

@@ -161,6 +161,37 @@ def checked_metadata(metadata):
     return MappingProxyType(dict(metadata or {}))
 
 
+def metadata_json(value, where="metadata"):
+    """``value`` (a model's metadata) in plain JSON types: NumPy scalars and arrays become
+    numbers and lists, tuples lists, and a number that is not finite ``None`` (JSON has no
+    NaN, and a model file with one could not be loaded); InvalidModelError for anything
+    JSON cannot hold, naming where it is."""
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    elif isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, (str, bool)):
+        return value
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        value = float(value)
+        return value if np.isfinite(value) else None
+    if isinstance(value, (dict, MappingProxyType)):
+        plain = {}
+        for key, item in value.items():
+            if isinstance(key, np.generic):
+                key = key.item()
+            if not (key is None or isinstance(key, (str, int, float, bool))):
+                raise InvalidModelError(f"{where}: key {key!r:.40} is not a JSON key (a "
+                                        f"string or a number)")
+            plain[key] = metadata_json(item, f"{where}[{key!r}]")
+        return plain
+    if isinstance(value, (list, tuple)):
+        return [metadata_json(item, f"{where}[{i}]") for i, item in enumerate(value)]
+    raise InvalidModelError(f"{where}: a {type(value).__name__} cannot be written as JSON")
+
+
 def _finite_number(value, name):
     """``value`` as a float; InvalidModelError unless it is a finite real number (a
     string or a boolean is not a number)."""
@@ -443,7 +474,7 @@ class PIModel(Immutable, ABC):
             d["creep"] = self.creep.to_dict()
         d.update(delay_dict(self))
         if self.metadata:
-            d["metadata"] = dict(self.metadata)
+            d["metadata"] = metadata_json(self.metadata)
         return d
 
     def _own_dict(self):
