@@ -300,42 +300,35 @@ def test_a_reader_module_that_fails_to_load_is_a_one_line_user_error(tmp_path, c
     assert "cannot load it (RuntimeError: at import)" in err and err.count("\n") == 1
 
 
-@pytest.mark.parametrize("argv", [
-    ["predict", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--skip-until", "3"],
-    ["validate", MULTISLOPE, "{src}", "--skip-until", "3", "--lag", "1"],
-    ["validate", MULTISLOPE, "{src}", "--skip-until", "3"],
+VOLTS_160 = ("time_s,voltage_V,displacement_um\n"
+             + "".join(f"{k},{v},0\n" for k, v in enumerate([0, 10, 20, 30, 40, 160, 60])))
+OUT_OF_REACH = ("time_s,displacement_um\n"
+                + "".join(f"{k / 10},{d}\n" for k, d in enumerate([0, 1, 2, 3, 4, 5, 99, 6])))
+TIME_BACK = ("time_s,displacement_um\n"
+             + "".join(f"{t},{k}\n" for k, t in enumerate([0, 1, 2, 3, 4, 3.5, 6])))
+
+
+@pytest.mark.parametrize("text, argv, where", [
+    (VOLTS_160, ["predict", "-o", "{tmp}/o.csv", "--skip-until", "3"],
+     "7:2: voltage_V = 160 is outside"),
+    (VOLTS_160, ["validate", "--skip-until", "3", "--lag", "1"],
+     "7:2: voltage_V = 160 is outside"),
+    (VOLTS_160, ["validate", "--skip-until", "3"], "7:2: voltage_V = 160 is outside"),
+    (OUT_OF_REACH, ["compensate", "-o", "{tmp}/o.csv", "--strict", "--skip-until", "0.5"],
+     "8:2: displacement_um = 99 is out of reach"),
+    (TIME_BACK, ["compensate", "-o", "{tmp}/o.csv", "--slew-rate", "100", "--skip-until", "2"],
+     "7:1: time_s = 3.5 "),
+    (TIME_BACK, ["track", "-o", "{tmp}/o.csv", "--skip-until", "2"], "7:1: time_s = 3.5 "),
 ])
-def test_errors_after_skip_until_name_the_files_line(tmp_path, capsys, argv):
+def test_errors_after_skip_until_name_the_files_line(tmp_path, capsys, text, argv, where):
+    """The reader counts the skipped lines as it goes: an error found while streaming the
+    samples kept after --skip-until names the file's own line."""
     src = tmp_path / "in.csv"
-    src.write_text("time_s,voltage_V,displacement_um\n"
-                   + "".join(f"{k},{v},0\n" for k, v in enumerate([0, 10, 20, 30, 40, 160, 60])))
-    assert run(*[a.format(src=src, tmp=tmp_path) for a in argv]) == 2
+    src.write_text(text)
+    command, *options = argv
+    assert run(command, MULTISLOPE, src, *[a.format(tmp=tmp_path) for a in options]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"pihyst: error: {src}:7:2: voltage_V = 160 is outside"), err
-
-
-def test_compensate_strict_after_skip_until_names_the_files_line(tmp_path, capsys):
-    src = tmp_path / "desired.csv"
-    src.write_text("time_s,displacement_um\n"
-                   + "".join(f"{k / 10},{d}\n" for k, d in enumerate([0, 1, 2, 3, 4, 5, 99, 6])))
-    assert run("compensate", MULTISLOPE, src, "-o", tmp_path / "o.csv", "--strict",
-               "--skip-until", "0.5") == 2
-    err = capsys.readouterr().err
-    assert err.startswith(f"pihyst: error: {src}:8:2: displacement_um = 99 is out of reach"), err
-
-
-@pytest.mark.parametrize("command", [
-    ["compensate", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv", "--slew-rate", "100"],
-    ["track", MULTISLOPE, "{src}", "-o", "{tmp}/o.csv"],
-])
-def test_time_going_back_after_skip_until_names_the_files_line(tmp_path, capsys, command):
-    src = tmp_path / "desired.csv"
-    src.write_text("time_s,displacement_um\n"
-                   + "".join(f"{t},{k}\n" for k, t in enumerate([0, 1, 2, 3, 4, 3.5, 6])))
-    argv = [a.format(src=src, tmp=tmp_path) for a in command] + ["--skip-until", "2"]
-    assert run(*argv) == 2
-    err = capsys.readouterr().err
-    assert err.startswith(f"pihyst: error: {src}:7:1: time_s = 3.5 "), err
+    assert err.startswith(f"pihyst: error: {src}:{where}"), err
 
 
 @pytest.mark.parametrize("command,options,message", [
