@@ -44,12 +44,13 @@ DRIVER = r"""
 #include <math.h>
 #include "{header}"
 /* stdin: n, n voltages, n desired outputs; stdout: n predictions, then per desired
- * output the voltage, the output with creep and the flags */
+ * output the voltage, the output with creep and the flags (the loop of the header's
+ * comment; {{kind}}: "" for a PI model, "bw_" for Bouc-Wen) */
 int main(void)
 {{
     static double u[4096], yd[4096];
-    pihyst_model m;
-    pihyst_compensator c;
+    pihyst_{kind}model m;
+    pihyst_{kind}compensator c;
     pihyst_creep cr;
     int n, t;
     if (scanf("%d", &n) != 1 || n > 4096) return 3;
@@ -57,13 +58,13 @@ int main(void)
     for (t = 0; t < n; ++t) if (scanf("%lf", &yd[t]) != 1) return 3;
     if ({name}_init(&m) != PIHYST_OK) return 4;
     if ({name}_creep_init(&cr, {NAME}_INITIAL_OUTPUT) != PIHYST_CREEP_OK) return 6;
-    for (t = 0; t < n; ++t) printf("%.17g\n", pihyst_creep_step(&cr, pihyst_model_step(&m, u[t])));
-    pihyst_model_reset(&m, {name}_initial_state);
+    for (t = 0; t < n; ++t) printf("%.17g\n", pihyst_creep_step(&cr, {step}(&m, u[t])));
+    if ({name}_init(&m) != PIHYST_OK) return 4;
     if ({name}_compensator_init(&c, &m, NAN, NAN, INFINITY, m.u_min) != PIHYST_OK) return 5;
     if ({name}_creep_init(&cr, c.y_last) != PIHYST_CREEP_OK) return 6;
     for (t = 0; t < n; ++t) {{
         pihyst_flags flags = 0;
-        double y, volts = pihyst_creep_compensator_step(&cr, &c, -1.0, yd[t], &y, &flags);
+        double y, volts = pihyst_{kind}creep_compensator_step(&cr, &c, -1.0, yd[t], &y, &flags);
         printf("%.17g %.17g %d\n", volts, y, (int)flags);
     }}
     return 0;
@@ -93,7 +94,8 @@ def test_header_loop_reproduces_predict_and_compensate_with_creep(tmp_path, fami
     model = MODELS[family]
     name = f"exported_{family}"
     exe = compile_driver(tmp_path, "exported.h", c_header(model, name),
-                         DRIVER.format(header="exported.h", name=name, NAME=name.upper()),
+                         DRIVER.format(header="exported.h", name=name, NAME=name.upper(), kind="",
+                                       step="pihyst_model_step"),
                          core_objects)
     u, yd = export_signals(model)
     y_c, volts, y_comp, flags = _run(exe, u, yd)
@@ -138,42 +140,14 @@ def test_single_precision_header_of_a_creep_model_is_refused_in_one_line():
 
 
 # ---------------------------------------------------------------- a Bouc-Wen model
-BW_DRIVER = r"""
-#include <stdio.h>
-#include <math.h>
-#include "{header}"
-/* as DRIVER, with the Bouc-Wen loop the header's comment gives */
-int main(void)
-{{
-    static double u[4096], yd[4096];
-    pihyst_bw_model m;
-    pihyst_bw_compensator c;
-    pihyst_creep cr;
-    int n, t;
-    if (scanf("%d", &n) != 1 || n > 4096) return 3;
-    for (t = 0; t < n; ++t) if (scanf("%lf", &u[t]) != 1) return 3;
-    for (t = 0; t < n; ++t) if (scanf("%lf", &yd[t]) != 1) return 3;
-    if ({name}_init(&m) != PIHYST_OK) return 4;
-    if ({name}_creep_init(&cr, {NAME}_INITIAL_OUTPUT) != PIHYST_CREEP_OK) return 6;
-    for (t = 0; t < n; ++t) printf("%.17g\n", pihyst_creep_step(&cr, pihyst_bw_step(&m, u[t])));
-    if ({name}_init(&m) != PIHYST_OK) return 4;
-    if ({name}_compensator_init(&c, &m, NAN, NAN, INFINITY, m.u_min) != PIHYST_OK) return 5;
-    if ({name}_creep_init(&cr, c.y_last) != PIHYST_CREEP_OK) return 6;
-    for (t = 0; t < n; ++t) {{
-        pihyst_flags flags = 0;
-        double y, volts = pihyst_bw_creep_compensator_step(&cr, &c, -1.0, yd[t], &y, &flags);
-        printf("%.17g %.17g %d\n", volts, y, (int)flags);
-    }}
-    return 0;
-}}
-"""
 
 
 def test_bouc_wen_header_with_creep_reproduces_predict_and_compensate(tmp_path,
                                                                      core_objects):
     model = BW_CREEP
     exe = compile_driver(tmp_path, "exported.h", c_header(model, "bw_x"),
-                         BW_DRIVER.format(header="exported.h", name="bw_x", NAME="BW_X"),
+                         DRIVER.format(header="exported.h", name="bw_x", NAME="BW_X", kind="bw_",
+                                       step="pihyst_bw_step"),
                          core_objects)
     u, yd = export_signals(model)
     y_c, volts, y_comp, flags = _run(exe, u, yd)
