@@ -71,6 +71,17 @@ def searched_shape(p, n=None):
     return beta, gamma, nn
 
 
+def first_reversal(v):
+    """Index of the first sample after the input's first change of direction (v.size if
+    it never turns): the end of the first sweep."""
+    d = np.diff(v)
+    moving = np.flatnonzero(d != 0)
+    if moving.size == 0:
+        return v.size
+    turns = np.flatnonzero(np.sign(d[moving]) != np.sign(d[moving[0]]))
+    return int(moving[turns[0]]) + 1 if turns.size else v.size
+
+
 # the family in fit()'s comparison runs on at most this many samples plus every input
 # extremum: z at a kept sample depends only on the extrema before it (rate-independent),
 # so the kept samples' errors are exact; each sample costs a few microseconds in Python
@@ -103,18 +114,60 @@ def boucwen_columns(x, z, d, negative):
     return np.stack([base0, base1, hyst], axis=-1)
 
 
-def _solve_linear(x, z, y, d):
-    """(offset, c_1, c_2, a) of the best monotone fit to y for a fixed z."""
+def _solve_linear(x, z, y, d, s=None):
+    """((offset, c_1, c_2, a), b) of the best monotone fit y = offset + c_1 x + c_2 x^2
+    + a z + b s for a fixed z; ``s`` (optional, else b = 0) is a free column: the
+    sensitivity of z to its unknown starting value (:func:`start_sensitivity`).
+
+    The free columns (the constant, and s) are eliminated exactly: X and y are replaced
+    by their residuals after least squares on [1, s], the bounded problem is solved on
+    those, and (offset, b) are the least squares of what remains."""
+    F = np.ones((x.size, 1)) if s is None else np.column_stack([np.ones(x.size), s])
+    pinv = np.linalg.pinv(F)
+
+    def free_part(A):
+        return A - F @ (pinv @ A)
+
     best = None
     for negative in (False, True):
         X = boucwen_columns(x, z, d, negative)
-        Xc, yc = X - X.mean(axis=0), y - y.mean()
+        Xc, yc = free_part(X), free_part(y)
         v = _small_nnls(Xc.T @ Xc, Xc.T @ yc)
         rss = float(np.sum((yc - Xc @ v) ** 2))
         if best is None or rss < best[0]:
-            off = float(y.mean() - X.mean(axis=0) @ v)
-            best = (rss, (off, *boucwen_coefficients(v, d, negative)))
-    return best[1]
+            f = pinv @ (y - X @ v)
+            best = (rss, (float(f[0]), *boucwen_coefficients(v, d, negative)),
+                    0.0 if s is None else float(f[1]))
+    return best[1], best[2]
+
+
+def start_sensitivity(x, x0, z0, z, beta, gamma, n):
+    """s[t] = dz[t] / dz0: how z along the input x follows a change of its starting value
+    z0. A record assumed to start at rest after a full cycle rarely does exactly (a
+    partial cycle before it, a supply switched on): the fit then takes z0 + b/a as the
+    start, the linear column b s(t), which fades as the input sweeps the range (measured
+    on random Bouc-Wen actuators after a partial cycle to 20-50 % of the range: 2-3 % of
+    range on ramps and staircases without it).
+
+    Between two samples the input moves one way (s = +-1) and dz/dx = g_s(z), an
+    autonomous equation, whose variational solution is exact:
+
+        dz(x_t) / dz(x_{t-1}) = g_s(z_t) / g_s(z_{t-1}),
+
+    so s[t] is the running product of these ratios along the computed z (each ratio in
+    [0, 1]: a monotone sweep only draws z towards its bound)."""
+    x = np.asarray(x, dtype=float)
+    xp = np.r_[x0, x[:-1]]
+    zp = np.r_[z0, z[:-1]]
+    step = np.sign(x - xp)
+
+    def g(zz):
+        return 1.0 - np.abs(zz) ** n * (step * beta * np.sign(zz) + gamma)
+
+    before, after = g(zp), g(z)
+    ratio = np.where(step == 0, 1.0,
+                     np.clip(after / np.where(before > 0, before, np.inf), 0.0, 1.0))
+    return np.cumprod(ratio)
 
 
 def boucwen_coefficients(v, d, negative):
@@ -201,7 +254,9 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     n : float, optional
         Fix the exponent (default: searched over 1 ... 3 and refined).
     shape : dict, optional
-        {"beta", "gamma", "n"}: skip the search and use this shape.
+        {"beta", "gamma", "n"}: skip the search and use this shape; with
+        "start_of_z_fitted": True, also fit the start of z (the report's
+        ``data["start_of_z_fitted"]`` of the fit that found the shape).
     layout_ : Layout, optional
         The settle/fit/held-back cut of the record, when the caller has made it (the
         comparison of families in :func:`pihyst.fit`).
@@ -232,103 +287,139 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
     x = v / span
 
+    rest_z = {}
+
     def start(beta, gamma, nn):
         # (x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
         # settled by the first sweep)
         if settle:
             return x[0], 0.0
-        return 0.0, cycled_z(beta, gamma, nn)
+        if (beta, gamma, nn) not in rest_z:
+            rest_z[beta, gamma, nn] = cycled_z(beta, gamma, nn)
+        return 0.0, rest_z[beta, gamma, nn]
 
-    # 1. grid: every shape on a decimated record
+    free_start = False      # the start of z a free column (see start_sensitivity)
+
+    def with_sensitivity(xs, z, beta, gamma, nn):
+        """(z, its sensitivity to z0 with free_start, else None)."""
+        if not free_start:
+            return z, None
+        return z, start_sensitivity(xs, *start(beta, gamma, nn), z, beta, gamma, nn)
+
+    def z_and_sensitivity(xs, beta, gamma, nn):
+        """z along xs from the start (the model's own arithmetic, in the C core), and
+        (with free_start) its sensitivity to z0."""
+        return with_sensitivity(xs, trajectory(xs, *start(beta, gamma, nn), beta, gamma, nn),
+                                beta, gamma, nn)
+
     keep = _keep(x, SEARCH_SAMPLES)
     where = np.zeros(x.size, dtype=bool)
     where[fit_i] = True
     kfit = np.flatnonzero(where[keep])
     ns = GRID_N if n is None else (float(n),)
-    if shape is None:
-        grid = np.array([(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in ns])
-        gb, gg, gn = grid.T
-        # one C-core trajectory per shape, each at its own substeps
-        Z = np.column_stack([trajectory(x[keep], *start(b, g, e), b, g, e)
-                             for b, g, e in grid])
-        xs, ys = x[keep][kfit], y[keep][kfit]
-        rss = np.empty(len(grid))
-        for j in range(len(grid)):
-            d = 2 * gb[j] / (gb[j] + gg[j])
-            off, c1, c2, a = _solve_linear(xs, Z[kfit, j], ys, d)
-            r = ys - (off + c1 * xs + c2 * xs * xs + a * Z[kfit, j])
-            rss[j] = r @ r
-        b0, g0, n0 = grid[int(np.argmin(rss))]
-    else:
-        b0, g0, n0 = float(shape["beta"]), float(shape["gamma"]), float(shape.get("n", 1))
-
-
-    def linear_fit(beta, gamma, nn, rows):
-        z = _z(beta, gamma, nn)
-        d = 2 * beta / (beta + gamma)
-        return z, _solve_linear(x[rows], z[rows], y[rows], d)
-
-    def _z(beta, gamma, nn):
-        x0, z0 = start(beta, gamma, nn)
-        return trajectory(x, x0, z0, beta, gamma, nn)
-
+    xk, yk = x[keep], y[keep]
     evaluations = 0
 
-    xk, yk = x[keep], y[keep]
+    def fitted_rms(beta, gamma, nn, zk, sk):
+        xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]
+        sf = None if sk is None else sk[kfit]
+        (off, c1, c2, a), b = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma), sf)
+        r = yf - (off + c1 * xf + c2 * xf * xf + a * zf + (0 if sf is None else b * sf))
+        return float(np.sqrt(np.mean(r * r)))
 
     def objective(p):
         # fitted RMS on the decimated record (reversals kept: z is that of the full one)
         nonlocal evaluations
         evaluations += 1
-        shape = searched_shape(p, n)
-        if shape is None:
+        shape_ = searched_shape(p, n)
+        if shape_ is None:
             return math.inf
-        beta, gamma, nn = shape
-        # the model's own arithmetic, in the C core
-        x0, z0 = start(beta, gamma, nn)
-        zk = trajectory(xk, x0, z0, beta, gamma, nn)
-        xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]
-        off, c1, c2, a = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma))
-        r = yf - (off + c1 * xf + c2 * xf * xf + a * zf)
-        return float(np.sqrt(np.mean(r * r)))
+        return fitted_rms(*shape_, *z_and_sensitivity(xk, *shape_))
 
-    # 2. refinement on the fitted samples
-    p0 = np.array([math.log(b0), math.atanh(np.clip(g0 / b0, -0.95, 0.95)), n0])
-    if shape is None:
-        res = minimize(objective, p0, method="Nelder-Mead",
-                       options={"xatol": 1e-4, "fatol": 1e-7 * np.ptp(y), "maxfev": 200,
-                                "initial_simplex": p0 + np.vstack(
-                                    [np.zeros(3), np.diag([0.3, 0.3, 0.25])])})
-        p_best = res.x if res.fun <= objective(p0) else p0
-    else:
+    grid = [(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in ns]
+    grid_z = []
+
+    def search():
+        """(beta, gamma, n): 1. a grid of shapes on the decimated record, 2. Nelder-Mead
+        from the best of them on the fitted samples."""
+        if shape is None:
+            if not grid_z:      # each shape's z, shared by the searches with a free start
+                grid_z.extend(trajectory(xk, *start(*g), *g) for g in grid)
+            rms = [fitted_rms(*g, *with_sensitivity(xk, zk, *g)) for g, zk in zip(grid, grid_z)]
+            b0, g0, n0 = grid[int(np.argmin(rms))]
+        else:
+            b0, g0, n0 = (float(shape["beta"]), float(shape["gamma"]),
+                          float(shape.get("n", 1)))
+        p0 = np.array([math.log(b0), math.atanh(np.clip(g0 / b0, -0.95, 0.95)), n0])
         p_best = p0
-    beta, gamma, nn = searched_shape(p_best, n) or searched_shape(p0, n)
-    z, coef = linear_fit(beta, gamma, nn, fit_i)
+        if shape is None:
+            res = minimize(objective, p0, method="Nelder-Mead",
+                           options={"xatol": 1e-4, "fatol": 1e-7 * np.ptp(y), "maxfev": 200,
+                                    "initial_simplex": p0 + np.vstack(
+                                        [np.zeros(3), np.diag([0.3, 0.3, 0.25])])})
+            p_best = res.x if res.fun <= objective(p0) else p0
+        return searched_shape(p_best, n) or searched_shape(p0, n)
+
+    def linear_fit(beta, gamma, nn, rows):
+        z, sens = z_and_sensitivity(x, beta, gamma, nn)
+        d = 2 * beta / (beta + gamma)
+        return z, sens, _solve_linear(x[rows], z[rows], y[rows], d,
+                                      None if sens is None else sens[rows])
+
+    def rms_from_rest(z, coef, rows):
+        off, c1, c2, a = coef
+        r = y[rows] - (off + c1 * x[rows] + c2 * x[rows] ** 2 + a * z[rows])
+        return float(np.sqrt(np.mean(r * r))) if rows.size else math.inf
+
+    start_free = bool(shape is not None and shape.get("start_of_z_fitted")) and not settle
+    free_start = start_free
+    beta, gamma, nn = search()
+    z, sens, (coef, b) = linear_fit(beta, gamma, nn, fit_i)
+    later = fit_i[fit_i >= first_reversal(v)]
+    if not settle and shape is None and (held_i.size or later.size):
+        # a record taken to start at rest may not (a partial cycle before it): the search
+        # again with the start of z free, kept if the actuator, predicted from rest, then
+        # holds back better (after its first sweep, without held-back cycles)
+        judge = held_i if held_i.size else later
+        free_start = True
+        shape2 = search()
+        z2, sens2, (coef2, b2) = linear_fit(*shape2, fit_i)
+        if rms_from_rest(z2, coef2, judge) < rms_from_rest(z, coef, judge):
+            (beta, gamma, nn), z, sens, coef, b = shape2, z2, sens2, coef2, b2
+            start_free = True
+        free_start = False
 
     def model_of(coef):
         off, c1, c2, a = coef
         return BoucWenModel(beta=beta, gamma=gamma, n=nn, hysteretic=a, linear=c1,
                             quadratic=c2, offset=off, input_range=(lo, hi))
 
-    def residual(coef, rows):
+    def residual(coef, b, rows):
+        # the record's own start (b s: z0 other than at rest); the model starts at rest
         off, c1, c2, a = coef
         xr = x[rows]
-        return y[rows] - (off + c1 * xr + c2 * xr * xr + a * z[rows])
+        start_term = 0.0 if sens is None else b * sens[rows]
+        return y[rows] - (off + c1 * xr + c2 * xr * xr + a * z[rows] + start_term)
 
-    errors = {"fit": _errors(residual(coef, fit_i)),
-              "held_back": _errors(residual(coef, held_i))}
+    errors = {"fit": _errors(residual(coef, b, fit_i)),
+              "held_back": _errors(residual(coef, b, held_i))}
     final = errors
     if refit and held_i.size:
         both = np.sort(np.r_[fit_i, held_i])
-        coef = _solve_linear(x[both], z[both], y[both], 2 * beta / (beta + gamma))
-        final = {"all": _errors(residual(coef, both))}
+        coef, b = _solve_linear(x[both], z[both], y[both], 2 * beta / (beta + gamma),
+                                None if sens is None else sens[both])
+        final = {"all": _errors(residual(coef, b, both))}
     model = model_of(coef)
     how = (f"grid of {len(GRID_BETA) * len(GRID_RATIO) * len(ns)} shapes + {evaluations} "
            f"Nelder-Mead evaluations" if shape is None else "shape given")
     summary = f"beta {beta:.4g}, gamma {gamma:.4g}, n {nn:.3g} on the normalized input ({how})"
+    if start_free:
+        summary += ("; shape found with the start of z unknown (the record does not start "
+                    "at rest: predicted from rest, it holds back better)")
     data = {"samples": int(x.size), "fit_samples": int(fit_i.size),
             "held_back_samples": int(held_i.size), "settle_samples": int(lay.settle_end),
-            "holdout": lay.holdout, "initial_state": initial_state}
+            "holdout": lay.holdout, "initial_state": initial_state,
+            "start_of_z_fitted": start_free}
     report = BoucWenReport(
         chosen="bouc-wen", errors=errors, final_errors=final,
         search={"summary": summary, "beta": beta, "gamma": gamma, "n": nn,
@@ -373,6 +464,7 @@ def family_fit(family, fitter):
 
     def refit():
         shape = {k: report.search[k] for k in ("beta", "gamma", "n")}
+        shape["start_of_z_fitted"] = report.data["start_of_z_fitted"]
         return fit_boucwen(rec.u, rec.y, refit=True, shape=shape, **kwargs)[0]
 
     errors = on.errors(model)
