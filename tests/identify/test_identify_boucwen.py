@@ -1,5 +1,7 @@
 """The Bouc-Wen family: fitted alone or compared with the PI families on the same cycles."""
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given
@@ -7,7 +9,7 @@ from hypothesis import strategies as st
 
 from pihyst import FitError, compensate, fit
 from pihyst.identify import FAMILY_NAMES, BoucWen
-from pihyst.identify._boucwen import start_sensitivity
+from pihyst.identify._boucwen import _nnls, start_sensitivity
 from pihyst.model import BoucWenModel
 from pihyst.model._boucwen import cycled_z, trajectory
 from pihyst.sim import make_plant
@@ -35,6 +37,44 @@ def test_recovers_a_bouc_wen_model_from_its_own_output():
     v = np.clip(np.cumsum(rng.normal(0, 6, 400)) % 300, 0, 300)
     v = np.where(v > 150, 300 - v, v)
     assert np.max(np.abs(m.predict(v) - TRUE.predict(v))) < 5e-3 * np.ptp(y)
+
+
+def _nnls_every_active_set(G, b):
+    """The plain twin: min v'Gv - 2 b'v over v >= 0 by trying every active set."""
+    best, best_v = np.inf, np.zeros(b.size)
+    for r in range(b.size + 1):
+        for free in itertools.combinations(range(b.size), r):
+            v = np.zeros(b.size)
+            if free:
+                idx = list(free)
+                sol = np.linalg.lstsq(G[np.ix_(idx, idx)], b[idx], rcond=1e-12)[0]
+                if np.any(sol < 0):
+                    continue
+                v[idx] = sol
+            obj = float(v @ G @ v - 2 * b @ v)
+            if obj < best:
+                best, best_v = obj, v
+    return best_v
+
+
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["full", "collinear", "zero column"]))
+def test_nnls_reaches_the_minimum_of_every_active_set(seed, kind):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(40, 3)) * rng.uniform(1e-3, 1e3, 3)
+    if kind == "collinear":
+        X[:, 2] = 2.0 * X[:, 0]
+    elif kind == "zero column":
+        X[:, 1] = 0.0
+    y = rng.normal(size=40) * rng.uniform(1e-3, 1e3)
+    fast, plain = _nnls(X, y), _nnls_every_active_set(X.T @ X, X.T @ y)
+    assert np.all(fast >= 0) and np.all(np.isfinite(fast))
+    if kind == "zero column":
+        assert fast[1] == 0.0
+
+    def rss(v):
+        return float(np.sum((X @ v - y) ** 2))
+
+    assert rss(fast) <= rss(plain) * (1 + 1e-9) + 1e-12 * float(y @ y)
 
 
 @given(st.floats(0.5, 60.0), st.floats(-0.8, 0.8), st.floats(1.0, 3.0),

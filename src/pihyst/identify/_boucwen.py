@@ -22,7 +22,6 @@ cut into settle/fit/held-back cycles as for the PI families (:mod:`._cycles`); t
 held-back RMS is what the choice between families compares.
 """
 
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -88,22 +87,14 @@ def first_reversal(v):
 FAMILY_SAMPLES = 20_000
 
 
-def _small_nnls(G, b):
-    """min v'Gv - 2 b'v over v >= 0 (G 3 x 3 positive semi-definite): every active set."""
-    best, best_v = math.inf, np.zeros(b.size)
-    for r in range(b.size + 1):
-        for free in itertools.combinations(range(b.size), r):
-            v = np.zeros(b.size)
-            if free:
-                idx = list(free)
-                sol = np.linalg.lstsq(G[np.ix_(idx, idx)], b[idx], rcond=1e-12)[0]
-                if np.any(sol < 0):
-                    continue
-                v[idx] = sol
-            obj = float(v @ G @ v - 2 * b @ v)
-            if obj < best:
-                best, best_v = obj, v
-    return best_v
+def _nnls(X, y):
+    """min |X v - y| over v >= 0 (a few columns): Lawson-Hanson (scipy.optimize.nnls) on
+    the columns scaled to unit norm (a zero column keeps v = 0)."""
+    from scipy.optimize import nnls  # lazy, like every SciPy import of pihyst.identify
+
+    norm = np.sqrt(np.einsum("ij,ij->j", X, X))
+    scale = np.where(norm > 0, 1.0 / np.where(norm > 0, norm, 1.0), 0.0)
+    return nnls(X * scale, y)[0] * scale
 
 
 def boucwen_columns(x, z, d, negative):
@@ -132,7 +123,7 @@ def _solve_linear(x, z, y, d, s=None):
     for negative in (False, True):
         X = boucwen_columns(x, z, d, negative)
         Xc, yc = free_part(X), free_part(y)
-        v = _small_nnls(Xc.T @ Xc, Xc.T @ yc)
+        v = _nnls(Xc, yc)
         rss = float(np.sum((yc - Xc @ v) ** 2))
         if best is None or rss < best[0]:
             f = pinv @ (y - X @ v)
