@@ -38,6 +38,7 @@ from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._family_fit import FramedRecord
 from pihyst.identify._qp import solve_qp
+from pihyst.identify._record_start import record_start_check
 from pihyst.model._boucwen import BoucWenModel
 from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 
@@ -305,6 +306,9 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                     f"than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
                     f"{judged['family_with']} reaches with creep")
         if not judged["kept"]:
+            plain = first.model.replace(delay=0).predict(ua)
+            judged["record_start"] = record_start_check(ya[start:] - plain[start:], ta[start:],
+                                                        tau, duration, np.ptp(ya[start:]))
             return _without_creep(first, judged)
     else:
         second = structure_without_creep(start_model)
@@ -314,13 +318,19 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
         free_weights=_free(second.model), **qp)
     aligned = hyst.replace(creep=Creep(tau, gains, dt_fixed))
     model = aligned.replace(delay=d, sample_period=dt_fixed if d else None)
+    residual = ya[start:] - aligned.predict(ua, t=t[d:])[start:]
+    record_start = record_start_check(residual, ta[start:], tau, duration,
+                                      np.ptp(ya[start:]))
+    if judged is not None:
+        judged["record_start"] = record_start
     meta = dict(second.model.metadata)
     summary = dict(meta.get("fit", {}))
     summary["creep"] = {
         "tau_s": tau.tolist(), "gain": gains.tolist(), "dt_s": dt_fixed,
         "creep_total": float(gains.sum()), "qp_passes": passes,
         "rms_without_creep": _rms(first.model.replace(delay=0), ua, ya, None, start),
-        "rms_with_creep": _rms(aligned, ua, ya, t[d:], start),
+        "rms_with_creep": float(np.sqrt(np.mean(residual ** 2))),
+        "record_start": record_start,
         "weights": ("shape and linear part (offset, c_1, c_2, a) fitted with the gains"
                     if isinstance(hyst, BoucWenModel) else
                     "free" if _free(second.model) else "one scale (regularized kp shape)"),
