@@ -432,13 +432,17 @@ def family_fit(family, fitter):
     :func:`pihyst.fit` (docs/theory/bouc-wen.md)."""
     from pihyst.identify._family_result import FamilyFit
     rec = fitter.rec
+    # the zero state chosen from the data (identify/_start_state.py): a Bouc-Wen fit
+    # takes the start of z as unknown anyway (fit_boucwen)
+    from_data = rec.state_choice is not None
     unsupported = [name for name, given in (
         ("thresholds", fitter.thresholds is not None),
         ("candidates", fitter.candidates is not None),
         ("n_operators", fitter.n_operators is not None),
         ("bounds", fitter.bounds is not None), ("nonnegative=False", not fitter.nonnegative),
         ("a fixed offset", not rec.fit_offset), ("through", len(rec.through) > 0),
-        ("an explicit or zero initial_state", rec.state_mode not in ("cycled", "settle")))
+        ("an explicit or zero initial_state",
+         rec.state_mode not in ("cycled", "settle") and not from_data))
         if given]
     if unsupported:
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
@@ -449,7 +453,8 @@ def family_fit(family, fitter):
         fitter.notes[-1] = fitter.notes[-1].replace("errors on all", "errors on those "
                                                     "samples")
     rec = on.rec
-    kwargs = dict(input_range=(rec.lo, rec.lo + rec.S), initial_state=rec.state_mode,
+    kwargs = dict(input_range=(rec.lo, rec.lo + rec.S),
+                  initial_state="cycled" if from_data else rec.state_mode,
                   n=family.n, layout_=rec.layout)
     model, report = fit_boucwen(rec.u, rec.y, refit=False, **kwargs)
 

@@ -82,6 +82,8 @@ class FramedRecord:
             if self.explicit_state.ndim != 1 or not np.all(np.isfinite(self.explicit_state)):
                 raise FitError("initial_state must be a flat list of finite numbers")
         self.state_mode = mode
+        # "auto" resolved to "cycled" or "zero" by identify/_start_state.py: what it compared
+        self.state_choice = None
         self.layout = layout(self.v, self.S, settle=(mode == "settle"), holdout=holdout)
         self.has_held_back = self.layout.count("held_back") > 0
         self.through = self._through_indices(through)

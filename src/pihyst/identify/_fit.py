@@ -41,6 +41,7 @@ from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
 from pihyst.identify._latency import measure_latency
 from pihyst.identify._report import FitReport, FitResult
+from pihyst.identify._start_state import start_state
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
 from pihyst.identify._sufficiency import check_fit, check_record
 from pihyst.model import InvalidModelError
@@ -227,9 +228,18 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                             nonnegative=nonnegative, bounds=bounds,
                             max_exhaustive=max_exhaustive)
 
-    rec = FramedRecord(u, y, input_range=input_range, initial_state=initial_state,
-                       holdout=holdout, offset=offset, through=through)
+    def record_in(state):
+        return FramedRecord(u, y, input_range=input_range, initial_state=state,
+                            holdout=holdout, offset=offset, through=through)
+
+    rec = record_in(initial_state)
     check_record(rec.u, rec.y)
+    if isinstance(initial_state, str) and initial_state == "auto" and \
+            rec.state_mode == "cycled":
+        # at rest after a full cycle, or from the zero state (identify/_start_state.py)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            rec, rec.state_choice = start_state(rec, record_in, fitter_of)
     if rec.state_mode == "explicit" and thresholds is None:
         raise FitError("an explicit initial_state needs explicit thresholds (one value "
                        "per operator)")

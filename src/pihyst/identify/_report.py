@@ -12,10 +12,21 @@ import numpy as np
 
 from pihyst.identify._assess import KINDS
 
+
+def _state_choice_text(choice):
+    """How "auto" chose the initial state, when it compared (identify/_start_state.py)."""
+    if not choice:
+        return ""
+    rms = choice["probe_fitted_rms"]
+    return (f" (chosen from the record: its probe fits {rms['cycled']:.4g} from rest after a "
+            f"full cycle, {rms['zero']:.4g} from the zero state)")
+
+
 _STATE_TEXT = {
     "cycled": "at rest at the bottom of the range after a full cycle (docs/interfaces.md)",
     "settle": "unknown; settled by the first full sweep of the input range (not fitted)",
-    "zero": "all operator outputs zero",
+    "zero": "all operator outputs zero (a record from the zero state: its first rise is "
+            "the initial loading curve)",
     "explicit": "given",
 }
 
@@ -72,6 +83,7 @@ class FitReport:
             "measured_range": rec.measured_range,
             "units": units,
             "initial_state": rec.state_mode,
+            "initial_state_choice": rec.state_choice,
             "settle_samples": int(lay.settle_end),
             "cycles": lay.n_cycles,
             "minor_cycles": lay.n_minor,
@@ -176,7 +188,8 @@ class FitReport:
             f"{d['input_range'][1]:.6g} {uin}, output {d['output_range'][0]:.6g} .. "
             f"{d['output_range'][1]:.6g} {uout} (range {d['measured_range']:.4g} {uout})",
             f"initial state: {_STATE_TEXT.get(d['initial_state'], d['initial_state'])}"
-            + (f" ({d['settle_samples']} samples)" if d["settle_samples"] else ""),
+            + (f" ({d['settle_samples']} samples)" if d["settle_samples"] else "")
+            + _state_choice_text(d.get("initial_state_choice")),
             f"{d['cycles']} cycles ({d['minor_cycles']} not spanning the whole range: minor); "
             f"fitted: {d['fit_cycles']} cycles, {d['fit_samples']} samples; held back: "
             + (f"{d['held_back_cycles']} cycles, {d['held_back_samples']} samples "
@@ -238,6 +251,10 @@ class FitReport:
                              f"holds back {e['held_back_rms_with']:.4g} with creep")
             if creep.get("other_kind_not_tried"):
                 lines.append(f"  other kind not tried: {creep['other_kind_not_tried']}")
+            start = creep.get("record_start")
+            if start:
+                lines.append(f"  record start: {'at rest' if start['settled'] else 'NOT at rest'}"
+                             f" ({start['note']})")
         if self._data["undetermined"]:
             lines.append("what the data could not determine:")
             lines += [f"  - {t}" for t in self._data["undetermined"]]
