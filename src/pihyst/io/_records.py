@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.exceptions import CSVError, RecordError
+from pihyst.exceptions import CSVError, InvalidArgumentError, RecordError
 from pihyst.io._array_sources import ArraySource, function_source, open_array_source
 from pihyst.io._text_source import TextSource
 
@@ -75,11 +75,21 @@ class RecordReader:
         self.source = _open_source(self.path, reader, separator, decimal_comma)
         found = self.source.extra.get("found", {}) if isinstance(self.source, ArraySource) \
             else {}
-        specs = {"voltage": voltage, "displacement": displacement, "time": time}
-        self.refs = self._resolve(specs)
-        self.labels = {q: self._label(r) for q, r in self.refs.items()}
         self.rate = (_positive(rate, "--rate") if rate is not None else
                      _positive(found.get("rate"), "the reader's metadata 'rate'"))
+        specs = {"voltage": voltage, "displacement": displacement, "time": time}
+        self.refs = self._resolve(specs)
+        if not self.refs:
+            # the time a rate defines needs a column to count the samples of
+            optional = sorted(set(self.optional) - set(self.need))
+            raise InvalidArgumentError(
+                f"{self.path}: no column to read: need={self.need!r}"
+                + (f", and the optional {', '.join(DEFAULT_NAMES[q] for q in optional)} is "
+                   f"not in the record" if optional else "")
+                + ("; the rate gives the time, but it needs a column to count the samples"
+                   if self.rate is not None else "")
+                + ": name the quantities to read in need (voltage, displacement, time)")
+        self.labels = {q: self._label(r) for q, r in self.refs.items()}
         self.voltage_gain = (
             _finite(voltage_gain, "--voltage-gain") if voltage_gain is not None else
             _finite(found.get("voltage_gain", 1.0), "the reader's metadata 'voltage_gain'"))
@@ -104,13 +114,16 @@ class RecordReader:
         refs = {}
         for q in QUANTITIES:
             spec = specs[q]
+            # a rate gives the time: the time column is looked for only to refuse both
+            needed = q in self.need and not (q == "time" and self.rate is not None)
             if spec is not None and str(spec).strip().lower() == "none":
-                if q in self.need:
-                    raise ValueError(f"--{q} none: this command needs the {q}")
+                if needed:
+                    raise ValueError(f"--{q} none: this command needs the {q}"
+                                     + (" (or --rate HZ)" if q == "time" else ""))
                 continue
             if q not in self.need and spec is None and q not in self.optional:
                 continue
-            ref = self._ref(q, spec)
+            ref = self._ref(q, spec, needed)
             if ref is not None:
                 refs[q] = ref
         seen = {}
@@ -121,18 +134,20 @@ class RecordReader:
             seen[ref] = q
         return refs
 
-    def _ref(self, quantity, spec):
+    def _ref(self, quantity, spec, needed):
         src = self.source
         if isinstance(src, ArraySource):
             if spec is not None:
                 return src.resolve(spec, quantity)
             ref = src.default([DEFAULT_NAMES[quantity], quantity])
-            if ref is None and quantity in self.need:
+            if ref is None and needed:
                 raise RecordError(self.path, f"no {DEFAULT_NAMES[quantity]!r} for the "
-                                  f"{quantity}: name it with --{quantity} NAME, NAME:K or K "
-                                  f"({src.inventory()})")
+                                  f"{quantity}: name it with --{quantity} NAME, NAME:K or K"
+                                  + (" (or give the sample rate, --rate HZ)"
+                                     if quantity == "time" else "")
+                                  + f" ({src.inventory()})")
             return ref
-        return _text_column(src, quantity, spec, quantity in self.need)
+        return _text_column(src, quantity, spec, needed)
 
     def _label(self, ref):
         if isinstance(self.source, ArraySource):
@@ -371,7 +386,9 @@ def _text_column(src, quantity, spec, needed):
                 return None
             raise CSVError(src.path, d.header_line, 0, f"missing column {name!r} in header "
                            f"({', '.join(src.columns)}); name the {quantity} column with "
-                           f"--{quantity} NAME or --{quantity} NUMBER")
+                           f"--{quantity} NAME or --{quantity} NUMBER"
+                           + (", or give the sample rate, --rate HZ" if quantity == "time"
+                              else ""))
         spec = name
     text = str(spec).strip()
     if text.isdigit():
