@@ -166,6 +166,18 @@ def _check_output(path):
                              "'pihyst[hdf5]'") from None
 
 
+def _run(rig, args, program, **options):
+    """``rig.run`` into ``args.output``; rig limits the supply may not be sent are a
+    UsageError naming the configuration (before the log is opened)."""
+    from pihyst.exceptions import InvalidArgumentError
+    from pihyst.rig._controller import check_limits
+    try:
+        check_limits(rig.supply, rig.config.rig)
+    except InvalidArgumentError as err:
+        raise UsageError(f"{args.config}: {err}") from None
+    return rig.run(program, args.output, **options)
+
+
 def _report(result, args, rig):
     t = result.timing()
     say = print
@@ -249,7 +261,7 @@ def run_record(args):
     _check_output(args.output)
     program = VoltageProgram(u, description)
     with _open(args, config) as rig:
-        result = rig.run(program, args.output, fsync=args.fsync)
+        result = _run(rig, args, program, fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     y = y[np.isfinite(y)]
     if y.size:
@@ -289,8 +301,8 @@ def run_track(args):
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
     with _open(args, config) as rig:
-        result = rig.run(program, args.output, notes=[f"model: {args.model}: {model!r}"],
-                         fsync=args.fsync)
+        result = _run(rig, args, program, notes=[f"model: {args.model}: {model!r}"],
+                      fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     ref = result.column("reference", phase="run")
     ok = np.isfinite(y)

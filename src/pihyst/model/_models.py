@@ -632,7 +632,11 @@ class Stepper:
         if self._lags is None:
             return h
         if dt is not None:
-            dt = float(dt)
+            try:
+                dt = float(dt)
+            except (TypeError, ValueError):
+                raise InvalidArgumentError(f"dt must be a number of seconds, got "
+                                           f"{dt!r:.40}") from None
             if not (np.isfinite(dt) and dt >= 0):
                 raise InvalidArgumentError(f"dt must be a finite interval >= 0 s, got {dt}")
         return self._lags.step(h, dt)
