@@ -71,7 +71,7 @@ class RecordReader:
         self.optional = tuple(optional) + (("time",) if skip_until is not None else ())
         unknown = set(self.need) - set(QUANTITIES)
         if unknown:
-            raise ValueError(f"unknown quantities {sorted(unknown)}")
+            raise InvalidArgumentError(f"unknown quantities {sorted(unknown)}")
         self.source = _open_source(self.path, reader, separator, decimal_comma)
         found = self.source.extra.get("found", {}) if isinstance(self.source, ArraySource) \
             else {}
@@ -83,7 +83,7 @@ class RecordReader:
             # the time a rate defines needs a column to count the samples of
             optional = sorted(set(self.optional) - set(self.need))
             raise InvalidArgumentError(
-                f"{self.path}: no column to read: need={self.need!r}"
+                f"no column to read: need={self.need!r}"
                 + (f", and the optional {', '.join(DEFAULT_NAMES[q] for q in optional)} is "
                    f"not in the record" if optional else "")
                 + ("; the rate gives the time, but it needs a column to count the samples"
@@ -94,17 +94,17 @@ class RecordReader:
             _finite(voltage_gain, "--voltage-gain") if voltage_gain is not None else
             _finite(found.get("voltage_gain", 1.0), "the reader's metadata 'voltage_gain'"))
         if self.voltage_gain == 0:
-            raise ValueError("--voltage-gain must not be 0")
+            raise InvalidArgumentError("--voltage-gain must not be 0")
         self.unit, self.unit_from = self._unit(displacement_unit, found)
         if not (isinstance(lag, (int, np.integer)) and lag >= 0):
-            raise ValueError(f"--lag must be a whole number of samples >= 0, got {lag!r}")
+            raise InvalidArgumentError(f"--lag must be a whole number of samples >= 0, got {lag!r}")
         both = "voltage" in self.refs and "displacement" in self.refs
         self.lag = int(lag) if both else 0
         self.skip_until = None if skip_until is None else _finite(skip_until, "--skip-until")
         if self.skip_until is not None and "time" not in self.refs and self.rate is None:
-            raise ValueError(f"--skip-until needs a time column in {self.path} or --rate")
+            raise InvalidArgumentError(f"--skip-until needs a time column in {self.path} or --rate")
         if "time" in self.refs and self.rate is not None:
-            raise ValueError("--rate is for records without a time column; this one has "
+            raise InvalidArgumentError("--rate is for records without a time column; this one has "
                              f"time in {self.labels['time']} (use --time none to ignore it)")
         self.skipped = 0
         self.n_samples = None
@@ -118,7 +118,7 @@ class RecordReader:
             needed = q in self.need and not (q == "time" and self.rate is not None)
             if spec is not None and str(spec).strip().lower() == "none":
                 if needed:
-                    raise ValueError(f"--{q} none: this command needs the {q}"
+                    raise InvalidArgumentError(f"--{q} none: this command needs the {q}"
                                      + (" (or --rate HZ)" if q == "time" else ""))
                 continue
             if q not in self.need and spec is None and q not in self.optional:
@@ -129,7 +129,7 @@ class RecordReader:
         seen = {}
         for q, ref in refs.items():
             if ref in seen:
-                raise ValueError(f"the {seen[ref]} and the {q} are both read from "
+                raise InvalidArgumentError(f"the {seen[ref]} and the {q} are both read from "
                                  f"{self._label(ref)} of {self.path}")
             seen[ref] = q
         return refs
@@ -173,7 +173,7 @@ class RecordReader:
         if unit not in UNIT_FACTORS:
             option = ("the reader's metadata 'displacement_unit'" if where == "reader"
                       else "--displacement-unit")
-            raise ValueError(f"{option} must be one of m, mm, um, nm; got {unit!r}")
+            raise InvalidArgumentError(f"{option} must be one of m, mm, um, nm; got {unit!r}")
         return unit, where
 
     # ---------------------------------------------------------------- reading
@@ -419,7 +419,8 @@ def _open_source(path, reader, separator, decimal_comma):
     if kind is None:
         return TextSource(path, separator=separator, decimal_comma=decimal_comma)
     if separator is not None or decimal_comma is not None:
-        raise ValueError(f"--separator and --decimal-comma are for text files, not {kind}")
+        raise InvalidArgumentError(f"--separator and --decimal-comma are for text files, not "
+                                   f"{kind}")
     return open_array_source(path, kind)
 
 
@@ -434,19 +435,19 @@ def _call_reader(reader, path):
         name = str(reader)
         module, sep, attr = name.rpartition(":")
         if not sep or not module or not attr:
-            raise ValueError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
+            raise InvalidArgumentError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
                              "FILE.py:FUNCTION")
         try:
             loaded = _load_reader_module(module)
         except ImportError as err:
-            raise ValueError(f"--reader {reader}: cannot load it ({err})") from None
+            raise InvalidArgumentError(f"--reader {reader}: cannot load it ({err})") from None
         except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's module failed
-            raise ValueError(f"--reader {reader}: cannot load it ({_what(err)})") from err
+            raise InvalidArgumentError(f"--reader {reader}: cannot load it ({_what(err)})") from err
         func = getattr(loaded, attr, None)
         if func is None:
-            raise ValueError(f"--reader {reader}: {module} has no function {attr!r}")
+            raise InvalidArgumentError(f"--reader {reader}: {module} has no function {attr!r}")
         if not callable(func):
-            raise ValueError(f"--reader {reader}: {attr!r} in {module} is not a function "
+            raise InvalidArgumentError(f"--reader {reader}: {attr!r} in {module} is not a function "
                              f"but {type(func).__name__}")
     try:
         return func(path)
@@ -482,7 +483,7 @@ def _positive(value, option):
         return None
     value = _finite(value, option)
     if value <= 0:
-        raise ValueError(f"{option} must be positive, got {value:g}")
+        raise InvalidArgumentError(f"{option} must be positive, got {value:g}")
     return value
 
 
@@ -490,9 +491,9 @@ def _finite(value, option):
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{option} must be a number, got {value!r}") from None
+        raise InvalidArgumentError(f"{option} must be a number, got {value!r}") from None
     if not np.isfinite(value):
-        raise ValueError(f"{option} must be a finite number, got {value!r}")
+        raise InvalidArgumentError(f"{option} must be a finite number, got {value!r}")
     return value
 
 
@@ -519,7 +520,7 @@ def read_record(path, **options):
     ``metadata``); ``need`` (the quantities that must be there).
 
     Returns a :class:`Record`. Bad data raise :class:`RecordError` (:class:`CSVError` for
-    text, with file, line and column); bad options ``ValueError``.
+    text, with file, line and column); bad options :class:`InvalidArgumentError`.
 
     Examples
     --------
