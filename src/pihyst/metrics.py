@@ -10,20 +10,15 @@ Examples
 
 import numpy as np
 
-from pihyst.exceptions import InvalidArgumentError
-
 
 def _residual(y_true, y_pred):
-    try:
-        y_true = np.asarray(y_true, dtype=float)
-        y_pred = np.asarray(y_pred, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidArgumentError("y_true and y_pred must be arrays of numbers") from None
+    y_true = np.asarray(y_true, dtype=float)
+    y_pred = np.asarray(y_pred, dtype=float)
     if y_true.shape != y_pred.shape:
-        raise InvalidArgumentError(f"y_true and y_pred have different shapes {y_true.shape} "
-                                   f"and {y_pred.shape}")
+        raise ValueError(f"y_true and y_pred have different shapes {y_true.shape} and "
+                         f"{y_pred.shape}")
     if y_true.size == 0:
-        raise InvalidArgumentError("no samples to compare")
+        raise ValueError("no samples to compare")
     return y_pred - y_true
 
 
