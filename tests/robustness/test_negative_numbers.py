@@ -75,6 +75,7 @@ BASES = {
     "fit": ["fit", LOOP, "-o", "{out}", "--model", "classical", "--thresholds", "0,20,40"],
     "rig record": ["rig", "record", "--config", "{config}", "--period", "2", "--cycles",
                    "1", "-o", "{out}"],
+    "rig emulate": ["rig", "emulate", "--config", "{config}"],
 }
 RIG_CONFIG = """[rig]
 rate_hz = 20.0
@@ -141,3 +142,16 @@ def test_a_negative_number_runs_or_is_one_line(tmp_path, base, option, value):
             f"{float(value):g}" in outcome.err, outcome.err
     if outcome.status == 0:
         assert os.path.exists(out) or base == "validate"
+
+
+@pytest.mark.parametrize("value, says", [
+    ("nan", "must be a finite number"), ("inf", "must be a finite number"),
+    ("-1", "must be a positive number"), ("1e308", "must be at most 9.22337e+09 s"),
+])
+def test_rig_emulate_duration_is_checked_as_parsed(tmp_path, value, says):
+    # a float option once: inf and 1e308 were an OverflowError (internal error), nan and
+    # -1 ran and stopped at once
+    outcome = run(["rig", "emulate", "--config", write_rig_config(tmp_path),
+                   "--duration", value])
+    assert outcome.status == 2 and len(outcome.err.splitlines()) == 1
+    assert f"argument --duration: {says}" in outcome.err

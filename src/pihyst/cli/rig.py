@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, positive_number
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
@@ -100,12 +100,22 @@ def register(sub):
     e.add_argument("--config", metavar="RIG.toml", required=True)
     e.add_argument("--plant", default=None, metavar="NAME", help="the simulated beam")
     _fault_option(e)
-    e.add_argument("--duration", type=float, default=None, metavar="S",
+    e.add_argument("--duration", type=_duration, default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     e.set_defaults(run=run_emulate)
 
 
 # ----------------------------------------------------------------------------- helpers
+def _duration(text):
+    """--duration: a positive number of seconds a wait can take (threading's limit)."""
+    import threading
+    seconds = positive_number(text)
+    if seconds > threading.TIMEOUT_MAX:
+        raise argparse.ArgumentTypeError(f"must be at most {threading.TIMEOUT_MAX:g} s, got "
+                                         f"{text!r}")
+    return seconds
+
+
 def _fault_option(p):
     p.add_argument("--fault", action="append", default=[], metavar="DEVICE:KIND[:START[:N]]",
                    help="emulated instruments only: inject a fault, e.g. sensor:over-range:5 "
