@@ -142,3 +142,12 @@ def test_a_needed_time_comes_from_the_rate(tmp_path, small_blocks, need):
         assert reader.read().time.tolist() == [0.0]
     with pytest.raises(ValueError, match=r"needs the time \(or --rate HZ\)"):
         open_record(timed, need=need, time="none")
+
+
+def test_need_may_name_one_quantity_alone(tmp_path):
+    path = write(tmp_path, [(0.0, 1.0), (0.5, 2.0)], header="time_s,voltage_V")
+    with open_record(path, need="voltage", optional="time") as reader:
+        rec = reader.read()
+    assert rec.voltage.tolist() == [1.0, 2.0] and rec.time.tolist() == [0.0, 0.5]
+    with pytest.raises(InvalidArgumentError, match=r"unknown quantities \['force'\]"):
+        open_record(path, need="force")

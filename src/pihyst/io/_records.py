@@ -67,8 +67,10 @@ class RecordReader:
                  separator=None, decimal_comma=None, reader=None,
                  need=("voltage", "displacement"), optional=("time",)):
         self.path = os.fspath(path)
-        self.need = tuple(need)
-        self.optional = tuple(optional) + (("time",) if skip_until is not None else ())
+        # one quantity may be named alone (need="time"), not spelt out letter by letter
+        self.need = (need,) if isinstance(need, str) else tuple(need)
+        optional = (optional,) if isinstance(optional, str) else tuple(optional)
+        self.optional = optional + (("time",) if skip_until is not None else ())
         unknown = set(self.need) - set(QUANTITIES)
         if unknown:
             raise InvalidArgumentError(f"unknown quantities {sorted(unknown)}")
@@ -97,15 +99,18 @@ class RecordReader:
             raise InvalidArgumentError("--voltage-gain must not be 0")
         self.unit, self.unit_from = self._unit(displacement_unit, found)
         if not (isinstance(lag, (int, np.integer)) and lag >= 0):
-            raise InvalidArgumentError(f"--lag must be a whole number of samples >= 0, got {lag!r}")
+            raise InvalidArgumentError(f"--lag must be a whole number of samples >= 0, got "
+                                       f"{lag!r}")
         both = "voltage" in self.refs and "displacement" in self.refs
         self.lag = int(lag) if both else 0
         self.skip_until = None if skip_until is None else _finite(skip_until, "--skip-until")
         if self.skip_until is not None and "time" not in self.refs and self.rate is None:
-            raise InvalidArgumentError(f"--skip-until needs a time column in {self.path} or --rate")
+            raise InvalidArgumentError(f"--skip-until needs a time column in {self.path} or "
+                                       f"--rate")
         if "time" in self.refs and self.rate is not None:
-            raise InvalidArgumentError("--rate is for records without a time column; this one has "
-                             f"time in {self.labels['time']} (use --time none to ignore it)")
+            raise InvalidArgumentError(f"--rate is for records without a time column; this one "
+                                       f"has time in {self.labels['time']} (use --time none to "
+                                       f"ignore it)")
         self.skipped = 0
         self.n_samples = None
 
@@ -119,7 +124,7 @@ class RecordReader:
             if spec is not None and str(spec).strip().lower() == "none":
                 if needed:
                     raise InvalidArgumentError(f"--{q} none: this command needs the {q}"
-                                     + (" (or --rate HZ)" if q == "time" else ""))
+                                               + (" (or --rate HZ)" if q == "time" else ""))
                 continue
             if q not in self.need and spec is None and q not in self.optional:
                 continue
@@ -130,7 +135,7 @@ class RecordReader:
         for q, ref in refs.items():
             if ref in seen:
                 raise InvalidArgumentError(f"the {seen[ref]} and the {q} are both read from "
-                                 f"{self._label(ref)} of {self.path}")
+                                           f"{self._label(ref)} of {self.path}")
             seen[ref] = q
         return refs
 
@@ -436,19 +441,20 @@ def _call_reader(reader, path):
         module, sep, attr = name.rpartition(":")
         if not sep or not module or not attr:
             raise InvalidArgumentError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
-                             "FILE.py:FUNCTION")
+                                       "FILE.py:FUNCTION")
         try:
             loaded = _load_reader_module(module)
         except ImportError as err:
             raise InvalidArgumentError(f"--reader {reader}: cannot load it ({err})") from None
         except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's module failed
-            raise InvalidArgumentError(f"--reader {reader}: cannot load it ({_what(err)})") from err
+            raise InvalidArgumentError(f"--reader {reader}: cannot load it "
+                                       f"({_what(err)})") from err
         func = getattr(loaded, attr, None)
         if func is None:
             raise InvalidArgumentError(f"--reader {reader}: {module} has no function {attr!r}")
         if not callable(func):
-            raise InvalidArgumentError(f"--reader {reader}: {attr!r} in {module} is not a function "
-                             f"but {type(func).__name__}")
+            raise InvalidArgumentError(f"--reader {reader}: {attr!r} in {module} is not a "
+                                       f"function but {type(func).__name__}")
     try:
         return func(path)
     except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's function failed

@@ -21,7 +21,7 @@ class TextSource:
         self.block_bytes = block_bytes or BLOCK_BYTES
         if separator is not None and separator not in SEPARATOR_NAMES:
             raise InvalidArgumentError(f"unknown separator {separator!r}: use one of "
-                             "',', ';', 'tab', 'whitespace'")
+                                       "',', ';', 'tab', 'whitespace'")
         sep = AUTO if separator is None else SEPARATOR_NAMES[separator]
         decimal = None if decimal_comma is None else ("," if decimal_comma else ".")
         if sep == "," and decimal == ",":
