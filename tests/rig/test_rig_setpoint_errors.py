@@ -133,3 +133,24 @@ def test_a_stepper_refuses_a_dt_that_is_not_a_number():
         stepper.step(1.0, dt="x")
     with pytest.raises(InvalidArgumentError, match=r"dt must be a number of seconds, got \[None\]"):
         stepper.step(1.0, dt=[None])
+
+
+def test_a_setpoint_refused_during_a_run_stops_it_at_0_v(tmp_path):
+    # a driver that refuses 40 V and more although the limits passed its check: the run
+    # stops there (not an error escaping the loop), and ramps down to 0 V, output off
+    log = tmp_path / "run.csv"
+    with Rig(make_config(rig={"slew_V_per_s": 400.0})) as rig:
+        send = rig.supply.set_voltage
+
+        def refusing(volts):
+            if volts >= 40.0:
+                raise InvalidArgumentError(f"supply setpoint: {volts:g} V refused")
+            send(volts)
+        rig.supply.set_voltage = refusing
+        result = rig.run(VoltageProgram(np.r_[np.linspace(0.0, 60.0, 61), 0.0]), log)
+        assert not result.completed and result.zeroed
+        assert result.reason == "supply setpoint: 40 V refused"
+        state = rig.emulators.supply_state
+        assert state.last_setpoint_V == 0.0 and not state.output_on
+    notes = read_run_log(log)[1]
+    assert any(n.startswith("stopped: supply setpoint: 40 V refused") for n in notes), notes
