@@ -10,10 +10,11 @@ import os
 import pytest
 from harness import DESIRED, GOOD_MODEL, LOOP, VOLTS, judge, run
 
+import pihyst
 from pihyst.cli import build_parser
 from pihyst.cli.errors import NEGATIVE_NUMBER
 
-NEGATIVES = ("-1e-3", "-2.5E+8", "-1e308", "-1e400", "-.5e1", "-3.")
+NEGATIVES = ("-1e-3", "-2.5E+8", "-1e308", "-1e400", "-.5e1", "-3.", "-inf", "-10,150")
 
 
 def _options(parser, path=()):
@@ -37,12 +38,13 @@ def test_every_subcommand_is_walked():
     assert ("rig", "record") in {path for path, _ in OPTIONS}
 
 
-@pytest.mark.parametrize("value", ["-1", "-1.5", "-.5", "-1e-3", "-1E3", "-2.5e+8", "-3.e2"])
-def test_the_matcher_takes_negative_numbers(value):
+@pytest.mark.parametrize("value", ["-1", "-1.5", "-.5", "-1e-3", "-1E3", "-2.5e+8", "-3.e2",
+                                   "-10,150", "-1e-3, 2", "-inf", "-NaN", "-1e"])
+def test_the_matcher_takes_negative_numbers_and_lists(value):
     assert NEGATIVE_NUMBER.match(value)
 
 
-@pytest.mark.parametrize("value", ["-o", "--u-min", "-e3", "-1e", "-1e-", "-inf", "-x1"])
+@pytest.mark.parametrize("value", ["-o", "-h", "--u-min", "-e3", "-x1", "-1.csv", "-", "--"])
 def test_the_matcher_leaves_options(value):
     assert not NEGATIVE_NUMBER.match(value)
 
@@ -155,3 +157,14 @@ def test_rig_emulate_duration_is_checked_as_parsed(tmp_path, value, says):
                    "--duration", value])
     assert outcome.status == 2 and len(outcome.err.splitlines()) == 1
     assert f"argument --duration: {says}" in outcome.err
+
+
+def test_a_list_option_may_start_with_a_negative_number(tmp_path):
+    out = tmp_path / "m.json"
+    outcome = run(["fit", LOOP, "-o", str(out), "--model", "classical", "--thresholds",
+                   "0,20,40", "--input-range", "-1e1,150"])
+    assert outcome.status == 0, outcome.err
+    assert pihyst.load_model(out).input_range == (-10.0, 150.0)
+    outcome = run(["fit", LOOP, "-o", str(out), "--thresholds", "-1e-3,2"])
+    assert outcome.status == 2 and "--thresholds" in outcome.err
+    assert "expected one argument" not in outcome.err

@@ -52,9 +52,11 @@ def one_line(text):
     return " ".join(str(text).splitlines()) or "(no message)"
 
 
-#: What argparse takes for a negative number rather than an option: its own rule
-#: (``-5``, ``-.5``, ``-0.5``) widened to scientific notation (``-1e-3``, ``-2.5E+8``)
-NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+#: What argparse takes for an option's value rather than an option name: its own rule for
+#: negative numbers (``-5``, ``-.5``) widened to any float notation (``-1e-3``, ``-2.5E+8``,
+#: ``-inf``), and to a list starting with one (``--input-range -10,150``). No option name
+#: of pihyst starts with '-' and a digit; the option's type then says what is wrong.
+NEGATIVE_NUMBER = re.compile(r"^-(\.?\d[\d.eE+\-,\s]*|inf|infinity|nan)$", re.IGNORECASE)
 
 
 class ArgumentParser(argparse.ArgumentParser):
