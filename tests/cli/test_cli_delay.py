@@ -3,11 +3,14 @@ model file carries it; predict and compensate honour it block by block (the pend
 inputs and the preview cross block boundaries); another sample period is a one-line
 error with exit status 2."""
 
+import json
+
 import numpy as np
 import pytest
 
 import pihyst
 from pihyst.cli import main
+from pihyst.exceptions import ResourceLimitError
 from pihyst.io import _records, read_columns, write_columns
 
 TRUE = pihyst.ClassicalPI([0, 20, 45], [0.3, 0.2, 0.1])
@@ -210,3 +213,56 @@ def test_fit_many_takes_the_delay_option(tmp_path, capsys):
                  "--delay", "0"]) == 0
     assert pihyst.load_model(models / "lagged.json").delay == 0
     assert main(["fit-many", str(folder), "-o", str(models), "--delay", "-1"]) == 2
+
+
+# ------------------------------------------------------------------ delays too long to hold
+def _delayed_file(tmp_path, **keys):
+    d = TRUE.to_dict()
+    d.update(keys)
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+@pytest.mark.parametrize("value", [1e12, 10 ** 12, 1_000_001])
+@pytest.mark.parametrize("command", ["predict", "compensate", "track", "validate", "export"])
+def test_a_delay_too_long_to_hold_is_refused_naming_file_field_and_limit(tmp_path, capsys,
+                                                                         command, value):
+    model = _delayed_file(tmp_path, delay_samples=value)
+    data, _, _ = lagged_record(tmp_path)
+    out = tmp_path / "out.csv"
+    argv = {"predict": ["predict", model, data, "-o", out],
+            "compensate": ["compensate", model, data, "-o", out],
+            "track": ["track", model, data, "-o", out],
+            "validate": ["validate", model, data],
+            "export": ["export", model, "--c", "-o", out]}[command]
+    assert main([str(a) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"{model}: delay_samples = {value:.6g} is more than the 1,000,000 samples" in err
+    assert not out.exists()
+
+
+def test_a_delay_converted_to_too_many_samples_is_refused(tmp_path, capsys):
+    # 3 samples at 1 s are 3e12 samples at 1 ps: refused before anything is allocated
+    model = _delayed_file(tmp_path, delay_samples=3, sample_period_s=1.0)
+    data = tmp_path / "fast.csv"
+    write_columns(data, {"voltage_V": np.linspace(0, 100, 50)})
+    out = tmp_path / "out.csv"
+    for rate in ("1e12", "1e300"):
+        assert main(["predict", str(model), str(data), "--rate", rate, "-o", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"{data}: the model's delay of 3 samples at 1 s" in err
+        assert "more than the 1,000,000 pihyst holds as an input delay" in err
+        assert not out.exists()
+
+
+def test_the_api_refuses_delays_too_long_to_hold():
+    with pytest.raises(pihyst.InvalidModelError, match="delay = 2e\\+06 is more than"):
+        TRUE.replace(delay=2_000_000)
+    with pytest.raises(pihyst.InvalidModelError, match="m.json: delay_samples = 1e\\+12"):
+        pihyst.PIModel.from_dict({**TRUE.to_dict(), "delay_samples": 1e12}, source="m.json")
+    with pytest.raises(ResourceLimitError, match="3e\\+09 samples at 1e-09 s"):
+        TRUE.replace(delay=3, sample_period=1.0).delay_at(1e-9)
+    with pytest.raises(pihyst.FitError, match="delay = 2000000 is more than"):
+        pihyst.fit(np.zeros(10), np.zeros(10), delay=2_000_000)

@@ -4,6 +4,7 @@ each, validate, compensate's reachable range and --strict, the input-range rule,
 
 import json
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -84,16 +85,42 @@ def test_validate_a_model_on_its_own_prediction_and_a_shifted_record(tmp_path, c
     assert figure.read_text().lstrip().startswith("<?xml")
 
 
-def test_validate_settle_on_triangles_judges_from_the_top_of_the_first_sweep(tmp_path, capsys):
-    u = np.r_[np.tile(np.r_[np.linspace(0, 150, 51), np.linspace(150, 0, 51)[1:-1]], 3), 0.0]
-    src = tmp_path / "tri.csv"
+def _triangles():
+    return np.r_[np.tile(np.r_[np.linspace(0, 150, 51), np.linspace(150, 0, 51)[1:-1]], 3), 0.0]
+
+
+def _mid_range_start():
+    return np.r_[np.linspace(70, 150, 30), np.linspace(150, 0, 60)[1:],
+                 np.linspace(0, 150, 60)[1:], np.linspace(150, 0, 60)[1:],
+                 np.linspace(0, 120, 40)[1:], np.linspace(120, 30, 40)[1:],
+                 np.linspace(30, 150, 50)[1:]]
+
+
+@pytest.mark.parametrize("voltage, settled", [(_triangles, 101), (_mid_range_start, 89)])
+def test_settle_judges_the_span_fit_judges(tmp_path, capsys, voltage, settled):
+    # --initial-state settle of validate and predict cuts the record where
+    # pihyst.fit(initial_state="settle") does: at the first valley after both ends
+    u = voltage()
+    src = tmp_path / "rec.csv"
     model = pihyst.load_model(MULTISLOPE)
-    pihyst.io.write_columns(src, {"voltage_V": u, "displacement_um": model.predict(u) + 0.1})
+    y = model.predict(u) + 0.1
+    pihyst.io.write_columns(src, {"voltage_V": u, "displacement_um": y})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pihyst.exceptions.PihystWarning)
+        fitted = pihyst.fit(u, y, family="multislope", initial_state="settle")
+    assert fitted.model.metadata["fit"]["settled"]["sample"] == settled
     assert run("validate", MULTISLOPE, src, "--initial-state", "settle", "--json") == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["first_judged_sample"] == 50 and len(result["cycles"]) == 3
-    assert result["errors"]["samples"] == u.size - 50
+    assert result["first_judged_sample"] == settled
+    assert result["errors"]["samples"] == u.size - settled
     assert result["errors"]["max_abs_um"] == pytest.approx(0.1)
+    out = tmp_path / "predicted.csv"
+    assert run("predict", MULTISLOPE, src, "--initial-state", "settle", "-o", out) == 0
+    cols, _ = pihyst.io.read_columns(out, ["settling"])
+    np.testing.assert_array_equal(cols["settling"], np.arange(u.size) < settled)
+
+
+def test_validate_settle_needs_samples_after_the_sweep(tmp_path, capsys):
     ramp = tmp_path / "ramp.csv"
     pihyst.io.write_columns(ramp, {"voltage_V": np.linspace(0, 150, 11),
                                    "displacement_um": np.zeros(11)})

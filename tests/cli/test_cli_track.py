@@ -50,7 +50,10 @@ def test_track_is_deterministic_for_a_seed(tmp_path, desired):
 
 
 @pytest.mark.parametrize("content,options,what", [
-    ("displacement_um\n1\n2\n", (), "missing column 'time_s'"),
+    ("displacement_um\n1\n2\n", (), "missing column 'time_s' in header (displacement_um); "
+     "name the time column with --time NAME or --time NUMBER, or give the sample rate, "
+     "--rate HZ"),
+    ("time_s,displacement_um\n0,1\n1,2\n", ("--rate", "10"), "--rate is for records without"),
     ("time_s,displacement_um\n0,1\n2,2\n1,3\n", (), "d.csv:4:1: time_s = 1 goes back"),
     ("time_s,displacement_um\n0,1\n1,nan\n", (), "d.csv:3:2:"),
     ("time_s,displacement_um\n0,1\n", ("--u-max", "200"), "--u-max 200 is outside"),
@@ -64,3 +67,19 @@ def test_bad_input(tmp_path, capsys, content, options, what):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("pihyst: error: ") and what in err
     assert not out.exists()
+
+
+def test_track_takes_the_times_from_rate(tmp_path, capsys, desired):
+    path, t, y = desired
+    untimed = tmp_path / "untimed.csv"
+    write_columns(untimed, {"displacement_um": y})
+    out, timed_out = tmp_path / "rate.csv", tmp_path / "timed.csv"
+    assert run("track", MODEL, str(untimed), "--rate", "2", "-o", str(out),
+               "--slew-rate", "20") == 0
+    assert run("track", MODEL, str(path), "-o", str(timed_out), "--slew-rate", "20") == 0
+    cols, _ = read_columns(out, ["time_s", "voltage_V", "displacement_um"])
+    timed, _ = read_columns(timed_out, ["time_s", "voltage_V", "displacement_um"])
+    np.testing.assert_allclose(cols["time_s"], np.arange(y.size) / 2.0, rtol=0, atol=0)
+    np.testing.assert_allclose(t, np.arange(y.size) * 0.5)   # the same times as the timed file
+    for name in ("voltage_V", "displacement_um"):
+        np.testing.assert_array_equal(cols[name], timed[name])

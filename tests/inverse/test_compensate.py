@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 import pihyst
 from pihyst import Compensator, compensate
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse import FLAG_NAN, FLAG_SATURATED_HIGH, FLAG_SATURATED_LOW, FLAG_SLEW
 
 from strategies import U, classical_models, multislope_models, pwl_models, random_walk
@@ -239,6 +240,55 @@ def test_slew_limit_flags():
     assert result.flags[0] == FLAG_SLEW
     assert result.displacement[-1] == pytest.approx(30.0, abs=1e-12)
 
+
+def test_reset_to_a_state_alone_continues_from_the_voltage_it_pins():
+    # the zero threshold pins the voltage: the compensator reset to the state of one that
+    # ran (slew-limited, so its last voltage is not the last target's) goes on with the
+    # same voltages, NaN holds and slew steps included
+    model = pihyst.ClassicalPI([0, 10, 30], [0.3, 0.2, 0.1])
+    ran = Compensator(model, slew_rate=3.0)
+    ran.run(model.predict(np.r_[np.linspace(0, 100, 30), np.linspace(100, 60, 10)]))
+    reset = Compensator(model, slew_rate=3.0)
+    reset.step(5.0)
+    reset.reset(ran.state)
+    assert reset.voltage == ran.voltage and reset.displacement == ran.displacement
+    np.testing.assert_array_equal(reset.state, ran.state)
+    targets = [10.0, 11.0, np.nan, 12.0, 9.0, 30.0, 30.0]
+    assert [reset.step(y) for y in targets] == [ran.step(y) for y in targets]
+
+
+def test_reset_to_a_state_at_rest_at_a_limit_only():
+    # after a full cycle down to 0 V the paper's multislope state is at rest at 0 V alone
+    # within the limits
+    ran = Compensator(PAPER_MULTISLOPE)
+    ran.run(PAPER_MULTISLOPE.predict(np.r_[np.linspace(0, 150, 50), np.linspace(150, 0, 50)]))
+    reset = Compensator(PAPER_MULTISLOPE)
+    reset.step(20.0)
+    reset.reset(ran.state)
+    assert reset.voltage == pytest.approx(ran.voltage, abs=1e-13)
+    np.testing.assert_array_equal(reset.state, ran.state)
+    assert reset.step(12.5) == pytest.approx(ran.step(12.5), abs=1e-12)
+
+
+@pytest.mark.parametrize("state,says", [
+    # a multislope state after a fall to 60 V: at rest up to 85 V (its zero-threshold
+    # operator has a play band), so the last voltage is not known
+    ("fallen", r"at rest at every voltage in \[60, 85\] V.*reset\(state, voltage\)"),
+    ([140.0, 0.0, 0.0, 0.0], r"at rest at no voltage within the limits \[0, 150\] V"),
+])
+def test_reset_refuses_a_state_that_does_not_say_the_voltage(state, says):
+    comp = Compensator(PAPER_MULTISLOPE)
+    if state == "fallen":
+        comp.run(PAPER_MULTISLOPE.predict(np.r_[np.linspace(0, 100, 30),
+                                                np.linspace(100, 60, 10)]))
+        state = comp.state
+    before = comp.state, comp.voltage
+    with pytest.raises(InvalidArgumentError, match=says):
+        comp.reset(state)
+    np.testing.assert_array_equal(comp.state, before[0])     # left as it was
+    assert comp.voltage == before[1]
+    comp.reset(state, 70.0)                                    # with the voltage: as asked
+    assert comp.voltage == 70.0
 
 def test_streaming_state_and_reset():
     comp = Compensator(PAPER_MULTISLOPE, initial_voltage=0.0)

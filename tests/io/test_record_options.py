@@ -5,6 +5,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.io import CSVError, RecordError, open_record, read_record
 
 pytestmark = pytest.mark.usefixtures("engine")
@@ -101,3 +102,52 @@ def test_blocks_join_to_the_whole_record(tmp_path_factory, monkeypatch, n, lag, 
     for q in ("voltage", "displacement", "time"):
         np.testing.assert_array_equal(np.concatenate([getattr(p, q) for p in parts]),
                                       getattr(whole, q))
+
+
+@pytest.mark.parametrize("kind", ["csv", "npy"])
+@pytest.mark.parametrize("need,rate,options,message", [
+    # nothing to read: a clear error, not a StopIteration inside a generator
+    ((), None, {"time": "none"}, r"no column to read: need=\(\)"),
+    ((), 10.0, {}, r"no column to read: need=\(\).*; the rate gives the time, but it needs"),
+    (("time",), 10.0, {}, r"no column to read: need=\('time',\).*; the rate gives the time"),
+    ((), None, {"optional": ()}, r"no column to read: need=\(\): name the quantities"),
+])
+def test_a_reader_with_no_column_to_read_says_so(tmp_path, kind, need, rate, options,
+                                                 message):
+    if kind == "csv":
+        path = write(tmp_path, [(1.0, 2.0), (3.0, 4.0)], header="u,y")
+    else:
+        path = tmp_path / "r.npy"
+        np.save(path, np.array([[1.0, 2.0], [3.0, 4.0]]))
+    with pytest.raises(InvalidArgumentError, match=message):
+        open_record(path, need=need, rate=rate, **options)
+
+
+@pytest.mark.parametrize("need", [("time", "displacement"), ("time", "voltage"),
+                                  ("time", "voltage", "displacement")])
+def test_a_needed_time_comes_from_the_rate(tmp_path, small_blocks, need):
+    path = write(tmp_path, [(float(k), 2.0 * k) for k in range(9)],
+                 header="voltage_V,displacement_um")
+    with open_record(path, need=need, rate=4.0) as reader:
+        rec = reader.read()
+        blocks = list(reader.chunks())
+    np.testing.assert_array_equal(rec.time, np.arange(9) / 4.0)
+    np.testing.assert_array_equal(np.concatenate([b.time for b in blocks]), rec.time)
+    assert rec.metadata["rate_hz"] == 4.0
+    # a time column and a rate: which is meant? (the column is looked for to refuse both)
+    timed = write(tmp_path, [(0.0, 1.0, 2.0)], header="time_s,voltage_V,displacement_um")
+    with pytest.raises(ValueError, match="--rate is for records without a time column"):
+        open_record(timed, need=need, rate=4.0)
+    with open_record(timed, need=need, rate=4.0, time="none") as reader:
+        assert reader.read().time.tolist() == [0.0]
+    with pytest.raises(ValueError, match=r"needs the time \(or --rate HZ\)"):
+        open_record(timed, need=need, time="none")
+
+
+def test_need_may_name_one_quantity_alone(tmp_path):
+    path = write(tmp_path, [(0.0, 1.0), (0.5, 2.0)], header="time_s,voltage_V")
+    with open_record(path, need="voltage", optional="time") as reader:
+        rec = reader.read()
+    assert rec.voltage.tolist() == [1.0, 2.0] and rec.time.tolist() == [0.0, 0.5]
+    with pytest.raises(InvalidArgumentError, match=r"unknown quantities \['force'\]"):
+        open_record(path, need="force")

@@ -77,9 +77,15 @@ def test_bad_delays_are_refused_in_one_line(model, kw, match):
     assert "\n" not in str(err.value)
 
 
-def test_a_bad_delay_in_a_file_names_the_file():
-    data = {**M.to_dict(), "delay_samples": -2}
-    with pytest.raises(pihyst.InvalidModelError, match="m.json: delay must be"):
+@pytest.mark.parametrize("key, value, says", [
+    ("delay_samples", -2, "m.json: delay_samples must be a whole number"),
+    ("delay_samples", 2_000_000, "m.json: delay_samples = 2e\\+06 is more than the 1,000,000"),
+    ("sample_period_s", 0, "m.json: sample_period_s must be a finite number of seconds > 0"),
+])
+@pytest.mark.parametrize("model", [M, BW], ids=["classical", "bouc-wen"])
+def test_a_bad_delay_in_a_file_names_the_file_and_key(model, key, value, says):
+    data = {**model.to_dict(), "delay_samples": 1, key: value}
+    with pytest.raises(pihyst.InvalidModelError, match=says):
         PIModel.from_dict(data, "m.json")
 
 

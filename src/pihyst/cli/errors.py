@@ -17,6 +17,7 @@ Option values are checked where they are parsed, by the types below
 import argparse
 import math
 import os
+import re
 import sys
 import traceback
 import warnings
@@ -51,9 +52,22 @@ def one_line(text):
     return " ".join(str(text).splitlines()) or "(no message)"
 
 
+#: What argparse takes for an option's value rather than an option name: its own rule for
+#: negative numbers (``-5``, ``-.5``) widened to any float notation (``-1e-3``, ``-2.5E+8``,
+#: ``-inf``), and to a list starting with one (``--input-range -10,150``). No option name
+#: of pihyst starts with '-' and a digit; the option's type then says what is wrong.
+NEGATIVE_NUMBER = re.compile(r"^-(\.?\d[\d.eE+\-,\s]*|inf|infinity|nan)$", re.IGNORECASE)
+
+
 class ArgumentParser(argparse.ArgumentParser):
     """argparse with one-line errors: ``pihyst: error: argument --seed: ... (see 'pihyst
-    simulate --help')``, exit status 2."""
+    simulate --help')``, exit status 2; a negative number in scientific notation
+    (``--u-min -1e-3``) is an option's value, not an unknown option (every subcommand's
+    parser is of this class: ``add_subparsers`` makes its parsers of the parent's class)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message):
         self.exit(EXIT_USER_ERROR,

@@ -12,6 +12,7 @@ import numpy as np
 
 from pihyst.cli.errors import UsageError
 from pihyst.exceptions import InvalidArgumentError, InvalidModelError
+from pihyst.identify._cycles import record_settling_end
 
 TOLERANCE = 0.01
 INITIAL_STATES = ("model", "bottom", "top", "zero", "settle")
@@ -110,14 +111,11 @@ def initial_state(model, mode):
     raise UsageError(f"--initial-state: unknown mode {mode!r}")
 
 
-def settle_end(u, tolerance=0.02):
-    """Index after the first full sweep of ``u``: both ends of its range reached (within
-    ``tolerance`` of its span)."""
-    lo, hi = float(u.min()), float(u.max())
-    tol = tolerance * (hi - lo)
-    top = np.flatnonzero(u >= hi - tol)
-    bottom = np.flatnonzero(u <= lo + tol)
-    return int(max(top[0], bottom[0])) + 1
+def settle_end(u):
+    """Index after the sweep of ``u`` that settles the operators (--initial-state settle):
+    the rule of pihyst.fit(initial_state="settle"), so that a command and the fit judge
+    the same samples."""
+    return record_settling_end(u)
 
 
 def creep_times(model, rec, t_last):

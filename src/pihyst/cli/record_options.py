@@ -5,6 +5,7 @@ and the progress bar for long reads. docs/records.md."""
 import sys
 
 from pihyst.cli.errors import UsageError, count
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.io import open_record
 
 UNITS = ("m", "mm", "um", "nm")
@@ -113,9 +114,7 @@ def open_from_args(args, path, need, optional=("time",)):
                            skip_until=args.skip_until, separator=args.separator,
                            decimal_comma=args.decimal_comma, reader=args.reader, need=need,
                            optional=optional)
-    except ValueError as err:
-        if isinstance(err, UsageError) or type(err) is not ValueError:
-            raise
+    except InvalidArgumentError as err:      # an option that does not fit this record
         raise UsageError(f"{path}: {err}") from None
 
 

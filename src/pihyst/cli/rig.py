@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from pihyst.cli.errors import UsageError
+from pihyst.cli.errors import UsageError, positive_number
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
@@ -100,12 +100,22 @@ def register(sub):
     e.add_argument("--config", metavar="RIG.toml", required=True)
     e.add_argument("--plant", default=None, metavar="NAME", help="the simulated beam")
     _fault_option(e)
-    e.add_argument("--duration", type=float, default=None, metavar="S",
+    e.add_argument("--duration", type=_duration, default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     e.set_defaults(run=run_emulate)
 
 
 # ----------------------------------------------------------------------------- helpers
+def _duration(text):
+    """--duration: a positive number of seconds a wait can take (threading's limit)."""
+    import threading
+    seconds = positive_number(text)
+    if seconds > threading.TIMEOUT_MAX:
+        raise argparse.ArgumentTypeError(f"must be at most {threading.TIMEOUT_MAX:g} s, got "
+                                         f"{text!r}")
+    return seconds
+
+
 def _fault_option(p):
     p.add_argument("--fault", action="append", default=[], metavar="DEVICE:KIND[:START[:N]]",
                    help="emulated instruments only: inject a fault, e.g. sensor:over-range:5 "
@@ -164,6 +174,18 @@ def _check_output(path):
         except ImportError:
             raise UsageError(f"-o {path}: HDF5 logs need h5py: pip install "
                              "'pihyst[hdf5]'") from None
+
+
+def _run(rig, args, program, **options):
+    """``rig.run`` into ``args.output``; rig limits the supply may not be sent are a
+    UsageError naming the configuration (before the log is opened)."""
+    from pihyst.exceptions import InvalidArgumentError
+    from pihyst.rig._controller import check_limits
+    try:
+        check_limits(rig.supply, rig.config.rig)
+    except InvalidArgumentError as err:
+        raise UsageError(f"{args.config}: {err}") from None
+    return rig.run(program, args.output, **options)
 
 
 def _report(result, args, rig):
@@ -249,7 +271,7 @@ def run_record(args):
     _check_output(args.output)
     program = VoltageProgram(u, description)
     with _open(args, config) as rig:
-        result = rig.run(program, args.output, fsync=args.fsync)
+        result = _run(rig, args, program, fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     y = y[np.isfinite(y)]
     if y.size:
@@ -289,8 +311,8 @@ def run_track(args):
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
     with _open(args, config) as rig:
-        result = rig.run(program, args.output, notes=[f"model: {args.model}: {model!r}"],
-                         fsync=args.fsync)
+        result = _run(rig, args, program, notes=[f"model: {args.model}: {model!r}"],
+                      fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     ref = result.column("reference", phase="run")
     ok = np.isfinite(y)

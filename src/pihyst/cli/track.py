@@ -41,7 +41,8 @@ def register(sub):
                "--plant paper-beam -o tracked.csv")
     p.add_argument("model", metavar="MODEL.json", help="model file (see pihyst.load_model)")
     p.add_argument("desired", metavar="DESIRED",
-                   help="record with the time and the desired displacement")
+                   help="record with the desired displacement and its time (time_s, "
+                        "or --rate HZ for a record without one)")
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     add_limit_options(p, default_range="the model's and the beam's range")
     add_plant_options(p, seed_help="seed of the beam's sensor noise (default 0)")

@@ -34,7 +34,7 @@ except ImportError:  # pragma: no cover - exercised only without the extra
     raise ImportError("pihyst.control needs python-control: "
                       "pip install 'pihyst[control]'") from None
 
-from pihyst.exceptions import InputRangeError, InvalidModelError
+from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.inverse import Compensator
 from pihyst.model import PIModel
 
@@ -130,8 +130,8 @@ class _CompensatorStep:
 
 def _check(model):
     if not isinstance(model, PIModel):
-        raise TypeError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
-                        f"PiecewiseLinearPI), not {type(model).__name__}")
+        raise InvalidArgumentError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
+                                   f"PiecewiseLinearPI), not {type(model).__name__}")
     if model.delay:
         # the system's state is the operator state: it has no room for pending inputs
         raise InvalidModelError(f"the model has an input delay of {model.delay} samples: "

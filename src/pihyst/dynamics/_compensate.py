@@ -17,6 +17,7 @@ voltage and slew limits hold for every output whatever h_d is.
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse import compensate
 
 ZERO_TOLERANCE = 1e-12   # leading coefficients of B below this (relative): pure delay
@@ -52,7 +53,9 @@ def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=
     ZPETC prefilter, then the hysteresis inverse from the model's zero operator state.
     Returns (voltage, h_desired, result of :func:`pihyst.compensate`)."""
     if model.n_inputs != 1 or model.n_outputs != 1:
-        raise ValueError("compensate_hammerstein needs a single-input single-output model")
+        raise InvalidArgumentError(f"compensate_hammerstein needs a single-input "
+                                   f"single-output model, got {model.n_inputs} input(s) and "
+                                   f"{model.n_outputs} output(s)")
     H = model.hysteresis[0]
     h_d = zpetc(model.a[0], model.b[0][0], desired)
     res = compensate(H, h_d, u_min=u_min, u_max=u_max, slew_rate=slew_rate,

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst.dynamics._linear import fit_oe, fit_oe_periodic, response, simulate
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.model import ClassicalPI
 
 
@@ -88,7 +89,9 @@ def _as_records(records):
         u = np.atleast_2d(np.asarray(u, dtype=float).T).T
         y = np.atleast_2d(np.asarray(y, dtype=float).T).T
         if u.shape[0] != y.shape[0]:
-            raise ValueError("each record needs as many input as output samples")
+            raise InvalidArgumentError(f"record {len(out)}: {u.shape[0]} input samples but "
+                                       f"{y.shape[0]} output samples (each record needs as "
+                                       f"many of both)")
         out.append((u, y))
     return out
 

@@ -352,7 +352,8 @@ def _named(records):
     seen = set()
     for name, _ in named:
         if name in seen:
-            raise ValueError(f"two records are named {name!r}: names must be unique")
+            raise InvalidArgumentError(f"two records are named {name!r}: names must be "
+                                       f"unique")
         seen.add(name)
     return named
 

@@ -157,6 +157,34 @@ def starts_at_rest(v, span):
     return v[0] <= REST_TOLERANCE * span
 
 
+def settling_end(v, span, points=None):
+    """The index after the sweep that settles the operators of a record that does not
+    start at rest (v shifted to [0, span]; ``points``: its turning points, found if not
+    given): up to the first valley after both ends of the range were reached (within
+    REST_TOLERANCE of the span), or just past the second end if the record never turns up
+    again. The one rule of fit(initial_state="settle") and of the command line's
+    --initial-state settle (:func:`record_settling_end`)."""
+    if points is None:
+        points = turning_points(v, REVERSAL_TOLERANCE * span)
+    lo_hit = np.flatnonzero(v <= REST_TOLERANCE * span)[0]
+    hi_hit = np.flatnonzero(v >= (1 - REST_TOLERANCE) * span)[0]
+    swept = max(lo_hit, hi_hit)
+    valleys = [i for i, kind in points if kind < 0 and i >= swept]
+    return int(valleys[0] if valleys else swept) + 1
+
+
+def record_settling_end(u):
+    """:func:`settling_end` of the input ``u`` over its own range, as :func:`pihyst.fit`
+    judges a record (without ``input_range``); 0 for a constant input (nothing sweeps)."""
+    u = np.asarray(u, dtype=float)
+    if u.size == 0:
+        return 0
+    lo, span = float(u.min()), float(np.ptp(u))
+    if not span > 0:
+        return 0
+    return settling_end(u - lo, span)
+
+
 def layout(v, span, *, settle, holdout):
     """Cut the record v (shifted to [0, span]) into settle/fit/held-back segments.
 
@@ -168,13 +196,7 @@ def layout(v, span, *, settle, holdout):
     points = turning_points(v, tol)
     settle_end = 0
     if settle:
-        lo_hit = np.flatnonzero(v <= REST_TOLERANCE * span)[0]
-        hi_hit = np.flatnonzero(v >= (1 - REST_TOLERANCE) * span)[0]
-        swept = max(lo_hit, hi_hit)
-        valleys = [i for i, kind in points if kind < 0 and i >= swept]
-        # settle up to the first valley after both ends were reached, or just past the
-        # second end if the record never turns up again
-        settle_end = int(valleys[0] if valleys else swept) + 1
+        settle_end = settling_end(v, span, points)
         if n - settle_end < MIN_SAMPLES:
             raise FitError(f"the record does not start at rest, and after its first full "
                            f"sweep of the input range, which settles the operator states, "

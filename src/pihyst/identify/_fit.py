@@ -45,6 +45,7 @@ from pihyst.identify._start_state import start_state
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
 from pihyst.identify._sufficiency import check_fit, check_record
 from pihyst.model import InvalidModelError
+from pihyst.model._delay import MAX_DELAY_SAMPLES
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
 
@@ -362,6 +363,9 @@ def _check_bounds(max_operators, max_latency, delay):
         raise FitError(f"max_latency must be a positive number of seconds, got {max_latency!r}")
     if delay != "auto" and not (isinstance(delay, (int, np.integer)) and delay >= 0):
         raise FitError(f"delay must be a number of samples >= 0 or 'auto', got {delay!r}")
+    if delay != "auto" and delay > MAX_DELAY_SAMPLES:
+        raise FitError(f"delay = {delay} is more than the {MAX_DELAY_SAMPLES:,} samples "
+                       f"pihyst holds as an input delay")
 
 
 def _check_weight_bounds(bounds):

@@ -264,19 +264,49 @@ class Compensator:
 
     def reset(self, state=None, voltage=None, creep_state=None):
         """Go back to the initial state and voltage, or to ``state`` and ``voltage``
-        (with creep: the lags to ``creep_state``, default settled at the output)."""
+        (with creep: the lags to ``creep_state``, default settled at the output).
+
+        ``voltage`` is applied to ``state`` (a no-op for a state at rest there). With
+        ``state`` alone the voltage is the one within the limits at which ``state`` is at
+        rest, so that the compensator continues as the one that reached ``state``; where
+        the state is at rest at a whole interval of voltages (the voltage moved back
+        inside the play of every operator, or a model without a zero threshold) it does
+        not say which voltage was last, and the slew limit and a NaN target depend on
+        it: an :class:`InvalidArgumentError` asks for ``voltage``, as it does for a state
+        at rest nowhere within the limits (no run within them reaches it)."""
         start_state, start_voltage, start_creep = self._start
         if state is None and voltage is None and creep_state is None:
             creep_state = start_creep
         state = start_state if state is None else _finite_vector(state, "state",
                                                                  self.model.n_operators)
-        voltage = start_voltage if voltage is None else _number(voltage, "voltage")
         lo, hi = self.limits
+        if voltage is None:
+            voltage = start_voltage if state is start_state else \
+                self._voltage_of(state, lo, hi)
+        voltage = _number(voltage, "voltage")
         if not lo <= voltage <= hi:
             raise InvalidArgumentError(f"voltage {voltage:g} is outside the limits "
                                        f"[{lo:g}, {hi:g}]")
         self._core.reset(state, voltage)
         self._start_lags(creep_state)
+
+    def _voltage_of(self, state, lo, hi):
+        """The one voltage in [lo, hi] at which ``state`` is at rest (InvalidArgumentError
+        if there is none, or a whole interval)."""
+        at_rest = rest_interval(self.model, state, lo, hi)
+        if at_rest is None:
+            raise InvalidArgumentError(
+                f"state is at rest at no voltage within the limits [{lo:g}, {hi:g}] V, so "
+                f"no run within them reaches it: give the voltage to apply to it, "
+                f"reset(state, voltage)")
+        a, b = at_rest
+        # narrower than the rounding of voltages of the limits' size: one voltage
+        if b - a > 8 * np.spacing(max(abs(lo), abs(hi))):
+            raise InvalidArgumentError(
+                f"state is at rest at every voltage in [{a:.6g}, {b:.6g}] V, so it does not "
+                f"say which voltage was last (the slew limit and a NaN target start from "
+                f"it): give it, reset(state, voltage)")
+        return a
 
     # ---------------------------------------------------------------- compensation
     def step(self, y_desired, dt=None):
@@ -350,6 +380,17 @@ def rest_voltage(model, state, preferred, lo, hi):
             break
         a, b = (m, b) if moves(m, sign) else (a, m)
     return b if not moves(b, -sign) else preferred
+
+
+def rest_interval(model, state, lo, hi):
+    """(a, b): the voltages in [lo, hi] at which operator ``state`` is at rest form the
+    interval [a, b] (a == b: one voltage); None if it is at rest at none of them."""
+    a = rest_voltage(model, state, lo, lo, hi)
+    bank = model._new_bank(state)
+    bank.step(a)
+    if np.any(bank.state != state):
+        return None
+    return a, rest_voltage(model, state, hi, lo, hi)
 
 
 def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.exceptions import CSVError, RecordError
+from pihyst.exceptions import CSVError, InvalidArgumentError, RecordError
 from pihyst.io._array_sources import ArraySource, function_source, open_array_source
 from pihyst.io._text_source import TextSource
 
@@ -67,35 +67,50 @@ class RecordReader:
                  separator=None, decimal_comma=None, reader=None,
                  need=("voltage", "displacement"), optional=("time",)):
         self.path = os.fspath(path)
-        self.need = tuple(need)
-        self.optional = tuple(optional) + (("time",) if skip_until is not None else ())
+        # one quantity may be named alone (need="time"), not spelt out letter by letter
+        self.need = (need,) if isinstance(need, str) else tuple(need)
+        optional = (optional,) if isinstance(optional, str) else tuple(optional)
+        self.optional = optional + (("time",) if skip_until is not None else ())
         unknown = set(self.need) - set(QUANTITIES)
         if unknown:
-            raise ValueError(f"unknown quantities {sorted(unknown)}")
+            raise InvalidArgumentError(f"unknown quantities {sorted(unknown)}")
         self.source = _open_source(self.path, reader, separator, decimal_comma)
         found = self.source.extra.get("found", {}) if isinstance(self.source, ArraySource) \
             else {}
-        specs = {"voltage": voltage, "displacement": displacement, "time": time}
-        self.refs = self._resolve(specs)
-        self.labels = {q: self._label(r) for q, r in self.refs.items()}
         self.rate = (_positive(rate, "--rate") if rate is not None else
                      _positive(found.get("rate"), "the reader's metadata 'rate'"))
+        specs = {"voltage": voltage, "displacement": displacement, "time": time}
+        self.refs = self._resolve(specs)
+        if not self.refs:
+            # the time a rate defines needs a column to count the samples of
+            optional = sorted(set(self.optional) - set(self.need))
+            raise InvalidArgumentError(
+                f"no column to read: need={self.need!r}"
+                + (f", and the optional {', '.join(DEFAULT_NAMES[q] for q in optional)} is "
+                   f"not in the record" if optional else "")
+                + ("; the rate gives the time, but it needs a column to count the samples"
+                   if self.rate is not None else "")
+                + ": name the quantities to read in need (voltage, displacement, time)")
+        self.labels = {q: self._label(r) for q, r in self.refs.items()}
         self.voltage_gain = (
             _finite(voltage_gain, "--voltage-gain") if voltage_gain is not None else
             _finite(found.get("voltage_gain", 1.0), "the reader's metadata 'voltage_gain'"))
         if self.voltage_gain == 0:
-            raise ValueError("--voltage-gain must not be 0")
+            raise InvalidArgumentError("--voltage-gain must not be 0")
         self.unit, self.unit_from = self._unit(displacement_unit, found)
         if not (isinstance(lag, (int, np.integer)) and lag >= 0):
-            raise ValueError(f"--lag must be a whole number of samples >= 0, got {lag!r}")
+            raise InvalidArgumentError(f"--lag must be a whole number of samples >= 0, got "
+                                       f"{lag!r}")
         both = "voltage" in self.refs and "displacement" in self.refs
         self.lag = int(lag) if both else 0
         self.skip_until = None if skip_until is None else _finite(skip_until, "--skip-until")
         if self.skip_until is not None and "time" not in self.refs and self.rate is None:
-            raise ValueError(f"--skip-until needs a time column in {self.path} or --rate")
+            raise InvalidArgumentError(f"--skip-until needs a time column in {self.path} or "
+                                       f"--rate")
         if "time" in self.refs and self.rate is not None:
-            raise ValueError("--rate is for records without a time column; this one has "
-                             f"time in {self.labels['time']} (use --time none to ignore it)")
+            raise InvalidArgumentError(f"--rate is for records without a time column; this one "
+                                       f"has time in {self.labels['time']} (use --time none to "
+                                       f"ignore it)")
         self.skipped = 0
         self.n_samples = None
 
@@ -104,35 +119,40 @@ class RecordReader:
         refs = {}
         for q in QUANTITIES:
             spec = specs[q]
+            # a rate gives the time: the time column is looked for only to refuse both
+            needed = q in self.need and not (q == "time" and self.rate is not None)
             if spec is not None and str(spec).strip().lower() == "none":
-                if q in self.need:
-                    raise ValueError(f"--{q} none: this command needs the {q}")
+                if needed:
+                    raise InvalidArgumentError(f"--{q} none: this command needs the {q}"
+                                               + (" (or --rate HZ)" if q == "time" else ""))
                 continue
             if q not in self.need and spec is None and q not in self.optional:
                 continue
-            ref = self._ref(q, spec)
+            ref = self._ref(q, spec, needed)
             if ref is not None:
                 refs[q] = ref
         seen = {}
         for q, ref in refs.items():
             if ref in seen:
-                raise ValueError(f"the {seen[ref]} and the {q} are both read from "
-                                 f"{self._label(ref)} of {self.path}")
+                raise InvalidArgumentError(f"the {seen[ref]} and the {q} are both read from "
+                                           f"{self._label(ref)} of {self.path}")
             seen[ref] = q
         return refs
 
-    def _ref(self, quantity, spec):
+    def _ref(self, quantity, spec, needed):
         src = self.source
         if isinstance(src, ArraySource):
             if spec is not None:
                 return src.resolve(spec, quantity)
             ref = src.default([DEFAULT_NAMES[quantity], quantity])
-            if ref is None and quantity in self.need:
+            if ref is None and needed:
                 raise RecordError(self.path, f"no {DEFAULT_NAMES[quantity]!r} for the "
-                                  f"{quantity}: name it with --{quantity} NAME, NAME:K or K "
-                                  f"({src.inventory()})")
+                                  f"{quantity}: name it with --{quantity} NAME, NAME:K or K"
+                                  + (" (or give the sample rate, --rate HZ)"
+                                     if quantity == "time" else "")
+                                  + f" ({src.inventory()})")
             return ref
-        return _text_column(src, quantity, spec, quantity in self.need)
+        return _text_column(src, quantity, spec, needed)
 
     def _label(self, ref):
         if isinstance(self.source, ArraySource):
@@ -158,7 +178,7 @@ class RecordReader:
         if unit not in UNIT_FACTORS:
             option = ("the reader's metadata 'displacement_unit'" if where == "reader"
                       else "--displacement-unit")
-            raise ValueError(f"{option} must be one of m, mm, um, nm; got {unit!r}")
+            raise InvalidArgumentError(f"{option} must be one of m, mm, um, nm; got {unit!r}")
         return unit, where
 
     # ---------------------------------------------------------------- reading
@@ -371,7 +391,9 @@ def _text_column(src, quantity, spec, needed):
                 return None
             raise CSVError(src.path, d.header_line, 0, f"missing column {name!r} in header "
                            f"({', '.join(src.columns)}); name the {quantity} column with "
-                           f"--{quantity} NAME or --{quantity} NUMBER")
+                           f"--{quantity} NAME or --{quantity} NUMBER"
+                           + (", or give the sample rate, --rate HZ" if quantity == "time"
+                              else ""))
         spec = name
     text = str(spec).strip()
     if text.isdigit():
@@ -402,7 +424,8 @@ def _open_source(path, reader, separator, decimal_comma):
     if kind is None:
         return TextSource(path, separator=separator, decimal_comma=decimal_comma)
     if separator is not None or decimal_comma is not None:
-        raise ValueError(f"--separator and --decimal-comma are for text files, not {kind}")
+        raise InvalidArgumentError(f"--separator and --decimal-comma are for text files, not "
+                                   f"{kind}")
     return open_array_source(path, kind)
 
 
@@ -417,20 +440,21 @@ def _call_reader(reader, path):
         name = str(reader)
         module, sep, attr = name.rpartition(":")
         if not sep or not module or not attr:
-            raise ValueError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
-                             "FILE.py:FUNCTION")
+            raise InvalidArgumentError(f"--reader {reader!r}: expected MODULE:FUNCTION or "
+                                       "FILE.py:FUNCTION")
         try:
             loaded = _load_reader_module(module)
         except ImportError as err:
-            raise ValueError(f"--reader {reader}: cannot load it ({err})") from None
+            raise InvalidArgumentError(f"--reader {reader}: cannot load it ({err})") from None
         except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's module failed
-            raise ValueError(f"--reader {reader}: cannot load it ({_what(err)})") from err
+            raise InvalidArgumentError(f"--reader {reader}: cannot load it "
+                                       f"({_what(err)})") from err
         func = getattr(loaded, attr, None)
         if func is None:
-            raise ValueError(f"--reader {reader}: {module} has no function {attr!r}")
+            raise InvalidArgumentError(f"--reader {reader}: {module} has no function {attr!r}")
         if not callable(func):
-            raise ValueError(f"--reader {reader}: {attr!r} in {module} is not a function "
-                             f"but {type(func).__name__}")
+            raise InvalidArgumentError(f"--reader {reader}: {attr!r} in {module} is not a "
+                                       f"function but {type(func).__name__}")
     try:
         return func(path)
     except (Exception, SystemExit) as err:  # noqa: BLE001 - the user's function failed
@@ -465,7 +489,7 @@ def _positive(value, option):
         return None
     value = _finite(value, option)
     if value <= 0:
-        raise ValueError(f"{option} must be positive, got {value:g}")
+        raise InvalidArgumentError(f"{option} must be positive, got {value:g}")
     return value
 
 
@@ -473,9 +497,9 @@ def _finite(value, option):
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{option} must be a number, got {value!r}") from None
+        raise InvalidArgumentError(f"{option} must be a number, got {value!r}") from None
     if not np.isfinite(value):
-        raise ValueError(f"{option} must be a finite number, got {value!r}")
+        raise InvalidArgumentError(f"{option} must be a finite number, got {value!r}")
     return value
 
 
@@ -502,7 +526,7 @@ def read_record(path, **options):
     ``metadata``); ``need`` (the quantities that must be there).
 
     Returns a :class:`Record`. Bad data raise :class:`RecordError` (:class:`CSVError` for
-    text, with file, line and column); bad options ``ValueError``.
+    text, with file, line and column); bad options :class:`InvalidArgumentError`.
 
     Examples
     --------

@@ -3,7 +3,7 @@ careful reader where the engine refuses one, and exact line numbers for any samp
 
 import os
 
-from pihyst.exceptions import CSVError
+from pihyst.exceptions import CSVError, InvalidArgumentError
 from pihyst.io._text_check import check_block, data_line_of
 from pihyst.io._text_engines import engine_name, read_block
 from pihyst.io._text_format import AUTO, HEAD_BYTES, SEPARATOR_NAMES, sniff
@@ -20,12 +20,12 @@ class TextSource:
         self.path = os.fspath(path)
         self.block_bytes = block_bytes or BLOCK_BYTES
         if separator is not None and separator not in SEPARATOR_NAMES:
-            raise ValueError(f"unknown separator {separator!r}: use one of "
-                             "',', ';', 'tab', 'whitespace'")
+            raise InvalidArgumentError(f"unknown separator {separator!r}: use one of "
+                                       "',', ';', 'tab', 'whitespace'")
         sep = AUTO if separator is None else SEPARATOR_NAMES[separator]
         decimal = None if decimal_comma is None else ("," if decimal_comma else ".")
         if sep == "," and decimal == ",":
-            raise ValueError("a decimal comma needs a separator other than the comma")
+            raise InvalidArgumentError("a decimal comma needs a separator other than the comma")
         try:
             with open(self.path, "rb") as f:
                 head = f.read(HEAD_BYTES)

@@ -19,38 +19,44 @@ from collections import deque
 
 import numpy as np
 
-from pihyst.exceptions import InvalidArgumentError, InvalidModelError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError, ResourceLimitError
 
-__all__ = ["checked_delay", "checked_sample_period", "delay_at", "delayed_input",
-           "pending_after", "DelayLine"]
+__all__ = ["MAX_DELAY_SAMPLES", "checked_delay", "checked_sample_period", "delay_at",
+           "delayed_input", "pending_after", "DelayLine"]
 
 #: relative tolerance of "a whole number of samples" and of a uniform sample period
 EXACT = 1e-6
 UNIFORM = 0.01
+#: the longest delay pihyst holds (its d pending inputs are allocated): 10 s at 100 kHz
+MAX_DELAY_SAMPLES = 1_000_000
 
 
-def checked_delay(delay):
-    """``delay`` as an int >= 0; InvalidModelError otherwise (a float is accepted only
-    when it is a whole number; a boolean is not a number)."""
+def checked_delay(delay, name="delay"):
+    """``delay`` as an int in [0, MAX_DELAY_SAMPLES]; InvalidModelError naming ``name``
+    otherwise (a float is accepted only when it is a whole number; a boolean is not a
+    number)."""
     if isinstance(delay, (bool, np.bool_)) or not isinstance(delay, numbers.Real):
-        raise InvalidModelError(f"delay must be a whole number of samples >= 0, got "
+        raise InvalidModelError(f"{name} must be a whole number of samples >= 0, got "
                                 f"{delay!r:.40}")
     if not (np.isfinite(delay) and delay >= 0 and int(delay) == delay):
-        raise InvalidModelError(f"delay must be a whole number of samples >= 0, got "
+        raise InvalidModelError(f"{name} must be a whole number of samples >= 0, got "
                                 f"{delay!r:.40}")
+    if delay > MAX_DELAY_SAMPLES:
+        raise InvalidModelError(f"{name} = {delay:.6g} is more than the {MAX_DELAY_SAMPLES:,} "
+                                f"samples pihyst holds as an input delay")
     return int(delay)
 
 
-def checked_sample_period(period):
+def checked_sample_period(period, name="sample_period"):
     """``period`` as a float > 0 (s), or None (unknown); InvalidModelError otherwise."""
     if period is None:
         return None
     if isinstance(period, (bool, np.bool_)) or not isinstance(period, numbers.Real):
-        raise InvalidModelError(f"sample_period must be a number of seconds > 0, got "
+        raise InvalidModelError(f"{name} must be a number of seconds > 0, got "
                                 f"{period!r:.40}")
     period = float(period)
     if not (np.isfinite(period) and period > 0):
-        raise InvalidModelError(f"sample_period must be a finite number of seconds > 0, "
+        raise InvalidModelError(f"{name} must be a finite number of seconds > 0, "
                                 f"got {period}")
     return period
 
@@ -71,6 +77,11 @@ def delay_at(delay, sample_period, period=None, t=None):
                                        f"{period:g} s): a delay of {delay} samples needs "
                                        f"a fixed sample period")
     ratio = delay * sample_period / period
+    if not ratio <= MAX_DELAY_SAMPLES:      # (inf and NaN too: a period of a denormal)
+        raise ResourceLimitError(
+            f"the model's delay of {delay} samples at {sample_period:g} s "
+            f"({delay * sample_period:g} s) is {ratio:.4g} samples at {period:g} s: more "
+            f"than the {MAX_DELAY_SAMPLES:,} pihyst holds as an input delay")
     n = round(ratio)
     if abs(ratio - n) > EXACT * max(1.0, ratio):
         raise InvalidArgumentError(

@@ -521,8 +521,8 @@ class PIModel(Immutable, ABC):
                                     f"{SCHEMA_VERSION} (written by another pihyst version)")
         common = {k: d[k] for k in ("weights", "offset", "input_range", "initial_state",
                                     "units", "metadata", "creep") if k in d}
-        common.update(delay_from_dict(d))
         try:
+            common.update(delay_from_dict(d))
             return target(**target._own_from_dict(d), **common)
         except InvalidModelError as err:
             raise InvalidModelError(f"{source}: {err}") from None
@@ -552,9 +552,9 @@ def delay_from_dict(d):
     """Constructor arguments from the delay's JSON keys."""
     out = {}
     if "delay_samples" in d:
-        out["delay"] = d["delay_samples"]
+        out["delay"] = checked_delay(d["delay_samples"], "delay_samples")
     if "sample_period_s" in d:
-        out["sample_period"] = d["sample_period_s"]
+        out["sample_period"] = checked_sample_period(d["sample_period_s"], "sample_period_s")
     return out
 
 
@@ -632,7 +632,11 @@ class Stepper:
         if self._lags is None:
             return h
         if dt is not None:
-            dt = float(dt)
+            try:
+                dt = float(dt)
+            except (TypeError, ValueError):
+                raise InvalidArgumentError(f"dt must be a number of seconds, got "
+                                           f"{dt!r:.40}") from None
             if not (np.isfinite(dt) and dt >= 0):
                 raise InvalidArgumentError(f"dt must be a finite interval >= 0 s, got {dt}")
         return self._lags.step(h, dt)

@@ -7,6 +7,8 @@ import re
 import struct
 from dataclasses import dataclass
 
+from pihyst.exceptions import InvalidArgumentError
+
 # ----------------------------------------------------------------------------- Modbus RTU
 
 
@@ -58,15 +60,15 @@ def encode_registers(value, fmt, word_order="big"):
     elif fmt == "uint32":
         n = int(round(value))
         if not 0 <= n <= 0xFFFFFFFF:
-            raise ValueError(f"{value:g} does not fit a uint32 register pair")
+            raise InvalidArgumentError(f"{value:g} does not fit a uint32 register pair")
         raw = struct.pack(">I", n)
     elif fmt == "uint16":
         n = int(round(value))
         if not 0 <= n <= 0xFFFF:
-            raise ValueError(f"{value:g} does not fit a uint16 register")
+            raise InvalidArgumentError(f"{value:g} does not fit a uint16 register")
         return [n]
     else:
-        raise ValueError(f"unknown register format {fmt!r}")
+        raise InvalidArgumentError(f"unknown register format {fmt!r}")
     words = [raw[0] << 8 | raw[1], raw[2] << 8 | raw[3]]
     return words[::-1] if word_order == "little" else words
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.rig._clock import WallClock
 from pihyst.rig._log import TickRecord
 from pihyst.rig._safety import SetpointGuard, SignalGuard, StopRun, Terminated, Watchdog
@@ -104,6 +105,8 @@ class Controller:
             except OSError:
                 self.guard.failed(u)
                 raise
+            except InvalidArgumentError as err:     # refused before sending: it stays put
+                raise StopRun(str(err)) from None
             self.guard.sent(u)
 
     def _zero_from_watchdog(self):
@@ -223,8 +226,11 @@ class Controller:
 
     # ------------------------------------------------------------------ run
     def run(self, program):
-        """Run ``program`` to its end or to a stop; always ends at 0 V, output off."""
+        """Run ``program`` to its end or to a stop; always ends at 0 V, output off. Rig
+        limits the supply may not be sent are an InvalidArgumentError before anything is
+        sent (:func:`check_limits`)."""
         s = self.settings
+        check_limits(self.supply, s)
         self.records, self.tick, self.overruns = [], 0, 0
         self._comm_errors = self._invalid = self._consecutive_overruns = 0
         self._last_error = ""
@@ -347,3 +353,15 @@ class Controller:
             self._note(f"stopped: {reason}; WARNING: {'; '.join(problems)} - the beam may "
                        "still be charged")
         return zeroed, self.guard.last if zeroed else NAN
+
+
+def check_limits(supply, settings):
+    """InvalidArgumentError unless ``supply`` may be sent every voltage within the rig's
+    limits ``settings.u_min``..``u_max`` (the guard keeps every setpoint in them, and the
+    checks are monotone: the two ends suffice)."""
+    for volts in (settings.u_min, settings.u_max):
+        try:
+            supply.check_setpoint(volts)
+        except InvalidArgumentError as err:
+            raise InvalidArgumentError(f"[rig] limits {settings.u_min:g} .. {settings.u_max:g} "
+                                       f"V: {err}") from None

@@ -2,6 +2,8 @@
 
 from dataclasses import dataclass
 
+from pihyst.exceptions import InvalidArgumentError
+
 #: Every kind of fault, and the devices it applies to.
 FAULT_KINDS = {
     "no-reply": ("supply", "sensor"),      # the request is ignored
@@ -45,12 +47,13 @@ class Fault:
 
     def __post_init__(self):
         if self.kind not in FAULT_KINDS:
-            raise ValueError(f"unknown fault {self.kind!r}; choose one of "
+            raise InvalidArgumentError(f"unknown fault {self.kind!r}; choose one of "
                              f"{', '.join(FAULT_KINDS)}")
         if self.device not in FAULT_KINDS[self.kind]:
-            raise ValueError(f"fault {self.kind!r} does not apply to the {self.device}")
+            raise InvalidArgumentError(f"fault {self.kind!r} does not apply to the "
+                                       f"{self.device}")
         if self.count is not None and self.count < 1:
-            raise ValueError(f"count must be >= 1 or None, got {self.count}")
+            raise InvalidArgumentError(f"count must be >= 1 or None, got {self.count}")
         if self.code is None:
             self.code = 50 if self.device == "sensor" else 4
         self.used = 0

@@ -17,6 +17,8 @@ from dataclasses import astuple, dataclass
 
 import numpy as np
 
+from pihyst.exceptions import CSVError, RecordError
+
 COLUMNS = ("tick", "time_s", "phase", "reference", "command_V", "voltage_V", "readback_V",
            "displacement_um", "sensor_status", "supply_status", "overrun", "late_s",
            "busy_s")
@@ -109,8 +111,9 @@ def read_run_log(path):
     notes as a list of lines."""
     with open(path, encoding="utf-8-sig", newline="") as f:
         text = f.read()
-    notes, rows, header = [], [], None
-    for row in csv.reader(io.StringIO(text)):
+    notes, rows, lines, header = [], [], [], None
+    reader = csv.reader(io.StringIO(text))
+    for row in reader:
         if not row:
             continue
         first = row[0].lstrip()
@@ -127,13 +130,27 @@ def read_run_log(path):
                 notes.append(",".join(row).lstrip("# ").rstrip())
                 continue
         rows.append(row)
+        lines.append(reader.line_num)
     if header is None:
-        raise ValueError(f"{path}: no header row")
+        raise RecordError(path, "no header row: not a pihyst run log")
     out = {}
     for j, name in enumerate(header):
         values = [r[j] if j < len(r) else "" for r in rows]
         if name in ("phase", "sensor_status", "supply_status"):
             out[name] = np.array(values, dtype=object)
-        else:
+            continue
+        try:
             out[name] = np.array([float(v) if v else math.nan for v in values])
+        except ValueError:
+            i = next(i for i, v in enumerate(values) if v and not _is_number(v))
+            raise CSVError(path, lines[i], j + 1, f"column {name!r}: {values[i]!r} is not a "
+                           "number") from None
     return out, notes
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -10,7 +10,17 @@ import math
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse import compensator_for
+
+
+def _samples(values, what):
+    """``values`` as a float array; InvalidArgumentError naming ``what`` if they are not
+    numbers."""
+    try:
+        return np.asarray(values, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidArgumentError(f"{what} must be a sequence of numbers") from None
 
 
 class VoltageProgram:
@@ -19,11 +29,14 @@ class VoltageProgram:
     reference_unit = "V"
 
     def __init__(self, voltages, description="voltage signal"):
-        self.voltages = np.asarray(voltages, dtype=float)
+        self.voltages = _samples(voltages, "the voltage signal")
         if self.voltages.ndim != 1 or self.voltages.size == 0:
-            raise ValueError("the voltage signal must be a non-empty sequence")
+            raise InvalidArgumentError(f"the voltage signal must be a non-empty sequence of "
+                                       f"volts, got shape {self.voltages.shape}")
         if not np.all(np.isfinite(self.voltages)):
-            raise ValueError("the voltage signal has values that are not finite numbers")
+            k = int(np.flatnonzero(~np.isfinite(self.voltages))[0])
+            raise InvalidArgumentError(f"the voltage signal is not a finite number at tick "
+                                       f"{k}: {self.voltages[k]}")
         self.n_ticks = self.voltages.size
         self.description = description
 
@@ -54,14 +67,15 @@ class FeedforwardProgram:
 
     def __init__(self, model, desired, u_min, u_max, max_step=None, description="desired"):
         self.model = model
-        self.desired = np.asarray(desired, dtype=float)
+        self.desired = _samples(desired, "the desired trajectory")
         if self.desired.ndim != 1 or self.desired.size == 0:
-            raise ValueError("the desired trajectory must be a non-empty sequence")
+            raise InvalidArgumentError(f"the desired trajectory must be a non-empty sequence "
+                                       f"of displacements, got shape {self.desired.shape}")
         lo, hi = model.input_range
         self.limits = (max(lo, u_min), min(hi, u_max))
         if not self.limits[0] < self.limits[1]:
-            raise ValueError(f"the model's input range [{lo:g}, {hi:g}] V and the rig's "
-                             f"limits [{u_min:g}, {u_max:g}] V do not overlap")
+            raise InvalidArgumentError(f"the model's input range [{lo:g}, {hi:g}] V and the "
+                                       f"rig's limits [{u_min:g}, {u_max:g}] V do not overlap")
         self.max_step = max_step
         self.compensator = compensator_for(model, u_min=self.limits[0], u_max=self.limits[1],
                                            slew_rate=max_step)
@@ -122,7 +136,7 @@ class FeedbackProgram(FeedforwardProgram):
         super().__init__(model, desired, u_min, u_max, max_step, description)
         for name, v in (("KP", kp), ("KI", ki), ("KD", kd), ("dt", dt)):
             if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0, got {v}")
+                raise InvalidArgumentError(f"{name} must be a finite number >= 0, got {v}")
         self.dt, self.kp, self.ki, self.kd = dt, kp, ki, kd
         self.integral = 0.0
         self._e_prev = None

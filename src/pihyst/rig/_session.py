@@ -7,7 +7,7 @@ import os
 from pihyst._version import __version__
 from pihyst.rig import _serial_handlers
 from pihyst.rig._clock import VirtualClock, WallClock
-from pihyst.rig._controller import Controller
+from pihyst.rig._controller import Controller, check_limits
 from pihyst.rig._emulators import Emulators
 from pihyst.rig._log import CsvRunLog
 from pihyst.rig._sensor import open_sensor
@@ -100,7 +100,9 @@ class Rig:
 
     def run(self, program, log_path=None, *, notes=(), fsync=False, handle_signals=True):
         """Run ``program`` into the log ``log_path`` (CSV, or HDF5 for .h5/.hdf5; None:
-        no file); returns the :class:`RunResult`."""
+        no file); returns the :class:`RunResult`. Rig limits the supply may not be sent
+        are an InvalidArgumentError before the log is opened."""
+        check_limits(self.supply, self.config.rig)
         log = None
         if log_path is not None:
             cls = CsvRunLog

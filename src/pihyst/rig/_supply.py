@@ -3,7 +3,10 @@
 
 Errors are ``OSError`` subclasses: :class:`~pihyst.rig._ports.RigError`, minimalmodbus's
 ``ModbusException`` (no answer, bad CRC, exception reply) and pyserial's
-``SerialException``. The controller counts them as communication errors.
+``SerialException``. The controller counts them as communication errors. A setpoint the
+supply may not be sent (not finite, negative, more than its register holds) is refused
+before sending with an :class:`~pihyst.exceptions.InvalidArgumentError`
+(``check_setpoint``); the controller checks the rig's limits so before a run.
 """
 
 import math
@@ -11,6 +14,7 @@ import re
 
 import minimalmodbus
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.rig._clock import WallClock
 from pihyst.rig._codecs import register_count
 from pihyst.rig._ports import RigError, close_port, open_port, port_errors, read_line
@@ -47,12 +51,19 @@ class _Instrument(minimalmodbus.Instrument):
 
 
 def _check_volts(volts):
-    volts = float(volts)
+    """``volts`` as a float a unipolar supply may be sent; InvalidArgumentError saying why
+    not otherwise."""
+    try:
+        volts = float(volts)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"supply setpoint: refusing to send {volts!r:.40}, which "
+                                   f"is not a number of volts") from None
     if not math.isfinite(volts):
-        raise ValueError(f"refusing to send a non-finite setpoint ({volts})")
+        raise InvalidArgumentError(f"supply setpoint: refusing to send a non-finite setpoint "
+                                   f"({volts})")
     if volts < 0:
-        raise ValueError(f"refusing to send a negative setpoint ({volts:g} V) to a "
-                         "unipolar supply")
+        raise InvalidArgumentError(f"supply setpoint: refusing to send a negative setpoint "
+                                   f"({volts:g} V) to a unipolar supply")
     return volts
 
 
@@ -77,14 +88,21 @@ class ModbusRtuSupply:
         else:
             self.instrument.write_register(register, int(round(value)), 0, 6)
 
-    def set_voltage(self, volts):
+    def check_setpoint(self, volts):
+        """The register value of ``volts``; InvalidArgumentError if the supply may not be
+        sent it (not finite, negative, more than the setpoint register holds)."""
         volts = _check_volts(volts)
         counts = volts * self.cfg.scale
         limit = {"uint16": 0xFFFF, "uint32": 0xFFFFFFFF}.get(self.cfg.setpoint_format)
         if limit is not None and round(counts) > limit:
-            raise ValueError(f"{volts:g} V is {counts:g} register units: more than a "
-                             f"{self.cfg.setpoint_format} holds")
-        self._write(self.cfg.setpoint_register, counts)
+            raise InvalidArgumentError(
+                f"supply setpoint: {volts:g} V is {counts:g} register units at [supply] "
+                f"scale {self.cfg.scale:g}: more than a {self.cfg.setpoint_format} setpoint "
+                f"register holds ({limit})")
+        return counts
+
+    def set_voltage(self, volts):
+        self._write(self.cfg.setpoint_register, self.check_setpoint(volts))
 
     @property
     def has_readback(self):
@@ -163,9 +181,13 @@ class AsciiSupply:
             raise RigError(f"supply: {text!r} answered {reply!r}")
         return reply
 
+    def check_setpoint(self, volts):
+        """``volts`` as sent; InvalidArgumentError if the supply may not be sent it (not
+        finite, negative)."""
+        return _check_volts(volts)
+
     def set_voltage(self, volts):
-        volts = _check_volts(volts)
-        self._command(self.cfg.set_command.format(volts=volts))
+        self._command(self.cfg.set_command.format(volts=self.check_setpoint(volts)))
 
     @property
     def has_readback(self):

@@ -67,7 +67,7 @@ class BoucWen:
     def __init__(self, u_max, d, alpha, beta, gamma, c2=0.0, n=1.0):
         self.n = float(n)
         if not (np.isfinite(self.n) and self.n >= 1):
-            raise ValueError(f"Bouc-Wen exponent n must be >= 1, got {n}")
+            raise InvalidArgumentError(f"Bouc-Wen exponent n must be >= 1, got {n}")
         self.u_max = float(u_max)
         self.d, self.alpha, self.beta, self.gamma, self.c2 = (
             float(v) for v in (d, alpha, beta, gamma, c2))
