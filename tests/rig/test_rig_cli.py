@@ -29,6 +29,16 @@ def error_line(capsys):
     ("[sensor]\nsign = 2\n", "rig.toml:2: [sensor] sign: must be 1 or -1"),
     ("[supply]\nset_command = 'VOLT {v}'\n", "rig.toml:2: [supply] set_command: bad template"),
     ("[pump]\n", "rig.toml: [pump]: unknown section"),
+    # limits the supply cannot take: refused before anything is sent, not mid-run
+    ("[rig]\nu_min = -150.0\n", "rig.toml:2: [rig] u_min: must be 0, got -150: pihyst "
+                                 "drives unipolar supplies"),
+    ("[rig]\nu_max = 1000.0\n[supply]\nsetpoint_format = 'uint16'\nscale = 100.0\n",
+     "rig.toml:2: [rig] u_max: 1000 V is 100000 register units at [supply] scale 100: more "
+     "than a uint16 setpoint holds (65535)"),
+    ("[rig]\nu_max = 150.0\n[supply]\nsetpoint_format = 'uint32'\nscale = 1e8\n",
+     "rig.toml:2: [rig] u_max: 150 V is 1.5e+10 register units"),
+    ("[supply]\naddress = 0\n", "rig.toml:2: [supply] address: must be a Modbus slave "
+                                 "address 1..247, got 0"),
 ])
 def test_bad_configuration(tmp_path, capsys, text, expected):
     path = tmp_path / "rig.toml"
