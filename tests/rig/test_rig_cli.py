@@ -100,6 +100,19 @@ def test_a_fault_stops_the_run_with_status_1(tmp_path, capsys, cfg):
     assert "# stopped: 5 consecutive invalid sensor readings" in out.read_text()
 
 
+def test_a_supply_left_charged_after_the_program_is_status_1(tmp_path, capsys, cfg):
+    # the program runs to its end, then the supply stops answering: 0 V cannot be sent
+    volts = tmp_path / "volts.csv"
+    volts.write_text("time_s,voltage_V\n0,0\n2,40\n")
+    out = tmp_path / "loop.csv"
+    with pytest.raises(SystemExit) as info:
+        main(["rig", "record", "--config", str(cfg), "--voltages", str(volts),
+              "--fault", "supply:no-reply:2.2", "-o", str(out)])
+    assert info.value.code == 1
+    assert "the supply could not be zeroed at the end" in error_line(capsys)
+    assert "WARNING: could not send 0 V" in out.read_text()
+
+
 def test_record_a_csv_of_voltages(tmp_path, capsys, cfg):
     volts = tmp_path / "volts.csv"
     volts.write_text("# a ramp\ntime_s,voltage_V\n0,0\n2,40\n4,0\n")

@@ -123,7 +123,19 @@ def test_stuck_supply_is_caught_by_the_readback(tmp_path):
     result, emu, log = record(tmp_path, faults=[Fault("stuck", "supply", start_s=3.0)])
     assert "readback" in result.reason
     assert emu.supply_state.last_setpoint_V == 0.0
-    assert any("stopped: readback" in n for n in read_run_log(log)[1])
+    # the supply took neither 0 V nor output off: the run must not say it is at 0 V
+    assert emu.supply_state.output_V > 1.0
+    assert not result.zeroed and math.isnan(result.final_voltage_V)
+    stopped = [n for n in read_run_log(log)[1] if n.startswith("stopped: readback")]
+    assert len(stopped) == 1 and "WARNING: the supply reads back" in stopped[0], stopped
+    assert "the beam may still be charged" in stopped[0]
+
+
+def test_readback_after_the_end_confirms_0_V(tmp_path):
+    result, emu, log = record(tmp_path)
+    assert result.completed and result.zeroed
+    assert emu.supply_state.output_V == 0.0
+    assert not any("WARNING" in n for n in read_run_log(log)[1])
 
 
 def test_vanished_supply_port(tmp_path):

@@ -178,6 +178,10 @@ def _report(result, args, rig):
     if not result.completed:
         print(f"pihyst rig: error: the run stopped early: {result.reason}", file=sys.stderr)
         raise SystemExit(1)
+    if not result.zeroed:
+        print(f"pihyst rig: error: the supply could not be zeroed at the end (see the log "
+              f"{args.output}): the beam may still be charged", file=sys.stderr)
+        raise SystemExit(1)
 
 
 def _resample(path, column, rate_hz, what):

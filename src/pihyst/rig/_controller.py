@@ -23,6 +23,8 @@ from pihyst.rig._log import TickRecord
 from pihyst.rig._safety import SetpointGuard, SignalGuard, StopRun, Terminated, Watchdog
 
 NAN = math.nan
+#: how long the readback may take to fall to 0 V after the output is switched off
+RESIDUAL_WAIT_S = 1.0
 
 
 @dataclass
@@ -339,6 +341,10 @@ class Controller:
                 except OSError as err:
                     if attempt == 2:
                         problems.append(f"could not send {what}: {err}")
+        if not problems and self.supply.has_readback:
+            left = self._residual_voltage()
+            if left is not None:
+                problems.append(f"the supply reads back {left:.3f} V after 0 V and output off")
         zeroed = not problems
         if zeroed:
             self.guard.sent(0.0)
@@ -347,3 +353,20 @@ class Controller:
             self._note(f"stopped: {reason}; WARNING: {'; '.join(problems)} - the beam may "
                        "still be charged")
         return zeroed, self.guard.last if zeroed else NAN
+
+    def _residual_voltage(self):
+        """The readback after 0 V and output off when it stays above the tolerance for
+        RESIDUAL_WAIT_S (a supply that acknowledges but does not follow), else None."""
+        s = self.settings
+        value = None
+        for attempt in range(max(1, math.ceil(RESIDUAL_WAIT_S * s.rate_hz))):
+            if attempt:
+                self.clock.sleep(s.period_s)
+            try:
+                with self._supply_lock:
+                    value = self.supply.read_voltage()
+            except OSError:
+                continue
+            if value is None or abs(value) <= s.readback_tolerance_V:
+                return None
+        return value
