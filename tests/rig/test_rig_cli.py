@@ -71,6 +71,23 @@ def test_bad_options_and_ports(tmp_path, capsys, cfg):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("command, column", [("record", "voltage_V"),
+                                             ("track", "displacement_um")])
+def test_a_file_spanning_too_long_a_time_is_refused(tmp_path, capsys, cfg, command, column):
+    # two rows, 1e9 s apart: 2e10 ticks at 20 Hz, refused before any array is made
+    data = tmp_path / "data.csv"
+    data.write_text(f"time_s,{column}\n0,0\n1e9,10\n")
+    model = tmp_path / "m.json"
+    model.write_text('{"family": "classical", "thresholds": [0, 10], "weights": [0.1, 0.2]}')
+    out = tmp_path / "run.csv"
+    args = (["record", "--voltages", str(data)] if command == "record" else
+            ["track", str(model), str(data)])
+    assert main(["rig", *args, "--config", str(cfg), "-o", str(out)]) == 2
+    assert f"{data}: time_s spans 1e+09 s, 20,000,000,001 ticks at 20 Hz: more than the " \
+           "2,000,000 ticks of a run" in error_line(capsys)
+    assert not out.exists()
+
+
 def test_record_fit_track(tmp_path, capsys, cfg):
     loop, model, run = (tmp_path / n for n in ("loop.csv", "model.json", "run.csv"))
     assert main(["rig", "record", "--config", str(cfg), "--period", "30",

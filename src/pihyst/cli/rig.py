@@ -15,6 +15,7 @@ from pihyst.cli.errors import UsageError
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
+from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
@@ -197,7 +198,11 @@ def _resample(path, column, rate_hz, what):
         i = back[0] + 1
         raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
                        f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g})")
-    ticks = t[0] + np.arange(int(math.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1) / rate_hz
+    n = math.floor((t[-1] - t[0]) * rate_hz + 1e-9) + 1
+    if n > MAX_TICKS:
+        raise UsageError(f"{path}: time_s spans {t[-1] - t[0]:g} s, {n:,} ticks at "
+                         f"{rate_hz:g} Hz: more than the {MAX_TICKS:,} ticks of a run")
+    ticks = t[0] + np.arange(n) / rate_hz
     return np.interp(ticks, t, v)
 
 
