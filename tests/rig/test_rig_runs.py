@@ -131,6 +131,21 @@ def test_stuck_supply_is_caught_by_the_readback(tmp_path):
     assert "the beam may still be charged" in stopped[0]
 
 
+def test_an_echoing_ascii_supply_with_a_prompt_ends_at_zero(tmp_path):
+    # MDT693B-like: echo, '*' prompt, a readback query every tick; the shutdown's 0 V
+    # follows the last tick's query at once, before that query's closing prompt arrived
+    config = make_config(supply={
+        "protocol": "ascii", "baudrate": 115200, "terminator": "\r",
+        "set_command": "xvoltage={volts:.2f}", "query_command": "xvoltage?", "echo": True,
+        "prompt": "*", "setpoint_register": None, "setpoint_format": None,
+        "word_order": None, "scale": None, "output_register": None,
+        "readback_register": None, "address": None})
+    result, emu, log = record(tmp_path, config, period_s=5.0)
+    assert result.completed and result.zeroed, result.reason
+    assert emu.supply_state.output_V == 0.0
+    assert not any("WARNING" in n for n in read_run_log(log)[1])
+
+
 def test_readback_after_the_end_confirms_0_V(tmp_path):
     result, emu, log = record(tmp_path)
     assert result.completed and result.zeroed
