@@ -88,6 +88,30 @@ def test_a_file_spanning_too_long_a_time_is_refused(tmp_path, capsys, cfg, comma
     assert not out.exists()
 
 
+def test_track_says_which_ticks_the_model_cannot_reach(tmp_path, capsys):
+    # a model reaching 2 .. 28 um within the rig's 0 .. 100 V, asked for 0 .. 40 um: the
+    # ticks outside saturate; the command says so before the run (and in the log), not
+    # only as tracking errors
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text(config_text(rig={"u_max": 100.0}))
+    model = tmp_path / "m.json"
+    model.write_text('{"family": "classical", "thresholds": [0, 10], "weights": [0.1, 0.2]}')
+    desired = tmp_path / "desired.csv"
+    out = tmp_path / "run.csv"
+    desired.write_text("time_s,displacement_um\n0,0\n2,40\n4,0\n")
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "note: 27 of 81 ticks of the desired displacement (span [0, 40] um) lie outside " \
+           "the range [2, 28] um the model reaches with the voltage in [0, 100] V: they " \
+           "saturate" in text, text
+    assert "# note: 27 of 81 ticks" in out.read_text()
+    desired.write_text("time_s,displacement_um\n0,5\n2,20\n4,5\n")
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "-o", str(out)]) == 0
+    assert "note:" not in capsys.readouterr().out
+
+
 def test_record_fit_track(tmp_path, capsys, cfg):
     loop, model, run = (tmp_path / n for n in ("loop.csv", "model.json", "run.csv"))
     assert main(["rig", "record", "--config", str(cfg), "--period", "30",

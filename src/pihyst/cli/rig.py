@@ -297,9 +297,12 @@ def run_track(args):
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
+    reach = _reach_note(model, desired, *program.limits)
+    if reach is not None:
+        print(reach, flush=True)
     with _open(args, config) as rig:
-        result = rig.run(program, args.output, notes=[f"model: {args.model}: {model!r}"],
-                         fsync=args.fsync)
+        result = rig.run(program, args.output, notes=[f"model: {args.model}: {model!r}"]
+                         + ([] if reach is None else [reach]), fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     ref = result.column("reference", phase="run")
     ok = np.isfinite(y)
@@ -312,6 +315,24 @@ def run_track(args):
               f"absolute {s['mean_abs']:.4g} um{pct}; RMS {s['rms']:.4g} um; max "
               f"{s['max_abs']:.4g} um")
     _report(result, args, rig)
+
+
+def _reach_note(model, desired, lo, hi):
+    """What the model cannot reach within the voltages [lo, hi] of the run (None: all in
+    reach): those ticks saturate, and the tracking errors say so only as errors."""
+    from pihyst.cli.compensate import reach_hint, reachable
+    y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
+    span = max(y_hi - y_lo, 1e-300)
+    outside = int(np.count_nonzero((desired < y_lo - 1e-9 * span) |
+                                   (desired > y_hi + 1e-9 * span)))
+    if not outside:
+        return None
+    unit = model.units.get("output", "um")
+    return (f"note: {outside} of {desired.size} ticks of the desired displacement (span "
+            f"[{desired.min():.4g}, {desired.max():.4g}] {unit}) lie outside the range "
+            f"[{y_lo:.4g}, {y_hi:.4g}] {unit} the model reaches with the voltage in "
+            f"[{lo:g}, {hi:g}] V: they saturate; "
+            + reach_hint(model, y_lo, y_hi, float(desired.min()), float(desired.max())))
 
 
 def run_emulate(args):
