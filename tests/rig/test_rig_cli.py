@@ -130,6 +130,20 @@ def test_record_fit_track(tmp_path, capsys, cfg):
     assert "0 V sent, output off, readback 0.000 V" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("args, message", [
+    (["emulate", "--duration", "nan"], "argument --duration: must be a finite number"),
+    (["emulate", "--duration", "inf"], "argument --duration: must be a finite number"),
+    (["emulate", "--duration", "0"], "argument --duration: must be a positive number"),
+    (["record", "--fault", "sensor:over-range:nan", "-o", "x.csv"],
+     "--fault sensor:over-range:nan: the start must be a finite time in seconds"),
+])
+def test_bad_emulator_options(tmp_path, capsys, cfg, monkeypatch, args, message):
+    monkeypatch.chdir(tmp_path)
+    assert main(["rig", args[0], "--config", str(cfg), *args[1:]]) == 2
+    assert message in error_line(capsys)
+    assert not (tmp_path / "x.csv").exists()
+
+
 def test_a_fault_stops_the_run_with_status_1(tmp_path, capsys, cfg):
     out = tmp_path / "loop.csv"
     with pytest.raises(SystemExit) as info:

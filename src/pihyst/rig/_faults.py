@@ -1,5 +1,6 @@
 """Faults the emulated instruments can be told to make (fault injection)."""
 
+import math
 from dataclasses import dataclass
 
 #: Every kind of fault, and the devices it applies to.
@@ -49,6 +50,8 @@ class Fault:
                              f"{', '.join(FAULT_KINDS)}")
         if self.device not in FAULT_KINDS[self.kind]:
             raise ValueError(f"fault {self.kind!r} does not apply to the {self.device}")
+        if not math.isfinite(self.start_s):
+            raise ValueError(f"the start must be a finite time in seconds, got {self.start_s}")
         if self.count is not None and self.count < 1:
             raise ValueError(f"count must be >= 1 or None, got {self.count}")
         if self.code is None:
