@@ -112,6 +112,30 @@ def test_track_says_which_ticks_the_model_cannot_reach(tmp_path, capsys):
     assert "note:" not in capsys.readouterr().out
 
 
+def test_track_runs_a_models_creep_at_the_tick_period(tmp_path, capsys, cfg):
+    # a model fitted on a 200 Hz record (creep.dt 5 ms) on the 20 Hz rig: its creep lags
+    # must move 50 ms per tick, not 5 ms (the held 20 um then needed 7 V too much)
+    import numpy as np
+
+    import pihyst
+    from pihyst.model import Creep
+    model = pihyst.ClassicalPI([0, 10, 30, 60], [0.2, 0.05, 0.03, 0.01],
+                               creep=Creep([1.0, 10.0], [0.1, 0.1], dt=0.005))
+    path, desired, out = tmp_path / "m.json", tmp_path / "hold.csv", tmp_path / "run.csv"
+    model.save(path)
+    desired.write_text("time_s,displacement_um\n0,0\n1,20\n20,20\n")
+    assert main(["rig", "track", str(path), str(desired), "--config", str(cfg),
+                 "-o", str(out)]) == 0
+    text_rows = [line.split(",") for line in out.read_text().splitlines()
+                 if ",run," in line and not line.startswith("#")]
+    assert text_rows
+    sent = np.array([float(r[4]) for r in text_rows])        # command_V
+    ref = np.array([float(r[3]) for r in text_rows])
+    expected = pihyst.compensate(model, ref, t=0.05 * np.arange(ref.size), u_min=0.0,
+                                 u_max=150.0, slew_rate=10.0, initial_voltage=sent[0])
+    np.testing.assert_allclose(sent, expected.voltage, rtol=0, atol=1e-6)
+
+
 def test_record_fit_track(tmp_path, capsys, cfg):
     loop, model, run = (tmp_path / n for n in ("loop.csv", "model.json", "run.csv"))
     assert main(["rig", "record", "--config", str(cfg), "--period", "30",
