@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from pihyst.cli.errors import UsageError, positive_number
+from pihyst.cli.errors import UsageError
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
@@ -101,7 +101,7 @@ def register(sub):
     e.add_argument("--config", metavar="RIG.toml", required=True)
     e.add_argument("--plant", default=None, metavar="NAME", help="the simulated beam")
     _fault_option(e)
-    e.add_argument("--duration", type=positive_number, default=None, metavar="S",
+    e.add_argument("--duration", type=float, default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     e.set_defaults(run=run_emulate)
 
@@ -347,18 +347,6 @@ def _reach_note(model, desired, lo, hi):
             + reach_hint(model, y_lo, y_hi, float(desired.min()), float(desired.max())))
 
 
-def _wait_for(stop, duration):
-    """Until ``stop`` is set or ``duration`` seconds (None: for ever) have passed, in waits
-    short enough for the platform's timeouts (a year of seconds overflows time_t)."""
-    import time
-    end = None if duration is None else time.monotonic() + duration
-    while not stop.is_set():
-        left = 3600.0 if end is None else end - time.monotonic()
-        if left <= 0:
-            return
-        stop.wait(min(left, 3600.0))
-
-
 def run_emulate(args):
     import signal
     import threading
@@ -377,7 +365,7 @@ def run_emulate(args):
                 print(f"{what}: {path}  ({c.protocol}, {c.baudrate} baud)", flush=True)
             print(f"simulated beam: {emu.emulators.plant.name}; Ctrl-C to stop", flush=True)
             try:
-                _wait_for(stop, args.duration)
+                stop.wait(args.duration)
             except KeyboardInterrupt:
                 pass
             st = emu.emulators.supply_state
