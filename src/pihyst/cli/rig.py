@@ -331,19 +331,20 @@ def _creep_at(model, period):
 
 def _reach_note(model, desired, lo, hi):
     """What the model cannot reach within the voltages [lo, hi] of the run (None: all in
-    reach): those ticks saturate, and the tracking errors say so only as errors."""
+    reach): the feedforward's voltages for those ticks saturate, and the tracking errors
+    alone do not say why. Counted on the compensator's own run of the trajectory, as the
+    reach at a tick depends on the voltages before it."""
+    import pihyst
     from pihyst.cli.compensate import reach_hint, reachable
-    y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
-    span = max(y_hi - y_lo, 1e-300)
-    outside = int(np.count_nonzero((desired < y_lo - 1e-9 * span) |
-                                   (desired > y_hi + 1e-9 * span)))
-    if not outside:
+    run = pihyst.compensate(model, desired, u_min=lo, u_max=hi)
+    if not run.n_saturated:
         return None
+    y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
     unit = model.units.get("output", "um")
-    return (f"note: {outside} of {desired.size} ticks of the desired displacement (span "
-            f"[{desired.min():.4g}, {desired.max():.4g}] {unit}) lie outside the range "
-            f"[{y_lo:.4g}, {y_hi:.4g}] {unit} the model reaches with the voltage in "
-            f"[{lo:g}, {hi:g}] V: they saturate; "
+    return (f"note: {run.n_saturated} of {desired.size} ticks of the desired displacement "
+            f"(span [{desired.min():.4g}, {desired.max():.4g}] {unit}) are out of the "
+            f"model's reach with the voltage in [{lo:g}, {hi:g}] V (at most [{y_lo:.4g}, "
+            f"{y_hi:.4g}] {unit}): their voltage saturates; "
             + reach_hint(model, y_lo, y_hi, float(desired.min()), float(desired.max())))
 
 
