@@ -197,6 +197,29 @@ def test_a_supply_left_charged_after_the_program_is_status_1(tmp_path, capsys, c
     assert "WARNING: could not send 0 V" in out.read_text()
 
 
+def test_a_full_disk_stops_the_run_with_status_1(tmp_path, capsys, cfg, monkeypatch):
+    import errno
+
+    from pihyst.rig import _session
+    from pihyst.rig._log import CsvRunLog
+
+    class FullDisk(CsvRunLog):
+        budget = 100
+
+        def _flush(self):
+            FullDisk.budget -= 1
+            if FullDisk.budget < 0:
+                raise OSError(errno.ENOSPC, "No space left on device")
+            super()._flush()
+    monkeypatch.setattr(_session, "CsvRunLog", FullDisk)
+    with pytest.raises(SystemExit) as info:
+        main(["rig", "record", "--config", str(cfg), "--period", "20",
+              "-o", str(tmp_path / "loop.csv")])
+    assert info.value.code == 1
+    assert "the run stopped early: the log could not be written (OSError: [Errno 28] No " \
+           "space left on device)" in error_line(capsys)
+
+
 def test_record_a_csv_of_voltages(tmp_path, capsys, cfg):
     volts = tmp_path / "volts.csv"
     volts.write_text("# a ramp\ntime_s,voltage_V\n0,0\n2,40\n4,0\n")

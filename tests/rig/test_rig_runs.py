@@ -1,6 +1,7 @@
 """End to end through the emulated instruments in virtual time: the loop, its log, and
 the safety on every exit path."""
 
+import errno
 import math
 import os
 import signal
@@ -10,7 +11,8 @@ import pytest
 from rig_helpers import make_config
 
 from pihyst.cli import main as pihyst_main
-from pihyst.rig import Fault, Rig, VoltageProgram, WallClock, read_run_log
+from pihyst.rig import Fault, Rig, VoltageProgram, WallClock, _session, read_run_log
+from pihyst.rig._log import CsvRunLog
 from pihyst.sim.signals import triangle
 
 
@@ -144,6 +146,32 @@ def test_an_echoing_ascii_supply_with_a_prompt_ends_at_zero(tmp_path):
     assert result.completed and result.zeroed, result.reason
     assert emu.supply_state.output_V == 0.0
     assert not any("WARNING" in n for n in read_run_log(log)[1])
+
+
+class _FullDiskLog(CsvRunLog):
+    """A CSV log whose disk fills up after ``budget`` flushes."""
+
+    budget = 0
+
+    def _flush(self):
+        type(self).budget -= 1
+        if type(self).budget < 0:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        super()._flush()
+
+
+@pytest.mark.parametrize("budget", [3, 150])     # at the start ramp, in the run
+def test_a_log_that_cannot_be_written_stops_the_run_at_zero(tmp_path, monkeypatch, budget):
+    # the shutdown writes to the log too: a full disk raised out of it before 0 V was
+    # sent, and the supply stayed at 76 V with its output on
+    monkeypatch.setattr(_FullDiskLog, "budget", budget)
+    monkeypatch.setattr(_session, "CsvRunLog", _FullDiskLog)
+    result, emu, log = record(tmp_path)
+    assert not result.completed and result.zeroed
+    assert result.reason == "the log could not be written (OSError: [Errno 28] No space " \
+                            "left on device)"
+    assert emu.supply_state.last_setpoint_V == 0.0 and not emu.supply_state.output_on
+    assert emu.supply_state.output_V == 0.0
 
 
 def test_readback_after_the_end_confirms_0_V(tmp_path):

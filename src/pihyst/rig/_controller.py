@@ -88,11 +88,27 @@ class Controller:
             else watchdog
         self.handle_signals = handle_signals
         self._supply_lock = threading.RLock()
+        self._log_error = None          # why the log failed; it is not written to after
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def log_error(self):
+        """Why the log could not be written (None: it could)."""
+        return self._log_error
+
     def _note(self, text):
-        if self.log is not None:
-            self.log.note(text)
+        self._to_log("note", text)
+
+    def _to_log(self, method, item):
+        """Write to the log; a log that fails (disk full, a drive unplugged) is given up,
+        never raised here: the shutdown that zeroes the supply writes to it too. The run
+        stops at the end of the tick (:meth:`_check`)."""
+        if self.log is None or self._log_error is not None:
+            return
+        try:
+            getattr(self.log, method)(item)
+        except Exception as err:  # noqa: BLE001 - whatever broke, the supply comes first
+            self._log_error = f"{type(err).__name__}: {err}"
 
     def _send(self, u):
         # the guard learns the outcome under the supply lock: the watchdog thread may zero
@@ -192,12 +208,13 @@ class Controller:
 
     def _record(self, record):
         self.records.append(record)
-        if self.log is not None:
-            self.log.write(record)
+        self._to_log("write", record)
         self.tick += 1
 
     def _check(self, r):
         s = self.settings
+        if self._log_error is not None:
+            raise StopRun(f"the log could not be written ({self._log_error})")
         if self._comm_errors >= s.max_comm_errors:
             raise StopRun(f"{self._comm_errors} consecutive communication errors (last: "
                           f"{self._last_error})")
@@ -230,6 +247,7 @@ class Controller:
         self.records, self.tick, self.overruns = [], 0, 0
         self._comm_errors = self._invalid = self._consecutive_overruns = 0
         self._last_error = ""
+        self._log_error = None
         self._recent = []
         self._watchdog = None
         max_step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
