@@ -174,6 +174,31 @@ def test_a_log_that_cannot_be_written_stops_the_run_at_zero(tmp_path, monkeypatc
     assert emu.supply_state.output_V == 0.0
 
 
+@pytest.mark.parametrize("where", ["ramp", "zero"])
+def test_a_driver_error_that_is_no_oserror_does_not_stop_the_shutdown(tmp_path, where):
+    # the sensor goes over-range at 5 s (about 75 V); then the supply driver raises a
+    # ValueError (a driver bug, a value it cannot encode) for some setpoints on the way
+    # down: those were not caught, the shutdown left at once and the supply stayed on
+    config = make_config()
+    _, u = triangle(period_s=20.0, dt=1.0 / config.rig.rate_hz)
+    with Rig(config, faults=[Fault("over-range", "sensor", start_s=5.0)]) as rig:
+        send = rig.supply.set_voltage
+        seen = []
+
+        def refusing(volts):
+            seen.append(volts)
+            down = seen[seen.index(max(seen)):] if max(seen) > 70.0 else []
+            if down and ((where == "ramp" and 10.0 < volts < 60.0) or
+                         (where == "zero" and volts == 0.0 and down.count(0.0) < 3)):
+                raise ValueError(f"cannot encode {volts} V")
+            send(volts)
+        rig.supply.set_voltage = refusing
+        result = rig.run(VoltageProgram(u), tmp_path / "run.csv")
+        state = rig.emulators.supply_state
+    assert "invalid sensor readings" in result.reason
+    assert result.zeroed and state.output_V == 0.0 and not state.output_on
+
+
 def test_readback_after_the_end_confirms_0_V(tmp_path):
     result, emu, log = record(tmp_path)
     assert result.completed and result.zeroed

@@ -315,7 +315,9 @@ class Controller:
 
     def _shutdown(self, reason, deadline):
         """Ramp to 0 V at the slew limit (one step per tick, reading the sensor unless it
-        is the sensor that failed), switch the output off, and say why in the log."""
+        is the sensor that failed), switch the output off, and say why in the log. Any
+        error of a driver here counts as a failed exchange, never leaves this method: an
+        exception out of it would leave the supply where it is."""
         s = self.settings
         self._note(f"stopping: {reason}")
         # a failing sensor would cost its timeout on every step of the ramp
@@ -324,7 +326,10 @@ class Controller:
         failures = 0
         while self.guard.hi > 0 and step is not None and failures < 2:
             start, late = self._wait(deadline)
-            y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
+            try:
+                y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
+            except Exception as err:  # noqa: BLE001 - see the docstring
+                y, status = NAN, f"error: {err}"
             try:
                 with self._supply_lock:
                     # chosen under the lock: the watchdog may have zeroed the supply
@@ -333,12 +338,12 @@ class Controller:
                         break
                     try:
                         self.supply.set_voltage(u)
-                    except OSError:
+                    except Exception:
                         self.guard.failed(u)
                         raise
                     self.guard.sent(u)
                 sent, supply_status = u, "ok"
-            except OSError as err:
+            except Exception as err:  # noqa: BLE001 - see the docstring
                 failures += 1
                 sent, supply_status = NAN, f"error: {err}"
             end = self.clock.now()
@@ -356,7 +361,7 @@ class Controller:
                     with self._supply_lock:
                         call()
                     break
-                except OSError as err:
+                except Exception as err:  # noqa: BLE001 - see the docstring
                     if attempt == 2:
                         problems.append(f"could not send {what}: {err}")
         if not problems and self.supply.has_readback:
@@ -383,7 +388,7 @@ class Controller:
             try:
                 with self._supply_lock:
                     value = self.supply.read_voltage()
-            except OSError:
+            except Exception:  # noqa: BLE001 - as in _shutdown
                 continue
             if value is None or abs(value) <= s.readback_tolerance_V:
                 return None
