@@ -334,9 +334,9 @@ def _reach_note(model, desired, lo, hi):
     reach): the feedforward's voltages for those ticks saturate, and the tracking errors
     alone do not say why. Counted on the compensator's own run of the trajectory, as the
     reach at a tick depends on the voltages before it."""
-    import pihyst
     from pihyst.cli.compensate import reach_hint, reachable
-    run = pihyst.compensate(model, desired, u_min=lo, u_max=hi)
+    from pihyst.inverse import compensate
+    run = compensate(model, desired, u_min=lo, u_max=hi)
     if not run.n_saturated:
         return None
     y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
