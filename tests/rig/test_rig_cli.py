@@ -144,6 +144,22 @@ def test_track_runs_a_models_creep_at_the_tick_period(tmp_path, capsys, cfg):
     np.testing.assert_allclose(sent, expected.voltage, rtol=0, atol=1e-6)
 
 
+@pytest.mark.parametrize("options, expected", [
+    (["--period", "0"], "--signal triangle --period 0 --cycles 1 at 20 Hz ({cfg} [rig] "
+                        "rate_hz): period_s must be a positive number"),
+    (["--signal", "decaying-triangles", "--period", "0.01"],
+     "--signal decaying-triangles --period 0.01 at 20 Hz ({cfg} [rig] rate_hz): dt = 0.05 s "
+     "is more than half the period"),
+])
+def test_a_bad_signal_names_the_rigs_options(tmp_path, capsys, cfg, options, expected):
+    # not pihyst simulate's: rig record has no --dt (the tick period is the rig's)
+    out = tmp_path / "loop.csv"
+    assert main(["rig", "record", "--config", str(cfg), *options, "-o", str(out)]) == 2
+    line = error_line(capsys)
+    assert expected.format(cfg=cfg) in line and "--dt" not in line, line
+    assert not out.exists()
+
+
 def test_record_fit_track(tmp_path, capsys, cfg):
     loop, model, run = (tmp_path / n for n in ("loop.csv", "model.json", "run.csv"))
     assert main(["rig", "record", "--config", str(cfg), "--period", "30",

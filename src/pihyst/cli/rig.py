@@ -252,7 +252,17 @@ def run_record(args):
                                      period=args.period, cycles=args.cycles, triangles=5,
                                      ratio=0.7, ramps=20, rate=None, seed=0, steps=10,
                                      step_time=10.0)
-        _, u = make_signal(options, u_max)
+        try:
+            _, u = make_signal(options, u_max)
+        except UsageError as err:
+            # make_signal names pihyst simulate's options (--dt, --steps ...); say the
+            # rig's: the tick period is the configuration's
+            detail = str(err).split(": ", 1)[-1]
+            shown = {"triangle": f" --period {args.period:g} --cycles {args.cycles}",
+                     "sine": f" --period {args.period:g} --cycles {args.cycles}",
+                     "decaying-triangles": f" --period {args.period:g}"}.get(args.signal, "")
+            raise UsageError(f"--signal {args.signal}{shown} at {r.rate_hz:g} Hz ({args.config}"
+                             f" [rig] rate_hz): {detail}") from None
         description = (f"{args.signal} {u_min:g}-{u_max:g} V, period {args.period:g} s, "
                        f"{args.cycles} cycle(s)")
     _check_output(args.output)
