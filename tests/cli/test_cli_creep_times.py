@@ -108,3 +108,18 @@ def test_time_running_backwards_is_a_one_line_error(tmp_path, capsys, model_file
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "bad.csv:" in err and "runs backwards" in err, err
     assert not out.exists()
+
+
+def test_a_warning_about_the_record_is_said_once(tmp_path, capsys):
+    # with a time column the record is fitted with and without its creep estimate; a
+    # record without hysteresis made both fits warn, and the command said it twice
+    t = np.arange(4000) * 0.01
+    u = 75 + 75 * np.sin(2 * np.pi * t / 10)
+    y = 0.3 * u + np.random.default_rng(0).normal(0, 0.01, u.size)
+    data = tmp_path / "straight.csv"
+    write_columns(data, {"time_s": t, "voltage_V": u, "displacement_um": y})
+    assert main(["fit", str(data), "--model", "classical", "-o",
+                 str(tmp_path / "m.json")]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines()
+                if "shows no hysteresis" in line]
+    assert len(warnings) == 1, warnings

@@ -4,20 +4,24 @@ tolerance); the shared library's plain C ABI, called through ctypes, does the sa
 flat model file round-trips."""
 
 import ctypes
+import subprocess
 
 import numpy as np
 import pytest
 from c_export import (
+    CSRC,
     compile_core,
     compile_driver,
     export_signals,
+    needs_compiler,
     run_driver,
     shared_library,
 )
 
 import pihyst
 from pihyst.cli import main
-from pihyst.io._export import c_header, flat_text
+from pihyst.exceptions import InvalidArgumentError
+from pihyst.io._export import CORE_HEADERS, c_header, flat_text
 
 KP_LIKE = pihyst.PiecewiseLinearPI(
     [([0, 40, 60, 150], [0, 0, 1, 1]), ([0, 90, 110, 150], [0, 0, 1, 1]),
@@ -209,6 +213,11 @@ def test_export_command_writes_header_and_flat_file(tmp_path, capsys):
 @pytest.mark.parametrize("extra, message", [
     (["--flat", "--float"], "--float and --name go with --c"),
     (["--c", "--name", "2bad-name"], "not a C identifier"),
+    (["--c", "--name", "_Stage"], "not a C identifier"),       # reserved in C
+    # the core's namespace: pihyst_model_init, pihyst_params, ... would be redefined
+    (["--c", "--name", "pihyst_model"], "--name pihyst_model: names starting with 'pihyst' "
+                                        "are the C core's"),
+    (["--c", "--name", "PIHYST"], "names starting with 'pihyst' are the C core's"),
 ])
 def test_export_command_errors(tmp_path, capsys, extra, message):
     model_path = tmp_path / "m.json"
@@ -216,6 +225,59 @@ def test_export_command_errors(tmp_path, capsys, extra, message):
     out = tmp_path / "out.h"
     assert main(["export", str(model_path), *extra, "-o", str(out)]) == 2
     assert message in capsys.readouterr().err and not out.exists()
+
+
+@pytest.mark.parametrize("file_name, extra, message", [
+    # the name from the file: pihyst_model_init(pihyst_model *m) would not compile
+    ("pihyst_model.h", [], "-o {out}: the prefix 'pihyst_model': names starting with "
+                           "'pihyst' are the C core's"),
+    ("Pihyst-X.h", [], "the prefix 'Pihyst_X': names starting with 'pihyst'"),
+    # a header named like the core's is included in place of the core's
+    ("pihyst.h", ["--name", "stage"], "-o {out}: the C core has a header of that name"),
+    ("pihyst_creep.h", ["--name", "stage"], "the C core has a header of that name"),
+])
+def test_export_refuses_names_that_collide_with_the_core(tmp_path, capsys, file_name, extra,
+                                                          message):
+    model_path = tmp_path / "m.json"
+    MODELS["classical"].save(model_path)
+    out = tmp_path / file_name
+    assert main(["export", str(model_path), "--c", *extra, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message.format(out=out) in err[0], err
+    assert not out.exists()
+
+
+def test_core_headers_are_the_ones_in_csrc():
+    needs_compiler()
+    headers = {p.name for p in (*CSRC.glob("*.h"), *(CSRC / "lib").glob("*.h"))}
+    assert headers == set(CORE_HEADERS)
+
+
+@pytest.mark.parametrize("file_name, prefix", [
+    ("Ünit.h", "nit"), (".h", "h"), ("2axis.h", "model_2axis"), ("int.h", "int"),
+    ("stage-x.h", "stage_x"), ("__y.h", "y"), ("é.h", "model"),
+])
+def test_names_from_odd_file_names_compile(tmp_path, capsys, core_objects, file_name,
+                                           prefix):
+    model_path = tmp_path / "m.json"
+    MODELS["classical"].save(model_path)
+    out = tmp_path / file_name
+    assert main(["export", str(model_path), "--c", "-o", str(out)]) == 0
+    assert f"as {prefix}_params" in capsys.readouterr().out
+    driver = (f'#include "{file_name}"\nint main(void)\n{{\n    static pihyst_model m;\n'
+              f'    static pihyst_compensator c;\n    if ({prefix}_init(&m) != PIHYST_OK) '
+              f'return 1;\n    return {prefix}_compensator_init(&c, &m, 0.0, 150.0, 0.5, '
+              f'0.0) != PIHYST_OK;\n}}\n')
+    exe = compile_driver(tmp_path, file_name, out.read_text(), driver, core_objects)
+    assert subprocess.run([str(exe)]).returncode == 0
+
+
+def test_c_header_refuses_a_prefix_in_the_core_namespace():
+    with pytest.raises(InvalidArgumentError, match="names starting with 'pihyst'"):
+        c_header(MODELS["classical"], "pihyst")
+    with pytest.raises(InvalidArgumentError, match="names starting with 'pihyst'"):
+        c_header(pihyst.BoucWenModel(beta=1.0, gamma=0.5, n=1.0, hysteretic=1.0,
+                                     linear=1.0), "pihyst_bw")
 
 
 def test_a_delayed_model_carries_its_delay_into_both_forms():

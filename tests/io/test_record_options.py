@@ -52,6 +52,32 @@ def test_units_gain_from_options_and_names(tmp_path):
     assert rec.displacement == pytest.approx([2e-3])
 
 
+@pytest.mark.parametrize("header, factors, note", [
+    ("t_ms,u_mV,y", (1e-3, 1e-3), "voltage in mV (column name 'u_mV') -> V, time in ms"),
+    ("time [us],U [kV],y", (1e-6, 1e3), "voltage in kV (column name 'U [kV]') -> V"),
+    ("Zeit (ns),Spannung (V),y", (1e-9, 1.0), "time in ns (column name 'Zeit (ns)') -> s"),
+    ("time_s,voltage_V,y", (1.0, 1.0), None),
+    ("times,volts,y", (1.0, 1.0), None),             # no unit in the name
+])
+def test_time_and_voltage_in_the_unit_their_column_names(tmp_path, small_blocks, header,
+                                                         factors, note):
+    # a column named time_ms holds milliseconds: read as seconds it made a record 1000
+    # times longer (creep time constants, the delay's sample period, --skip-until)
+    rows = [(10.0 * k, 2.0 * k, 0.5 * k) for k in range(12)]
+    path = write(tmp_path, rows, header=header)
+    names = header.split(",")
+    reader = open_record(path, time=names[0], voltage=names[1], displacement="y",
+                         skip_until=factors[0] * 35.0, voltage_gain=3)
+    rec = reader.read()
+    np.testing.assert_allclose(rec.time, factors[0] * 10.0 * np.arange(4, 12))
+    np.testing.assert_allclose(rec.voltage, 3 * factors[1] * 2.0 * np.arange(4, 12))
+    if note is None:
+        assert "->" not in reader.describe()
+        assert "time_unit" not in rec.metadata and "voltage_unit" not in rec.metadata
+    else:
+        assert note in reader.describe()
+
+
 @pytest.mark.parametrize("options,message", [
     ({"lag": -1}, "--lag must be"),
     ({"rate": 0}, "--rate must be positive"),

@@ -119,6 +119,23 @@ def test_ascii_mdt693b_echo_and_prompt():
     port.done()
 
 
+def test_ascii_prompt_after_a_query_reply_arrives_before_the_next_echo():
+    # the prompt that follows a query's reply ('*[ 100]\r*' in a captured MDT693B
+    # session) was still on its way when the next command went out: it comes before the
+    # echo, which is otherwise right
+    supply, port = ascii_supply(
+        [(b"xvoltage?\r", b"xvoltage?\r*[  24.8]\r"),
+         (b"xvoltage=0.00\r", b"*xvoltage=0.00\r*"),
+         (b"xvoltage=1.00\r", b"*xvoltage=1.50\r")],
+        terminator="\r", set_command="xvoltage={volts:.2f}", query_command="xvoltage?",
+        echo=True, prompt="*")
+    assert supply.read_voltage() == 24.8
+    supply.set_voltage(0.0)
+    with pytest.raises(RigError, match="expected the echo"):   # a wrong echo still is one
+        supply.set_voltage(1.0)
+    port.done()
+
+
 def test_ascii_errors():
     supply, _ = ascii_supply([(b"xvoltage=1.00\r", b"xvolt")], terminator="\r",
                              set_command="xvoltage={volts:.2f}", echo=True)

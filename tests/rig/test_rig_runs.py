@@ -1,6 +1,7 @@
 """End to end through the emulated instruments in virtual time: the loop, its log, and
 the safety on every exit path."""
 
+import errno
 import math
 import os
 import signal
@@ -10,7 +11,8 @@ import pytest
 from rig_helpers import make_config
 
 from pihyst.cli import main as pihyst_main
-from pihyst.rig import Fault, Rig, VoltageProgram, WallClock, read_run_log
+from pihyst.rig import Fault, Rig, VoltageProgram, WallClock, _session, read_run_log
+from pihyst.rig._log import CsvRunLog
 from pihyst.sim.signals import triangle
 
 
@@ -123,7 +125,85 @@ def test_stuck_supply_is_caught_by_the_readback(tmp_path):
     result, emu, log = record(tmp_path, faults=[Fault("stuck", "supply", start_s=3.0)])
     assert "readback" in result.reason
     assert emu.supply_state.last_setpoint_V == 0.0
-    assert any("stopped: readback" in n for n in read_run_log(log)[1])
+    # the supply took neither 0 V nor output off: the run must not say it is at 0 V
+    assert emu.supply_state.output_V > 1.0
+    assert not result.zeroed and math.isnan(result.final_voltage_V)
+    stopped = [n for n in read_run_log(log)[1] if n.startswith("stopped: readback")]
+    assert len(stopped) == 1 and "WARNING: the supply reads back" in stopped[0], stopped
+    assert "the beam may still be charged" in stopped[0]
+
+
+def test_an_echoing_ascii_supply_with_a_prompt_ends_at_zero(tmp_path):
+    # MDT693B-like: echo, '*' prompt, a readback query every tick; the shutdown's 0 V
+    # follows the last tick's query at once, before that query's closing prompt arrived
+    config = make_config(supply={
+        "protocol": "ascii", "baudrate": 115200, "terminator": "\r",
+        "set_command": "xvoltage={volts:.2f}", "query_command": "xvoltage?", "echo": True,
+        "prompt": "*", "setpoint_register": None, "setpoint_format": None,
+        "word_order": None, "scale": None, "output_register": None,
+        "readback_register": None, "address": None})
+    result, emu, log = record(tmp_path, config, period_s=5.0)
+    assert result.completed and result.zeroed, result.reason
+    assert emu.supply_state.output_V == 0.0
+    assert not any("WARNING" in n for n in read_run_log(log)[1])
+
+
+class _FullDiskLog(CsvRunLog):
+    """A CSV log whose disk fills up after ``budget`` flushes."""
+
+    budget = 0
+
+    def _flush(self):
+        type(self).budget -= 1
+        if type(self).budget < 0:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        super()._flush()
+
+
+@pytest.mark.parametrize("budget", [3, 150])     # at the start ramp, in the run
+def test_a_log_that_cannot_be_written_stops_the_run_at_zero(tmp_path, monkeypatch, budget):
+    # the shutdown writes to the log too: a full disk raised out of it before 0 V was
+    # sent, and the supply stayed at 76 V with its output on
+    monkeypatch.setattr(_FullDiskLog, "budget", budget)
+    monkeypatch.setattr(_session, "CsvRunLog", _FullDiskLog)
+    result, emu, log = record(tmp_path)
+    assert not result.completed and result.zeroed
+    assert result.reason == "the log could not be written (OSError: [Errno 28] No space " \
+                            "left on device)"
+    assert emu.supply_state.last_setpoint_V == 0.0 and not emu.supply_state.output_on
+    assert emu.supply_state.output_V == 0.0
+
+
+@pytest.mark.parametrize("where", ["ramp", "zero"])
+def test_a_driver_error_that_is_no_oserror_does_not_stop_the_shutdown(tmp_path, where):
+    # the sensor goes over-range at 5 s (about 75 V); then the supply driver raises a
+    # ValueError (a driver bug, a value it cannot encode) for some setpoints on the way
+    # down: those were not caught, the shutdown left at once and the supply stayed on
+    config = make_config()
+    _, u = triangle(period_s=20.0, dt=1.0 / config.rig.rate_hz)
+    with Rig(config, faults=[Fault("over-range", "sensor", start_s=5.0)]) as rig:
+        send = rig.supply.set_voltage
+        seen = []
+
+        def refusing(volts):
+            seen.append(volts)
+            down = seen[seen.index(max(seen)):] if max(seen) > 70.0 else []
+            if down and ((where == "ramp" and 10.0 < volts < 60.0) or
+                         (where == "zero" and volts == 0.0 and down.count(0.0) < 3)):
+                raise ValueError(f"cannot encode {volts} V")
+            send(volts)
+        rig.supply.set_voltage = refusing
+        result = rig.run(VoltageProgram(u), tmp_path / "run.csv")
+        state = rig.emulators.supply_state
+    assert "invalid sensor readings" in result.reason
+    assert result.zeroed and state.output_V == 0.0 and not state.output_on
+
+
+def test_readback_after_the_end_confirms_0_V(tmp_path):
+    result, emu, log = record(tmp_path)
+    assert result.completed and result.zeroed
+    assert emu.supply_state.output_V == 0.0
+    assert not any("WARNING" in n for n in read_run_log(log)[1])
 
 
 def test_vanished_supply_port(tmp_path):

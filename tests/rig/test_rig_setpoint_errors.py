@@ -4,6 +4,8 @@ a rig whose limits include one is refused before anything is sent or logged (the
 line: one line, exit status 2, no log), and the programs, faults and log reader say what
 was wrong."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from rig_helpers import ScriptedPort, config_text, make_config
@@ -44,7 +46,8 @@ def test_a_driver_refuses_a_setpoint_before_sending(kind, volts, says):
 
 
 def test_a_setpoint_beyond_the_register_is_refused_before_sending():
-    cfg = make_config(supply={"setpoint_format": "uint16", "scale": 1000.0}).supply
+    cfg = make_config(supply={"setpoint_format": "uint16", "scale": 1000.0},
+                      rig={"u_max": 65.0}).supply
     supply = ModbusRtuSupply(ScriptedPort([]), cfg, VirtualClock())
     with pytest.raises(InvalidArgumentError, match=r"70 V is 70000 register units at \[supply\] "
                        r"scale 1000: more than a uint16 setpoint register holds \(65535\)"):
@@ -53,26 +56,40 @@ def test_a_setpoint_beyond_the_register_is_refused_before_sending():
 
 
 BAD_LIMITS = [
-    ({"rig": {"u_min": -10.0}}, "[rig] limits -10 .. 150 V: supply setpoint: refusing to send a "
-                                "negative setpoint (-10 V) to a unipolar supply"),
+    ({"rig": {"u_min": -10.0}}, "supply setpoint: refusing to send a negative setpoint "
+                                "(-10 V) to a unipolar supply", "[rig] limits -10 .. 150 V"),
     ({"supply": {"setpoint_format": "uint16", "scale": 1000.0}},
-     "[rig] limits 0 .. 150 V: supply setpoint: 150 V is 150000 register units at [supply] "
-     "scale 1000: more than a uint16 setpoint register holds (65535)"),
+     "supply setpoint: 150 V is 150000 register units at [supply] scale 1000: more than a "
+     "uint16 setpoint register holds (65535)", "[rig] limits 0 .. 150 V"),
+]
+# the same limits in a configuration file (refused when it is read, rig/_config.py)
+BAD_CONFIG = [
+    ({"rig": {"u_min": -10.0}}, ":3: [rig] u_min: must be 0, got -10: pihyst drives "
+                                "unipolar supplies (0 V to u_max)"),
+    ({"supply": {"setpoint_format": "uint16", "scale": 1000.0}},
+     ":4: [rig] u_max: 150 V is 150000 register units at [supply] scale 1000: more than a "
+     "uint16 setpoint holds (65535)"),
 ]
 
 
-@pytest.mark.parametrize("sections, says", BAD_LIMITS)
-def test_a_rig_whose_limits_the_supply_refuses_runs_nothing(tmp_path, sections, says):
+@pytest.mark.parametrize("sections, says, where", BAD_LIMITS)
+def test_a_rig_whose_limits_the_supply_refuses_runs_nothing(tmp_path, sections, says, where):
+    # limits set past the configuration file's checks (settings built in Python): the run
+    # refuses them before anything is sent or logged
+    config = make_config()
+    config = dataclasses.replace(
+        config, rig=dataclasses.replace(config.rig, **sections.get("rig", {})),
+        supply=dataclasses.replace(config.supply, **sections.get("supply", {})))
     log = tmp_path / "run.csv"
-    with Rig(make_config(**sections)) as rig:
+    with Rig(config) as rig:
         with pytest.raises(InvalidArgumentError) as err:
             rig.run(VoltageProgram([0.0, 5.0, 0.0]), log)
-        assert str(err.value) == says
+        assert str(err.value) == f"{where}: {says}"
         assert rig.emulators.supply.requests == 0     # nothing was sent
     assert not log.exists()
 
 
-@pytest.mark.parametrize("sections, says", BAD_LIMITS)
+@pytest.mark.parametrize("sections, says", BAD_CONFIG)
 @pytest.mark.parametrize("command", ["record", "track"])
 def test_the_rig_commands_refuse_such_limits_in_one_line(tmp_path, capsys, sections, says,
                                                          command):
@@ -88,7 +105,7 @@ def test_the_rig_commands_refuse_such_limits_in_one_line(tmp_path, capsys, secti
         argv = ["rig", "track", model, desired, "--config", cfg, "-o", out]
     assert main([str(a) for a in argv]) == 2
     err = capsys.readouterr().err
-    assert err == f"pihyst: error: {cfg}: {says}\n"
+    assert err == f"pihyst: error: {cfg}{says}\n"
     assert not out.exists()
 
 

@@ -5,7 +5,7 @@ import os
 from pihyst._atomic import write_atomically
 from pihyst.cli.errors import UsageError
 from pihyst.io import load_model
-from pihyst.io._export import c_header, c_identifier, flat_text
+from pihyst.io._export import CORE_HEADERS, c_header, c_identifier, core_prefix, flat_text
 
 
 def register(sub):
@@ -44,10 +44,21 @@ def run(args):
         write_atomically(args.output, flat_text(model))
         print(f"wrote {args.output}: {model.family} model, {_size(model)} (pihyst_lib_load)")
         return
-    stem = os.path.splitext(os.path.basename(args.output))[0]
+    base = os.path.basename(args.output)
+    if base.lower() in CORE_HEADERS:
+        raise UsageError(f"-o {args.output}: the C core has a header of that name, which "
+                         "this one would replace in your build; choose another file name")
+    stem = os.path.splitext(base)[0]
     name = args.name if args.name is not None else stem
     if args.name is not None and c_identifier(args.name) != args.name:
-        raise UsageError(f"--name {args.name!r} is not a C identifier (letters, digits, _)")
+        raise UsageError(f"--name {args.name!r} is not a C identifier (letters, digits "
+                         "and _, starting with a letter)")
+    if core_prefix(c_identifier(name)):
+        where = f"--name {args.name}" if args.name is not None else \
+            f"-o {args.output}: the prefix {c_identifier(name)!r}"
+        raise UsageError(f"{where}: names starting with 'pihyst' are the C core's "
+                         "(pihyst_model_init, pihyst_params, ...) and would not compile; "
+                         "choose another" + ("" if args.name is not None else " (--name)"))
     text = c_header(model, name, precision="float" if args.float else "double",
                     source=os.path.basename(args.model))
     write_atomically(args.output, text)

@@ -224,8 +224,10 @@ def run(args):
     save_model(model, args.output)
     if time_note is not None:
         print(f"pihyst: warning: {time_note}", flush=True, file=sys.stderr)
-    for w in caught:
-        print(f"pihyst: warning: {w.message}", flush=True, file=sys.stderr)
+    # with creep the record is fitted twice (with and without the creep estimate), and
+    # both fits may say the same thing about it
+    for message in dict.fromkeys(str(w.message) for w in caught):
+        print(f"pihyst: warning: {message}", flush=True, file=sys.stderr)
     print(result.report.to_json() if args.json else result.report)
     if not args.json:
         lag = f", input delay {model.delay} samples" if model.delay else ""

@@ -15,6 +15,7 @@ from pihyst.cli.errors import UsageError, positive_number
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
+from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
@@ -200,6 +201,10 @@ def _report(result, args, rig):
     if not result.completed:
         print(f"pihyst rig: error: the run stopped early: {result.reason}", file=sys.stderr)
         raise SystemExit(1)
+    if not result.zeroed:
+        print(f"pihyst rig: error: the supply could not be zeroed at the end (see the log "
+              f"{args.output}): the beam may still be charged", file=sys.stderr)
+        raise SystemExit(1)
 
 
 def _resample(path, column, rate_hz, what):
@@ -215,7 +220,11 @@ def _resample(path, column, rate_hz, what):
         i = back[0] + 1
         raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
                        f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g})")
-    ticks = t[0] + np.arange(int(math.floor((t[-1] - t[0]) * rate_hz + 1e-9)) + 1) / rate_hz
+    n = math.floor((t[-1] - t[0]) * rate_hz + 1e-9) + 1
+    if n > MAX_TICKS:
+        raise UsageError(f"{path}: time_s spans {t[-1] - t[0]:g} s, {n:,} ticks at "
+                         f"{rate_hz:g} Hz: more than the {MAX_TICKS:,} ticks of a run")
+    ticks = t[0] + np.arange(n) / rate_hz
     return np.interp(ticks, t, v)
 
 
@@ -265,7 +274,17 @@ def run_record(args):
                                      period=args.period, cycles=args.cycles, triangles=5,
                                      ratio=0.7, ramps=20, rate=None, seed=0, steps=10,
                                      step_time=10.0)
-        _, u = make_signal(options, u_max)
+        try:
+            _, u = make_signal(options, u_max)
+        except UsageError as err:
+            # make_signal names pihyst simulate's options (--dt, --steps ...); say the
+            # rig's: the tick period is the configuration's
+            detail = str(err).split(": ", 1)[-1]
+            shown = {"triangle": f" --period {args.period:g} --cycles {args.cycles}",
+                     "sine": f" --period {args.period:g} --cycles {args.cycles}",
+                     "decaying-triangles": f" --period {args.period:g}"}.get(args.signal, "")
+            raise UsageError(f"--signal {args.signal}{shown} at {r.rate_hz:g} Hz ({args.config}"
+                             f" [rig] rate_hz): {detail}") from None
         description = (f"{args.signal} {u_min:g}-{u_max:g} V, period {args.period:g} s, "
                        f"{args.cycles} cycle(s)")
     _check_output(args.output)
@@ -297,6 +316,7 @@ def run_track(args):
     model = load_model(args.model)
     # the delay in the rig's ticks: converted when exact, else a one-line error
     model = delay_for_run(model, args.config, period=1.0 / r.rate_hz)
+    model = _creep_at(model, 1.0 / r.rate_hz)
     gains = _gains(args.feedback) if args.feedback is not None else None
     desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
     max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz
@@ -310,9 +330,12 @@ def run_track(args):
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
+    reach = _reach_note(model, desired, *program.limits)
+    if reach is not None:
+        print(reach, flush=True)
     with _open(args, config) as rig:
-        result = _run(rig, args, program, notes=[f"model: {args.model}: {model!r}"],
-                      fsync=args.fsync)
+        result = _run(rig, args, program, notes=[f"model: {args.model}: {model!r}"]
+                      + ([] if reach is None else [reach]), fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     ref = result.column("reference", phase="run")
     ok = np.isfinite(y)
@@ -325,6 +348,36 @@ def run_track(args):
               f"absolute {s['mean_abs']:.4g} um{pct}; RMS {s['rms']:.4g} um; max "
               f"{s['max_abs']:.4g} um")
     _report(result, args, rig)
+
+
+def _creep_at(model, period):
+    """``model`` with its creep lags stepped at the tick ``period``: the compensator
+    advances them by ``creep.dt`` per step, the interval of the record it was fitted on
+    (5 ms for a 200 Hz record, while a 20 Hz rig's ticks are 50 ms apart)."""
+    creep = getattr(model, "creep", None)
+    if creep is None or creep.dt == period:
+        return model
+    from pihyst.model import Creep
+    return model.replace(creep=Creep(creep.tau, creep.gain, dt=period))
+
+
+def _reach_note(model, desired, lo, hi):
+    """What the model cannot reach within the voltages [lo, hi] of the run (None: all in
+    reach): the feedforward's voltages for those ticks saturate, and the tracking errors
+    alone do not say why. Counted on the compensator's own run of the trajectory, as the
+    reach at a tick depends on the voltages before it."""
+    from pihyst.cli.compensate import reach_hint, reachable
+    from pihyst.inverse import compensate
+    run = compensate(model, desired, u_min=lo, u_max=hi)
+    if not run.n_saturated:
+        return None
+    y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
+    unit = model.units.get("output", "um")
+    return (f"note: {run.n_saturated} of {desired.size} ticks of the desired displacement "
+            f"(span [{desired.min():.4g}, {desired.max():.4g}] {unit}) are out of the "
+            f"model's reach with the voltage in [{lo:g}, {hi:g}] V (at most [{y_lo:.4g}, "
+            f"{y_hi:.4g}] {unit}): their voltage saturates; "
+            + reach_hint(model, y_lo, y_hi, float(desired.min()), float(desired.max())))
 
 
 def run_emulate(args):

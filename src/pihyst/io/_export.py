@@ -22,7 +22,7 @@ import re
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.exceptions import InvalidModelError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 from pihyst.io._export_boucwen import boucwen_flat_lines, boucwen_header
 from pihyst.io._export_creep import (
     check_creep_precision,
@@ -39,12 +39,37 @@ _FAMILY_ENUM = {"classical": "PIHYST_CLASSICAL", "multislope": "PIHYST_MULTISLOP
 _FAMILY_CODE = {"classical": 0, "multislope": 1, "pwl": 2}
 
 
+#: the C core's headers (csrc/, csrc/lib/): a generated header of the same name would be
+#: included in their place
+CORE_HEADERS = ("pihyst.h", "pihyst_api.h", "pihyst_boucwen.h", "pihyst_boucwen_api.h",
+                "pihyst_bw_creep.h", "pihyst_creep.h", "pihyst_f32_names.h",
+                "pihyst_internal.h", "pihyst_lib.h")
+
+
 def c_identifier(text):
-    """A C identifier made from ``text`` (a file name, say): letters, digits and _."""
-    name = re.sub(r"[^0-9A-Za-z_]", "_", text)
+    """A C identifier made from ``text`` (a file name, say): letters, digits and _,
+    starting with a letter (a leading _ is reserved in C at file scope)."""
+    name = re.sub(r"[^0-9A-Za-z_]", "_", text).lstrip("_")
     if not name or name[0].isdigit():
-        name = "model_" + name
+        name = "model_" + name if name else "model"
     return name
+
+
+def core_prefix(name):
+    """True if the C prefix ``name`` is in the C core's namespace (pihyst_..., PIHYST_...):
+    the header's symbols and macros would collide with the core's."""
+    return name.lower().startswith("pihyst")
+
+
+def checked_c_prefix(name):
+    """``name`` made a C identifier, refused (InvalidArgumentError) in the core's
+    namespace."""
+    ident = c_identifier(name)
+    if core_prefix(ident):
+        raise InvalidArgumentError(f"C prefix {ident!r}: names starting with 'pihyst' are "
+                                   "the C core's (pihyst_model_init, pihyst_params, ...); "
+                                   "choose another")
+    return ident
 
 
 def _literal(x, precision):
@@ -77,14 +102,14 @@ def c_header(model, name, *, precision="double", source=""):
         raise InvalidModelError(f"precision must be 'double' or 'float', got {precision!r}")
     check_creep_precision(model, precision)
     if model.family == "bouc-wen":
-        name = c_identifier(name)
+        name = checked_c_prefix(name)
         return boucwen_header(model, name, lambda v: _literal(v, precision), precision,
                               source, _delay_comment(model, name),
                               lambda ctype, label, values: _array(ctype, label, values,
                                                                   precision))
     if model.family not in _FAMILY_ENUM:
         raise InvalidModelError(f"no C form for a {model.family!r} model")
-    name = c_identifier(name)
+    name = checked_c_prefix(name)
     real, sfx = ("double", "") if precision == "double" else ("float", "_f32")
     k = model.n_operators
     guard = f"PIHYST_MODEL_{name.upper()}_H"

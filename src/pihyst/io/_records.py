@@ -23,6 +23,11 @@ QUANTITIES = ("voltage", "displacement", "time")
 DEFAULT_NAMES = {"voltage": "voltage_V", "displacement": "displacement_um", "time": "time_s"}
 UNIT_FACTORS = {"m": 1e6, "mm": 1e3, "um": 1.0, "µm": 1.0, "nm": 1e-3}
 _UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(m|mm|um|µm|nm)[\])]?\s*$")
+# a time or voltage column named in another unit (time_ms, 'U [kV]') is converted too
+TIME_FACTORS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
+VOLTAGE_FACTORS = {"v": 1.0, "mv": 1e-3, "kv": 1e3}
+_TIME_UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(s|ms|us|µs|ns)[\])]?\s*$", re.IGNORECASE)
+_VOLTAGE_UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(v|mv|kv)[\])]?\s*$", re.IGNORECASE)
 EXTENSIONS = {".npy": "npy", ".npz": "npz", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
               ".he5": "hdf5", ".parquet": "parquet", ".pq": "parquet"}
 BLOCK_ROWS = 1 << 20
@@ -98,6 +103,9 @@ class RecordReader:
         if self.voltage_gain == 0:
             raise InvalidArgumentError("--voltage-gain must not be 0")
         self.unit, self.unit_from = self._unit(displacement_unit, found)
+        self.named_units = {q: self._unit_in_name(q, pattern, factors) for q, pattern, factors
+                            in (("time", _TIME_UNIT_IN_NAME, TIME_FACTORS),
+                                ("voltage", _VOLTAGE_UNIT_IN_NAME, VOLTAGE_FACTORS))}
         if not (isinstance(lag, (int, np.integer)) and lag >= 0):
             raise InvalidArgumentError(f"--lag must be a whole number of samples >= 0, got "
                                        f"{lag!r}")
@@ -160,6 +168,24 @@ class RecordReader:
         name = self.source.columns[ref] if self.source.columns else None
         return f"column {ref + 1}" + (f" {name!r}" if name else "")
 
+    def _column_name(self, quantity):
+        """The name of the column (or array variable) ``quantity`` is read from, if any."""
+        ref = self.refs.get(quantity)
+        names = self.source.columns if isinstance(self.source, TextSource) else ()
+        return names[ref] if isinstance(ref, int) and names else (
+            ref[0] if isinstance(ref, tuple) else None)
+
+    def _unit_in_name(self, quantity, pattern, factors):
+        """(unit, factor to s or V, column name) of a time or voltage column whose name
+        gives a unit other than s or V (``time_ms``, ``U [kV]``), else None."""
+        name = self._column_name(quantity)
+        m = pattern.search(name or "")
+        if m is None:
+            return None
+        unit = m.group(1)
+        factor = factors[unit.lower().replace("µ", "u")]
+        return None if factor == 1.0 else (unit, factor, name)
+
     def _unit(self, given, found):
         if given is not None:
             unit, where = given, "option"
@@ -167,10 +193,7 @@ class RecordReader:
             unit, where = found["displacement_unit"], "reader"
         else:
             unit, where = "um", "default"
-            ref = self.refs.get("displacement")
-            names = self.source.columns if isinstance(self.source, TextSource) else ()
-            name = names[ref] if isinstance(ref, int) and names else (
-                ref[0] if isinstance(ref, tuple) else None)
+            name = self._column_name("displacement")
             m = _UNIT_IN_NAME.search(name or "")
             if m:
                 unit, where = m.group(1), f"column name {name!r}"
@@ -254,6 +277,9 @@ class RecordReader:
                                       if not k.startswith("_")}}
         meta["columns"] = dict(self.labels)
         meta["displacement_unit"] = self.unit
+        for q in ("voltage", "time"):
+            if self.named_units.get(q) is not None:
+                meta[f"{q}_unit"] = self.named_units[q][0]
         if self.voltage_gain != 1.0:
             meta["voltage_gain"] = self.voltage_gain
         if self.rate is not None:
@@ -273,6 +299,10 @@ class RecordReader:
         notes = []
         if "displacement" in self.refs and self.unit != "um":
             notes.append(f"displacement in {self.unit} ({self.unit_from}) -> um")
+        for q, base in (("voltage", "V"), ("time", "s")):
+            named = self.named_units.get(q)
+            if named is not None:
+                notes.append(f"{q} in {named[0]} (column name {named[2]!r}) -> {base}")
         if self.voltage_gain != 1.0 and "voltage" in self.refs:
             notes.append(f"voltage x {self.voltage_gain:g}")
         if self.rate is not None:
@@ -321,6 +351,12 @@ class _Transform:
         r = self.r
         n = len(next(iter(raw.values())))
         block = dict(raw)
+        for q in ("voltage", "time"):
+            named = r.named_units.get(q)
+            if q in block and named is not None:
+                unit, factor, _ = named
+                block[q] = self._scaled(block[q], q, factor, f"{factor:g} ({unit} to "
+                                        f"{'V' if q == 'voltage' else 's'})")
         if "voltage" in block and r.voltage_gain != 1.0:
             block["voltage"] = self._scaled(block["voltage"], "voltage", r.voltage_gain,
                                             f"the voltage gain {r.voltage_gain:g}")

@@ -30,6 +30,8 @@ SUPPLY_PROTOCOLS = ("modbus-rtu", "ascii")
 SENSOR_PROTOCOLS = ("keyence-lk-g5000", "keyence-lk-g3000")
 REGISTER_FORMATS = ("uint16", "uint32", "float32")
 WORD_ORDERS = ("big", "little")
+#: the largest register value of each setpoint format
+REGISTER_MAX = {"uint16": 0xFFFF, "uint32": 0xFFFFFFFF, "float32": 3.4028234663852886e38}
 
 
 @dataclass(frozen=True)
@@ -225,6 +227,10 @@ def _validate(check, cfg):
     if r.u_min > 0 or r.u_max < 0:
         check.fail("rig", "u_min", f"the limits [{r.u_min:g}, {r.u_max:g}] V must include "
                    "0 V (runs start and end there)")
+    if r.u_min < 0:
+        # the drivers refuse a negative setpoint, and the shutdown ramps down to 0 V only
+        check.fail("rig", "u_min", f"must be 0, got {r.u_min:g}: pihyst drives unipolar "
+                   "supplies (0 V to u_max)")
     _positive(check, "rig", "slew_V_per_s", r.slew_V_per_s, allow_none=True)
     _positive(check, "rig", "ramp_V_per_s", r.ramp_V_per_s, allow_none=True)
     if r.ramp_V_per_s is not None and r.slew_V_per_s is not None and \
@@ -250,7 +256,8 @@ def _validate(check, cfg):
             check.fail(sec, "parity", f"must be N, E or O, got {c.parity!r}")
         if c.stopbits not in (1, 2):
             check.fail(sec, "stopbits", f"must be 1 or 2, got {c.stopbits}")
-    if not 0 <= s.address <= 247:
+    if s.protocol == "modbus-rtu" and not 1 <= s.address <= 247:
+        # 0 is the broadcast address, to which no slave replies
         check.fail("supply", "address", f"must be a Modbus slave address 1..247, got {s.address}")
     if s.setpoint_format not in REGISTER_FORMATS:
         check.fail("supply", "setpoint_format",
@@ -258,6 +265,11 @@ def _validate(check, cfg):
     if s.word_order not in WORD_ORDERS:
         check.fail("supply", "word_order", f"{s.word_order!r} is not big or little")
     _positive(check, "supply", "scale", s.scale)
+    largest = REGISTER_MAX[s.setpoint_format]
+    if s.protocol == "modbus-rtu" and round(r.u_max * s.scale) > largest:
+        check.fail("rig", "u_max", f"{r.u_max:g} V is {r.u_max * s.scale:g} register units at "
+                   f"[supply] scale {s.scale:g}: more than a {s.setpoint_format} setpoint "
+                   f"holds ({largest:g})")
     for name in ("setpoint_register", "output_register", "readback_register"):
         v = getattr(s, name)
         if v is not None and not 0 <= v <= 0xFFFF:

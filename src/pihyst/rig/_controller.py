@@ -24,6 +24,8 @@ from pihyst.rig._log import TickRecord
 from pihyst.rig._safety import SetpointGuard, SignalGuard, StopRun, Terminated, Watchdog
 
 NAN = math.nan
+#: how long the readback may take to fall to 0 V after the output is switched off
+RESIDUAL_WAIT_S = 1.0
 
 
 @dataclass
@@ -87,11 +89,27 @@ class Controller:
             else watchdog
         self.handle_signals = handle_signals
         self._supply_lock = threading.RLock()
+        self._log_error = None          # why the log failed; it is not written to after
 
     # ------------------------------------------------------------------ helpers
+    @property
+    def log_error(self):
+        """Why the log could not be written (None: it could)."""
+        return self._log_error
+
     def _note(self, text):
-        if self.log is not None:
-            self.log.note(text)
+        self._to_log("note", text)
+
+    def _to_log(self, method, item):
+        """Write to the log; a log that fails (disk full, a drive unplugged) is given up,
+        never raised here: the shutdown that zeroes the supply writes to it too. The run
+        stops at the end of the tick (:meth:`_check`)."""
+        if self.log is None or self._log_error is not None:
+            return
+        try:
+            getattr(self.log, method)(item)
+        except Exception as err:  # noqa: BLE001 - whatever broke, the supply comes first
+            self._log_error = f"{type(err).__name__}: {err}"
 
     def _send(self, u):
         # the guard learns the outcome under the supply lock: the watchdog thread may zero
@@ -193,12 +211,13 @@ class Controller:
 
     def _record(self, record):
         self.records.append(record)
-        if self.log is not None:
-            self.log.write(record)
+        self._to_log("write", record)
         self.tick += 1
 
     def _check(self, r):
         s = self.settings
+        if self._log_error is not None:
+            raise StopRun(f"the log could not be written ({self._log_error})")
         if self._comm_errors >= s.max_comm_errors:
             raise StopRun(f"{self._comm_errors} consecutive communication errors (last: "
                           f"{self._last_error})")
@@ -234,6 +253,7 @@ class Controller:
         self.records, self.tick, self.overruns = [], 0, 0
         self._comm_errors = self._invalid = self._consecutive_overruns = 0
         self._last_error = ""
+        self._log_error = None
         self._recent = []
         self._watchdog = None
         max_step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
@@ -301,7 +321,9 @@ class Controller:
 
     def _shutdown(self, reason, deadline):
         """Ramp to 0 V at the slew limit (one step per tick, reading the sensor unless it
-        is the sensor that failed), switch the output off, and say why in the log."""
+        is the sensor that failed), switch the output off, and say why in the log. Any
+        error of a driver here counts as a failed exchange, never leaves this method: an
+        exception out of it would leave the supply where it is."""
         s = self.settings
         self._note(f"stopping: {reason}")
         # a failing sensor would cost its timeout on every step of the ramp
@@ -310,7 +332,10 @@ class Controller:
         failures = 0
         while self.guard.hi > 0 and step is not None and failures < 2:
             start, late = self._wait(deadline)
-            y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
+            try:
+                y, status, _ = self._read() if read_sensor else (NAN, "not read", None)
+            except Exception as err:  # noqa: BLE001 - see the docstring
+                y, status = NAN, f"error: {err}"
             try:
                 with self._supply_lock:
                     # chosen under the lock: the watchdog may have zeroed the supply
@@ -319,12 +344,12 @@ class Controller:
                         break
                     try:
                         self.supply.set_voltage(u)
-                    except OSError:
+                    except Exception:
                         self.guard.failed(u)
                         raise
                     self.guard.sent(u)
                 sent, supply_status = u, "ok"
-            except OSError as err:
+            except Exception as err:  # noqa: BLE001 - see the docstring
                 failures += 1
                 sent, supply_status = NAN, f"error: {err}"
             end = self.clock.now()
@@ -342,9 +367,13 @@ class Controller:
                     with self._supply_lock:
                         call()
                     break
-                except OSError as err:
+                except Exception as err:  # noqa: BLE001 - see the docstring
                     if attempt == 2:
                         problems.append(f"could not send {what}: {err}")
+        if not problems and self.supply.has_readback:
+            left = self._residual_voltage()
+            if left is not None:
+                problems.append(f"the supply reads back {left:.3f} V after 0 V and output off")
         zeroed = not problems
         if zeroed:
             self.guard.sent(0.0)
@@ -354,6 +383,22 @@ class Controller:
                        "still be charged")
         return zeroed, self.guard.last if zeroed else NAN
 
+    def _residual_voltage(self):
+        """The readback after 0 V and output off when it stays above the tolerance for
+        RESIDUAL_WAIT_S (a supply that acknowledges but does not follow), else None."""
+        s = self.settings
+        value = None
+        for attempt in range(max(1, math.ceil(RESIDUAL_WAIT_S * s.rate_hz))):
+            if attempt:
+                self.clock.sleep(s.period_s)
+            try:
+                with self._supply_lock:
+                    value = self.supply.read_voltage()
+            except Exception:  # noqa: BLE001 - as in _shutdown
+                continue
+            if value is None or abs(value) <= s.readback_tolerance_V:
+                return None
+        return value
 
 def check_limits(supply, settings):
     """InvalidArgumentError unless ``supply`` may be sent every voltage within the rig's

@@ -1,5 +1,6 @@
 """Faults the emulated instruments can be told to make (fault injection)."""
 
+import math
 from dataclasses import dataclass
 
 from pihyst.exceptions import InvalidArgumentError
@@ -52,6 +53,9 @@ class Fault:
         if self.device not in FAULT_KINDS[self.kind]:
             raise InvalidArgumentError(f"fault {self.kind!r} does not apply to the "
                                        f"{self.device}")
+        if not math.isfinite(self.start_s):
+            raise InvalidArgumentError(f"the start must be a finite time in seconds, got "
+                                       f"{self.start_s}")
         if self.count is not None and self.count < 1:
             raise InvalidArgumentError(f"count must be >= 1 or None, got {self.count}")
         if self.code is None:

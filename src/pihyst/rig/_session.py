@@ -109,11 +109,17 @@ class Rig:
             if str(log_path).lower().endswith((".h5", ".hdf5")):
                 from pihyst.rig._hdf5 import Hdf5RunLog as cls
             log = cls(log_path, metadata(self, program, notes), fsync=fsync)
+        controller = self.controller(log, handle_signals=handle_signals)
         try:
-            return self.controller(log, handle_signals=handle_signals).run(program)
+            return controller.run(program)
         finally:
             if log is not None:
-                log.close()
+                try:
+                    log.close()
+                except Exception:
+                    # a log that already failed during the run (the run stopped for it)
+                    if controller.log_error is None:
+                        raise
 
 
 def metadata(rig, program, notes=()):

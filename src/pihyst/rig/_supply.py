@@ -167,6 +167,10 @@ class AsciiSupply:
         port.write(sent)
         if c.echo:
             echo = read_line(port, self._term, "supply")
+            # the prompt that ends a query's reply may come after this command went out
+            # (an MDT693B answers 'vlimit?' with '*[ 100]\r*'): it precedes the echo
+            while self._prompt and echo.startswith(self._prompt) and echo != sent:
+                echo = echo[len(self._prompt):]
             if echo != sent:
                 raise RigError(f"supply: expected the echo {sent!r}, got {echo!r}")
         reply = b""
