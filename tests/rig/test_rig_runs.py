@@ -362,3 +362,23 @@ def test_hdf5_log(tmp_path):
         assert any(n.startswith("stopped: 5 consecutive invalid") for n in
                    f.attrs["notes"])
         assert any("rig run log" in m for m in f.attrs["metadata"])
+
+
+def test_a_creep_model_runs_its_lags_at_the_rigs_tick(tmp_path):
+    # fitted on a 200 Hz record (creep.dt 5 ms), tracked through the Python API on the
+    # 20 Hz rig: the lags move 50 ms per tick, as pihyst.compensate at the ticks' times
+    import pihyst
+    from pihyst.model import Creep
+    from pihyst.rig import FeedforwardProgram
+
+    model = pihyst.ClassicalPI([0, 10, 30, 60], [0.2, 0.05, 0.03, 0.01],
+                               creep=Creep([1.0, 10.0], [0.1, 0.1], dt=0.005))
+    desired = np.r_[np.linspace(0.0, 20.0, 20), np.full(400, 20.0)]
+    program = FeedforwardProgram(model, desired, 0.0, 150.0, max_step=10.0)
+    result, _, _ = record(tmp_path, program=program)
+    assert result.completed
+    sent, ref = result.column("command_V", "run"), result.column("reference", "run")
+    expected = pihyst.compensate(model, ref, t=0.05 * np.arange(ref.size), u_min=0.0,
+                                 u_max=150.0, slew_rate=10.0, initial_voltage=sent[0])
+    np.testing.assert_allclose(sent, expected.voltage, rtol=0, atol=1e-6)
+    assert program.model.creep.dt == pytest.approx(0.05)

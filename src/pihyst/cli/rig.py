@@ -316,7 +316,6 @@ def run_track(args):
     model = load_model(args.model)
     # the delay in the rig's ticks: converted when exact, else a one-line error
     model = delay_for_run(model, args.config, period=1.0 / r.rate_hz)
-    model = _creep_at(model, 1.0 / r.rate_hz)
     gains = _gains(args.feedback) if args.feedback is not None else None
     desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
     max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz
@@ -348,17 +347,6 @@ def run_track(args):
               f"absolute {s['mean_abs']:.4g} um{pct}; RMS {s['rms']:.4g} um; max "
               f"{s['max_abs']:.4g} um")
     _report(result, args, rig)
-
-
-def _creep_at(model, period):
-    """``model`` with its creep lags stepped at the tick ``period``: the compensator
-    advances them by ``creep.dt`` per step, the interval of the record it was fitted on
-    (5 ms for a 200 Hz record, while a 20 Hz rig's ticks are 50 ms apart)."""
-    creep = getattr(model, "creep", None)
-    if creep is None or creep.dt == period:
-        return model
-    from pihyst.model import Creep
-    return model.replace(creep=Creep(creep.tau, creep.gain, dt=period))
 
 
 def _reach_note(model, desired, lo, hi):

@@ -280,6 +280,8 @@ class Controller:
                         raise StopRun(f"could not start: supply: {err}") from None
             self.t0 = deadline = self.clock.now()
             self._note(f"start: 0 V, output on; {program.describe()}")
+            if hasattr(program, "bind_tick"):
+                program.bind_tick(s.period_s)
             target = program.initial_voltage()
             if not math.isfinite(target):
                 raise StopRun(f"refused a non-finite first setpoint ({target})")
