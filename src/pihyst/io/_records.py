@@ -142,8 +142,8 @@ class RecordReader:
         seen = {}
         for q, ref in refs.items():
             if ref in seen:
-                raise InvalidArgumentError(f"the {seen[ref]} and the {q} are both read from "
-                                           f"{self._label(ref)} of {self.path}")
+                raise RecordError(self.path, f"the {seen[ref]} and the {q} are both read "
+                                             f"from {self._label(ref)}")
             seen[ref] = q
         return refs
 
