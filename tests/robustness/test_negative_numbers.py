@@ -6,6 +6,8 @@ import argparse
 import contextlib
 import io
 import os
+import shutil
+from pathlib import Path
 
 import pytest
 from harness import DESIRED, GOOD_MODEL, LOOP, VOLTS, judge, run
@@ -79,38 +81,13 @@ BASES = {
                    "1", "-o", "{out}"],
     "rig emulate": ["rig", "emulate", "--config", "{config}"],
 }
-RIG_CONFIG = """[rig]
-rate_hz = 20.0
-u_min = 0.0
-u_max = 150.0
-slew_V_per_s = 200.0
-[supply]
-port = "pihystsim://supply"
-baudrate = 19200
-protocol = "modbus-rtu"
-address = 1
-setpoint_register = 10
-setpoint_format = "float32"
-word_order = "big"
-scale = 1.0
-output_register = 9
-readback_register = 12
-[sensor]
-port = "pihystsim://sensor"
-baudrate = 115200
-protocol = "keyence-lk-g5000"
-output = 1
-scale_um = 1.0
-sign = 1
-[emulator]
-plant = "paper-beam"
-seed = 0
-"""
+# the emulated rig the README's rig commands use
+RIG_CONFIG = Path(__file__).resolve().parents[2] / "examples" / "rig" / "emulated.toml"
 
 
 def write_rig_config(folder):
     path = folder / "rig.toml"
-    path.write_text(RIG_CONFIG)
+    shutil.copyfile(RIG_CONFIG, path)
     return str(path)
 
 
