@@ -442,7 +442,7 @@ def family_fit(family, fitter):
         ("bounds", fitter.bounds is not None), ("nonnegative=False", not fitter.nonnegative),
         ("a fixed offset", not rec.fit_offset), ("through", len(rec.through) > 0),
         ("an explicit or zero initial_state",
-         rec.state_mode not in ("cycled", "settle") and not from_data))
+         rec.state_mode not in ("cycled", "settle", "rise", "fall") and not from_data))
         if given]
     if unsupported:
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
@@ -454,7 +454,10 @@ def family_fit(family, fitter):
                                                     "samples")
     rec = on.rec
     kwargs = dict(input_range=(rec.lo, rec.lo + rec.S),
-                  initial_state="cycled" if from_data else rec.state_mode,
+                  # rise, fall: z rises from rest at the bottom to the first sample,
+                  # and its start is then fitted as unknown (fit_boucwen)
+                  initial_state=("cycled" if from_data or rec.state_mode in ("rise", "fall")
+                                 else rec.state_mode),
                   n=family.n, layout_=rec.layout)
     model, report = fit_boucwen(rec.u, rec.y, refit=False, **kwargs)
 

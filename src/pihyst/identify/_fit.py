@@ -104,12 +104,16 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     through : "top" or list of int, optional
         Sample indices the model must pass through exactly ("top": the sample at the
         highest input).
-    initial_state : "auto", "cycled", "settle", "zero" or array_like
+    initial_state : "auto", "cycled", "settle", "zero", "rise", "fall" or array_like
         Operator state before the first sample. "cycled": at rest at the bottom of the
         range after a full bottom -> top -> bottom cycle (records made as in
         docs/interfaces.md); "settle": unknown, the first full sweep of the input range settles the
-        operators and is not fitted; "auto": "cycled" if the record starts at the bottom
-        of its range, else "settle". An array (needs ``thresholds``) is used as given.
+        operators and is not fitted; "rise" / "fall": at rest at the first input after
+        a rise from the bottom / a fall from the top; "auto": at the bottom of the
+        range "cycled" or "zero", whichever the record shows, else "settle", or (when
+        the first full sweep comes after more than half the record) "rise", "fall" or
+        "zero", whichever the record shows. An array (needs ``thresholds``) is used as
+        given.
     holdout : "alternate", float or None
         Held-back cycles: every other cycle (major and minor separately), the last
         fraction of the record, or none (choices then judged on the fitted data).
@@ -236,8 +240,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     rec = record_in(initial_state)
     check_record(rec.u, rec.y)
     if isinstance(initial_state, str) and initial_state == "auto" and \
-            rec.state_mode == "cycled":
-        # at rest after a full cycle, or from the zero state (identify/_start_state.py)
+            rec.state_mode in ("cycled", "rise"):
+        # at rest after a full cycle, or from the zero state; a record starting inside its
+        # range that its first sweep settles too late: after a rise or after a fall
+        # (identify/_start_state.py)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PihystWarning)
             rec, rec.state_choice = start_state(rec, record_in, fitter_of)
