@@ -419,6 +419,15 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         families=[{"family": "bouc-wen", "chosen": True, "n_params": 7, "errors": errors}])
     fit_meta = {"family": "bouc-wen", "errors": errors, "search": report.search,
                 "data": data}
+    # the state [u, z] the record itself started from, as fitted: the free start of z
+    # (z0 + b / a: the start column b s is the first-order change of z0), or z = 0 at
+    # the first sample when the first sweep settles it; what the model predicts the
+    # record from (the check of the record's creep start, identify/_creep.py)
+    x0, z0 = start(beta, gamma, nn)
+    if start_free and coef[3] != 0.0:
+        fit_meta["record_start"] = [lo + x0 * span, z0 + b / coef[3]]
+    elif settle:
+        fit_meta["record_start"] = [lo + x0 * span, z0]
     if settle:
         fit_meta["settled"] = {"sample": int(lay.settle_end),
                                "state": [float(u[lay.settle_end - 1]),

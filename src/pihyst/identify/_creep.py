@@ -306,7 +306,10 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                     f"than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
                     f"{judged['family_with']} reaches with creep")
         if not judged["kept"]:
-            plain = first.model.replace(delay=0).predict(ua)
+            # from the state the record started from as fitted (a Bouc-Wen z away from
+            # rest): its hysteresis forgetting that start is no creep decay
+            plain = first.model.replace(delay=0).predict(
+                ua, initial_state=first.model.metadata.get("fit", {}).get("record_start"))
             judged["record_start"] = record_start_check(ya[start:] - plain[start:], ta[start:],
                                                         tau, duration, np.ptp(ya[start:]))
             return _without_creep(first, judged)

@@ -322,6 +322,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                              validation=None if validation is None else validation.describe(),
                              undetermined=undetermined)
     fit_summary = report.model_summary()
+    record_start = (model.metadata or {}).get("fit", {}).get("record_start")
+    if record_start is not None:
+        # the state the record started from, as fitted (a Bouc-Wen z not at rest)
+        fit_summary["record_start"] = record_start
     if rec.layout.settle_end:
         # the operator state once the first sweep has settled it: predictions of the same
         # record continue from it (model.predict(u[sample:], initial_state=state,
