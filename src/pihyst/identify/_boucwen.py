@@ -425,9 +425,9 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     # record from (the check of the record's creep start, identify/_creep.py)
     x0, z0 = start(beta, gamma, nn)
     if start_free and coef[3] != 0.0:
-        fit_meta["record_start"] = [lo + x0 * span, z0 + b / coef[3]]
+        fit_meta["record_start"] = [float(lo + x0 * span), float(z0 + b / coef[3])]
     elif settle:
-        fit_meta["record_start"] = [lo + x0 * span, z0]
+        fit_meta["record_start"] = [float(lo + x0 * span), float(z0)]
     if settle:
         fit_meta["settled"] = {"sample": int(lay.settle_end),
                                "state": [float(u[lay.settle_end - 1]),
