@@ -351,7 +351,13 @@ def test_bad_input_errors():
 def test_record_that_never_settles_is_an_error():
     u = ramps([70, 150, 0], n=30)                    # starts mid-range, one sweep only
     with pytest.raises(FitError, match="settles the operator states"):
-        fit(u, 0.3 * u)
+        fit(u, 0.3 * u, initial_state="settle")
+    # "auto" fits it whole from the start state the probe fits best (_start_state.py)
+    true = ClassicalPI([0, 20], [0.3, 0.2])
+    y = true.predict(u, initial_state=[70.0, 50.0])     # risen to 70 from the bottom
+    res = fit(u, y, family="classical", thresholds=[0, 20])
+    assert res.report.to_dict()["data"]["initial_state"] == "rise"
+    np.testing.assert_allclose(res.model.weights, true.weights, atol=1e-9)
 
 
 def test_ill_conditioned_fit_warns_and_still_fits():

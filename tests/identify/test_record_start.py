@@ -97,3 +97,61 @@ def test_a_record_at_rest_is_not_flagged():
         result = pihyst.fit(u, y, t=t, family="classical")
     start = _start_of(result)
     assert start["settled"] and start["decay_share"] < UNSETTLED_SHARE
+
+
+def _duhem_from_zero(u):
+    """A user's Coleman-Hodgdon (Duhem) actuator (not pihyst's code):
+    dy/du = 0.02 |du|/du (0.35 u - y) + 0.2, explicit Euler in 10 steps per sample,
+    y = 0 at the first sample (its initial loading curve, not at rest after a cycle)."""
+    y, out = 0.0, np.empty(len(u))
+    for k in range(len(u)):
+        step = 0.0 if k == 0 else (u[k] - u[k - 1]) / 10
+        x = u[k - 1] if k else u[0]
+        for _ in range(10):
+            y += 0.02 * abs(step) * (0.35 * x - y) + 0.2 * step
+            x += step
+        out[k] = y
+    return out
+
+
+def _bouc_wen_from_z0(u):
+    """A user's Bouc-Wen actuator (not pihyst's code): y = 0.4 u + z,
+    dz/du = 0.6 - (0.02 sign(du z) + 0.005) |z|, RK4 in steps of at most 0.5 V, z = 0
+    at the first sample (a simulation started there: not at rest after a cycle)."""
+    def g(z, s):
+        return 0.6 - (0.02 * np.sign(s * z) + 0.005) * abs(z)
+
+    z, out = 0.0, np.empty(len(u))
+    for k in range(len(u)):
+        step = 0.0 if k == 0 else u[k] - u[k - 1]
+        m = max(1, int(np.ceil(abs(step) / 0.5)))
+        h = step / m
+        for _ in range(m if step else 0):
+            k1 = g(z, h)
+            k2 = g(z + h * k1 / 2, h)
+            k3 = g(z + h * k2 / 2, h)
+            z += h * (k1 + 2 * k2 + 2 * k3 + g(z + h * k3, h)) / 6
+        out[k] = 0.4 * u[k] + z
+    return out
+
+
+@pytest.mark.parametrize("truth, start", [(_duhem_from_zero, "bottom"),
+                                          (_bouc_wen_from_z0, "top")])
+def test_a_hysteresis_start_away_from_rest_is_no_creep_to_flag(truth, start):
+    # no creep at all: the loading curve from the bottom (which the Bouc-Wen fit takes
+    # as a free start of z), or a Bouc-Wen z from 0 at the top (which the first sweep
+    # settles). Judged from rest, that start was read as a creep decay and flagged
+    # (100 % and 97 % of the error, 2.2 % and 0.12 % of range RMS)
+    tri = np.r_[np.linspace(0, 150, 500, endpoint=False),
+                np.linspace(150, 0, 500, endpoint=False)]
+    u = np.r_[np.tile(tri, 2), 0.0]
+    if start == "top":
+        u = np.r_[np.linspace(150, 0, 250, endpoint=False), u]
+    y = truth(u) + np.random.default_rng(1).normal(0.0, 0.02, u.size)
+    t = np.arange(u.size) * 1e-3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InsufficientDataWarning)
+        result = pihyst.fit(u, y, t=t, family="bouc-wen")
+    check = _start_of(result)
+    assert check["settled"] and check["decay_share"] < UNSETTLED_SHARE
+    assert len(result.model.metadata["fit"]["record_start"]) == 2

@@ -60,3 +60,54 @@ def test_a_given_state_is_not_second_guessed():
     result = pihyst.fit(u, truth.predict(u), initial_state="cycled")
     data = result.report.to_dict()["data"]
     assert data["initial_state"] == "cycled" and data["initial_state_choice"] is None
+
+
+def _plays_from_zero(u, r, w):
+    """A user's classical PI: play operators initialised at 0 (not pihyst's code)."""
+    f = np.zeros(len(r))
+    out = np.empty(len(u))
+    for k, uk in enumerate(u):
+        f = np.maximum(uk - r, np.minimum(uk + r, f))
+        out[k] = w @ f
+    return out
+
+
+def _sine_growing_from(mid, amplitude, n=3000, cycles=6):
+    k = np.arange(n)
+    return mid - amplitude * (k / (n - 1)) * np.cos(2 * np.pi * cycles * k / n)
+
+
+@pytest.mark.parametrize("lo, hi", [(0.0, 150.0), (-100.0, 100.0)])
+def test_a_sine_growing_from_mid_range_is_fitted_whole(lo, hi):
+    # the first full sweep of the range comes at the very end: "settle" left 21 samples
+    # to fit (a one-operator model, 3-19 % of range off); the record is fitted whole from
+    # the start state the probe fits best
+    r = np.array([0.0, 10.0, 25.0, 45.0, 60.0]) * (hi - lo) / 150
+    w = np.array([0.3, 0.1, 0.08, 0.05, 0.04])
+    u = _sine_growing_from((lo + hi) / 2, (hi - lo) / 2)
+    y = _plays_from_zero(u, r, w)
+    result = pihyst.fit(u, y, family="classical", input_range=(lo, hi))
+    data = result.report.to_dict()["data"]
+    assert data["initial_state"] == "zero"
+    assert set(data["initial_state_choice"]["probe_fitted_rms"]) == {"rise", "fall", "zero"}
+    assert "too late to settle" in str(result.report)
+    assert result.model.n_operators >= 3
+    # other signals, both started by a full cycle (which wipes out either start state)
+    rng = np.random.default_rng(0)
+    levels = np.r_[lo, hi, lo, rng.uniform(lo, hi, 12)]
+    test = np.interp(np.linspace(0, levels.size - 1, 3000), np.arange(levels.size), levels)
+    truth = _plays_from_zero(test, r, w)
+    err = result.model.predict(test) - truth
+    err = err[1000:] - np.mean(err[1000:])
+    assert np.mean(np.abs(err)) < 0.002 * np.ptp(truth)
+
+
+def test_a_record_that_never_reaches_the_ends_of_a_given_range():
+    # input_range wider than the record: "settle" never completes (was an IndexError)
+    r = np.array([0.0, 10.0, 25.0])
+    u = _sine_growing_from(75.0, 60.0)
+    y = _plays_from_zero(u, r, np.array([0.3, 0.1, 0.1]))
+    result = pihyst.fit(u, y, family="classical", input_range=(0.0, 150.0))
+    assert result.report.to_dict()["data"]["initial_state"] in ("rise", "fall", "zero")
+    with pytest.raises(pihyst.FitError, match="only 0 samples remain"):
+        pihyst.fit(u, y, family="classical", input_range=(0.0, 150.0), initial_state="settle")

@@ -52,8 +52,10 @@ def register(sub):
                         "(the last half of the record), or 'none'")
     p.add_argument("--initial-state", choices=INITIAL_STATES, default="auto",
                    help="operator state at the first sample: 'cycled' (at rest after a full "
-                        "cycle), 'settle' (the first sweep settles it), 'zero'; 'auto' "
-                        "(default): cycled if the record starts at its lowest input")
+                        "cycle), 'settle' (the first sweep settles it), 'zero', 'rise' / "
+                        "'fall' (at rest at the first input after a rise from the bottom / "
+                        "a fall from the top); 'auto' (default): chosen from the record "
+                        "(docs/theory/identification.md)")
     p.add_argument("--through-top", action="store_true",
                    help="make the model pass exactly through the measured point at the "
                         "highest input")

@@ -419,6 +419,15 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         families=[{"family": "bouc-wen", "chosen": True, "n_params": 7, "errors": errors}])
     fit_meta = {"family": "bouc-wen", "errors": errors, "search": report.search,
                 "data": data}
+    # the state [u, z] the record itself started from, as fitted: the free start of z
+    # (z0 + b / a: the start column b s is the first-order change of z0), or z = 0 at
+    # the first sample when the first sweep settles it; what the model predicts the
+    # record from (the check of the record's creep start, identify/_creep.py)
+    x0, z0 = start(beta, gamma, nn)
+    if start_free and coef[3] != 0.0:
+        fit_meta["record_start"] = [float(lo + x0 * span), float(z0 + b / coef[3])]
+    elif settle:
+        fit_meta["record_start"] = [float(lo + x0 * span), float(z0)]
     if settle:
         fit_meta["settled"] = {"sample": int(lay.settle_end),
                                "state": [float(u[lay.settle_end - 1]),
@@ -442,7 +451,7 @@ def family_fit(family, fitter):
         ("bounds", fitter.bounds is not None), ("nonnegative=False", not fitter.nonnegative),
         ("a fixed offset", not rec.fit_offset), ("through", len(rec.through) > 0),
         ("an explicit or zero initial_state",
-         rec.state_mode not in ("cycled", "settle") and not from_data))
+         rec.state_mode not in ("cycled", "settle", "rise", "fall") and not from_data))
         if given]
     if unsupported:
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
@@ -454,7 +463,10 @@ def family_fit(family, fitter):
                                                     "samples")
     rec = on.rec
     kwargs = dict(input_range=(rec.lo, rec.lo + rec.S),
-                  initial_state="cycled" if from_data else rec.state_mode,
+                  # rise, fall: z rises from rest at the bottom to the first sample,
+                  # and its start is then fitted as unknown (fit_boucwen)
+                  initial_state=("cycled" if from_data or rec.state_mode in ("rise", "fall")
+                                 else rec.state_mode),
                   n=family.n, layout_=rec.layout)
     model, report = fit_boucwen(rec.u, rec.y, refit=False, **kwargs)
 

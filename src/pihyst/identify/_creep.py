@@ -29,10 +29,11 @@ joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_cre
 """
 
 import functools
+import warnings
 
 import numpy as np
 
-from pihyst.exceptions import FitError
+from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
 from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
@@ -276,7 +277,21 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
             second_kw["family"] = families
         elif second_kw.get("family") is None:
             second_kw["family"] = list(CREEP_FAMILIES)
-        return fit(u, np.r_[y[:d], ya + psi @ gains], **second_kw)
+        if not decide:
+            return fit(u, np.r_[y[:d], ya + psi @ gains], **second_kw)
+        # a trial: its warnings are about the record with this creep estimate removed,
+        # and are the user's only if that structure is kept (_keep_warnings)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PihystWarning)
+            second = fit(u, np.r_[y[:d], ya + psi @ gains], **second_kw)
+        trial_warnings[id(second)] = [w for w in caught
+                                      if issubclass(w.category, PihystWarning)]
+        for w in caught:
+            if not issubclass(w.category, PihystWarning):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return second
+
+    trial_warnings = {}
 
     judged = None
     if decide:
@@ -306,13 +321,19 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                     f"than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
                     f"{judged['family_with']} reaches with creep")
         if not judged["kept"]:
-            plain = first.model.replace(delay=0).predict(ua)
+            # from the state the record started from as fitted (a Bouc-Wen z away from
+            # rest): its hysteresis forgetting that start is no creep decay
+            plain = first.model.replace(delay=0).predict(
+                ua, initial_state=first.model.metadata.get("fit", {}).get("record_start"))
             judged["record_start"] = record_start_check(ya[start:] - plain[start:], ta[start:],
                                                         tau, duration, np.ptp(ya[start:]))
             return _without_creep(first, judged)
     else:
         second = structure_without_creep(start_model)
         start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
+    for w in trial_warnings.get(id(second), ()):
+        # the structure kept: what its fit said about the record is the user's
+        warnings.warn(w.message, w.category, stacklevel=3)
     hyst, gains, passes = _joint_qp_of(second.model, fixed_n)(
         second.model.replace(delay=0), ua, ya, dta, tau, start=start,
         free_weights=_free(second.model), **qp)

@@ -162,13 +162,17 @@ def settling_end(v, span, points=None):
     start at rest (v shifted to [0, span]; ``points``: its turning points, found if not
     given): up to the first valley after both ends of the range were reached (within
     REST_TOLERANCE of the span), or just past the second end if the record never turns up
-    again. The one rule of fit(initial_state="settle") and of the command line's
-    --initial-state settle (:func:`record_settling_end`)."""
+    again; the record's length if it never reaches an end of the range. The one rule of
+    fit(initial_state="settle") and of the command line's --initial-state settle
+    (:func:`record_settling_end`)."""
     if points is None:
         points = turning_points(v, REVERSAL_TOLERANCE * span)
-    lo_hit = np.flatnonzero(v <= REST_TOLERANCE * span)[0]
-    hi_hit = np.flatnonzero(v >= (1 - REST_TOLERANCE) * span)[0]
-    swept = max(lo_hit, hi_hit)
+    lo_hit = np.flatnonzero(v <= REST_TOLERANCE * span)
+    hi_hit = np.flatnonzero(v >= (1 - REST_TOLERANCE) * span)
+    if lo_hit.size == 0 or hi_hit.size == 0:
+        # an input range wider than the record: the record never sweeps it
+        return int(v.size)
+    swept = max(lo_hit[0], hi_hit[0])
     valleys = [i for i, kind in points if kind < 0 and i >= swept]
     return int(valleys[0] if valleys else swept) + 1
 

@@ -14,7 +14,13 @@ import numpy as np
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
 from pihyst.identify._assess import minor_loops_determined
-from pihyst.identify._cycles import MIN_SAMPLES, checked_signals, layout, starts_at_rest
+from pihyst.identify._cycles import (
+    MIN_SAMPLES,
+    checked_signals,
+    layout,
+    settling_end,
+    starts_at_rest,
+)
 from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._qp import solve_qp
@@ -26,7 +32,12 @@ from pihyst.identify._subsets import (
 )
 from pihyst.metrics import error_summary
 
-INITIAL_STATES = ("auto", "cycled", "settle", "zero")
+INITIAL_STATES = ("auto", "cycled", "settle", "zero", "rise", "fall")
+# "auto" on a record that does not start at the bottom: when its first full sweep (which
+# settles the operators) would take more than this share of it (a sine growing from the
+# middle of the range sweeps it only at the end) or never ends, the record is fitted
+# whole from "rise" or "fall" instead (identify/_start_state.py)
+SETTLE_MAX_SHARE = 0.5
 KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
 KP_DEFAULT_LAMBDA = 1e-2
 # When the record holds no minor loops, the kernel basis takes the strongest
@@ -72,13 +83,17 @@ class FramedRecord:
             mode = initial_state
             if mode == "auto":
                 mode = "cycled" if starts_at_rest(self.v, self.S) else "settle"
+                if mode == "settle" and settling_end(self.v, self.S) > \
+                        SETTLE_MAX_SHARE * self.v.size:
+                    # settling would leave little or nothing to fit
+                    mode = "rise"
         else:
             mode = "explicit"
             try:
                 self.explicit_state = np.asarray(initial_state, dtype=float)
             except (TypeError, ValueError):
-                raise FitError("initial_state must be 'auto', 'cycled', 'settle', 'zero' or "
-                               "a list of numbers") from None
+                raise FitError("initial_state must be 'auto', 'cycled', 'settle', 'zero', "
+                               "'rise', 'fall' or a list of numbers") from None
             if self.explicit_state.ndim != 1 or not np.all(np.isfinite(self.explicit_state)):
                 raise FitError("initial_state must be a flat list of finite numbers")
         self.state_mode = mode
@@ -192,6 +207,8 @@ class FramedRecord:
             return state
         if self.state_mode == "zero":
             return family.v_state(np.zeros(template.n_operators), self.lo)
+        if self.state_mode in ("rise", "fall"):
+            return moved_state(template, self.S, self.v[0], self.state_mode)
         return cycled_state(template, self.S)
 
 
@@ -201,6 +218,16 @@ def cycled_state(model, S):
     the operator output at its end only depends on its end points, so three samples are
     exact."""
     return model.simulate(np.array([0.0, S, 0.0])).final_state
+
+
+def moved_state(model, S, v0, how):
+    """Operator state at rest at ``v0`` reached from the cycled rest state at the bottom
+    by a monotone rise (``how="rise"``), or from rest at the top after a full cycle by a
+    monotone fall (``"fall"``): how a record that starts inside the range (an actuator
+    brought to a bias voltage) starts, when its first full sweep comes too late to settle
+    the operators (identify/_start_state.py)."""
+    path = [0.0, S, 0.0, v0] if how == "rise" else [0.0, S, v0]
+    return model.simulate(np.array(path, dtype=float)).final_state
 
 
 class FamilyFitter:

@@ -18,6 +18,11 @@ def _state_choice_text(choice):
     if not choice:
         return ""
     rms = choice["probe_fitted_rms"]
+    if "rise" in rms:
+        return (f" (chosen from the record: its first full sweep comes too late to settle "
+                f"the operators; its probe fits {rms['rise']:.4g} after a rise from the "
+                f"bottom, {rms['fall']:.4g} after a fall from the top, {rms['zero']:.4g} from "
+                f"the zero state)")
     return (f" (chosen from the record: its probe fits {rms['cycled']:.4g} from rest after a "
             f"full cycle, {rms['zero']:.4g} from the zero state)")
 
@@ -27,6 +32,10 @@ _STATE_TEXT = {
     "settle": "unknown; settled by the first full sweep of the input range (not fitted)",
     "zero": "all operator outputs zero (a record from the zero state: its first rise is "
             "the initial loading curve)",
+    "rise": "at rest at the first input, reached by a rise from rest at the bottom of the "
+            "range",
+    "fall": "at rest at the first input, reached by a fall from rest at the top of the "
+            "range",
     "explicit": "given",
 }
 

@@ -41,18 +41,36 @@ def _fitted_rms(fitter):
 
 def start_state(rec, record_in, fitter_of):
     """(record, choice): ``rec`` (framed with the cycled rest state) or the same record
-    framed from the zero state (``record_in("zero")``), and what was compared."""
+    framed from the zero state (``record_in("zero")``), and what was compared; for a
+    record framed from ``"rise"`` (one that starts inside its range and is not settled
+    soon enough by its first full sweep, identify/_family_fit.py), the state reached by a
+    rise from the bottom, by a fall from the top, or the zero state, whichever the probe
+    fits best."""
+    if rec.state_mode == "rise":
+        modes, favoured = ("rise", "fall", "zero"), None
+    else:
+        modes, favoured = ("cycled", "zero"), "cycled"
     probed = {}
-    for mode, r in (("cycled", rec), ("zero", record_in("zero"))):
+    for mode in modes:
+        r = rec if mode == rec.state_mode else record_in(mode)
         base, keep = _delay._probe_record(r)
         try:
             probed[mode] = (r, _fitted_rms(fitter_of(base.taken(keep, 0))))
         except FitError:
             probed[mode] = (r, np.inf)
-    cycled, zero = probed["cycled"][1], probed["zero"][1]
-    chosen = "zero" if zero < (1.0 - ZERO_GAIN) * cycled else "cycled"
-    choice = {"chosen": chosen, "probe_fitted_rms": {"cycled": cycled, "zero": zero},
-              "rule": (f"the zero state when the probe ({_delay.PROBE_PLAYS} equally spaced "
-                       f"plays) fits the record more than {100 * ZERO_GAIN:g} % better "
-                       f"from it than from rest after a full cycle")}
+    first, second = probed[modes[0]][1], probed[modes[1]][1]
+    if favoured is None:
+        chosen = min(modes, key=lambda m: probed[m][1])
+        rule = (f"the record starts inside its range and its first full sweep comes too late "
+                f"to settle the operators: at rest at its first input after a rise from the "
+                f"bottom, after a fall from the top, or from the zero state (every operator "
+                f"output 0, as in play-operator code started there), whichever the probe "
+                f"({_delay.PROBE_PLAYS} equally spaced plays) fits best")
+    else:
+        chosen = "zero" if second < (1.0 - ZERO_GAIN) * first else "cycled"
+        rule = (f"the zero state when the probe ({_delay.PROBE_PLAYS} equally spaced "
+                f"plays) fits the record more than {100 * ZERO_GAIN:g} % better "
+                f"from it than from rest after a full cycle")
+    choice = {"chosen": chosen, "probe_fitted_rms": {m: probed[m][1] for m in modes},
+              "rule": rule}
     return probed[chosen][0], choice
