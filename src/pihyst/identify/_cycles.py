@@ -205,7 +205,8 @@ def layout(v, span, *, settle, holdout):
             raise FitError(f"the record does not start at rest, and after its first full "
                            f"sweep of the input range, which settles the operator states, "
                            f"only {n - settle_end} samples remain (at least {MIN_SAMPLES} "
-                           f"needed): record more cycles, or pass initial_state",
+                           f"needed): record more cycles, or give the initial state "
+                           f"(initial_state= in Python, --initial-state on the command line)",
                            index=n - 1)
     cuts = [settle_end] + [i + 1 for i, kind in points
                            if kind < 0 and settle_end < i + 1 < n] + [n]
