@@ -5,7 +5,7 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import nnls
 
@@ -81,14 +81,22 @@ def _brute_force_rms(A, d, idx, subset):
 @given(seed=st.integers(0, 10_000), size=st.integers(1, 4))
 def test_exhaustive_search_equals_brute_force_on_the_full_matrix(seed, size):
     prob, A, d, idx = _problem(seed)
+
+    def determined(subset):
+        # operators the fitted cycles leave dependent (seed 670: every subset of 4) have
+        # many best fits, whose held-back errors differ: no one answer to compare
+        fitted = np.c_[A[idx["fit"]][:, list(subset)], np.ones(idx["fit"].size)]
+        return np.linalg.matrix_rank(fitted) == fitted.shape[1]
+
     best = prob.best_of_size(size)
     assert best.method == "exhaustive"
     brute = {s: _brute_force_rms(A, d, idx, s)
              for s in itertools.combinations(range(prob.n_candidates), size)}
     winner = min(brute, key=brute.get)
+    assume(determined(best.subset) and determined(winner))
     assert best.rms == pytest.approx(brute[winner], rel=1e-6)
     assert brute[best.subset] == pytest.approx(brute[winner], rel=1e-6)
-    for s in list(brute)[:5]:
+    for s in [s for s in brute if determined(s)][:5]:
         assert prob.score(s) == pytest.approx(brute[s], rel=1e-6)
 
 
