@@ -82,10 +82,11 @@ def record_start_check(residual, t, tau, duration, span):
             f"start, {100 * rms / max(span, 1e-300):.2g} % of the output range RMS (not "
             f"at rest: more than {100 * UNSETTLED_SHARE:g} % and {100 * MIN_DECAY:g} %)")
     if not settled:
-        advice = (f"the record's creep did not start at rest: {note}. The actuator held "
-                  f"another voltage before the record? Creep fitted from it is off on holds; "
-                  f"before recording, leave the actuator at the record's first voltage for "
-                  f"longer than the record ({float(duration):.3g} s)")
+        advice = (f"the record's creep likely did not start at rest: {note}. The actuator "
+                  f"held another voltage before the record (or started in another "
+                  f"hysteresis state than the fit assumed)? Creep fitted from it may be off "
+                  f"on holds; before recording, leave the actuator at the record's first "
+                  f"voltage for longer than the record ({float(duration):.3g} s)")
         warnings.warn(advice, InsufficientDataWarning, stacklevel=4)
         note = advice
     return {"settled": bool(settled), "decay_share": share, "decay_rms": rms, "note": note}
