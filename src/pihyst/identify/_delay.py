@@ -78,9 +78,9 @@ def window(rec):
     return stop if inside == everywhere else None
 
 
-def probe_rms(fitter, probe=PROBE):
+def probe_rms(fitter, probe=PROBE, on="judged"):
     """Judged RMS of the probe structure on ``fitter``'s record (held-back, or fitted if
-    nothing is held back)."""
+    nothing is held back); ``on="fitted"``: its RMS on the fitted samples."""
     rec = fitter.rec
     fam = probe()
     cand = fam.candidates(rec.S, PROBE_PLAYS)
@@ -89,7 +89,9 @@ def probe_rms(fitter, probe=PROBE):
     names = [f"r={r:g}" for r in cand] + [f"fixed {j}" for j in range(fam.n_fixed)]
     prob = fitter.problem(fam, parts, rows, len(cand), names)
     cols, x = prob.solve(tuple(range(len(cand))))
-    return np.inf if x is None else prob.judge.rms(cols, x)
+    if x is None:
+        return np.inf
+    return float((prob.fit if on == "fitted" else prob.judge).rms(cols, x))
 
 
 def _probe_record(rec):

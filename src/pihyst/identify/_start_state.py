@@ -27,18 +27,6 @@ from pihyst.identify import _delay
 ZERO_GAIN = 0.2
 
 
-def _fitted_rms(fitter):
-    """Fitted RMS of the probe structure (every play) on ``fitter``'s record."""
-    rec = fitter.rec
-    fam = _delay.PROBE()
-    cand = fam.candidates(rec.S, _delay.PROBE_PLAYS)
-    _, parts, rows = fitter.grams(fam, fam.template(cand, rec.S))
-    names = [f"r={r:g}" for r in cand] + [f"fixed {j}" for j in range(fam.n_fixed)]
-    prob = fitter.problem(fam, parts, rows, len(cand), names)
-    cols, x = prob.solve(tuple(range(len(cand))))
-    return np.inf if x is None else float(prob.fit.rms(cols, x))
-
-
 def start_state(rec, record_in, fitter_of):
     """(record, choice): ``rec`` (framed with the cycled rest state) or the same record
     framed from the zero state (``record_in("zero")``), and what was compared; for a
@@ -55,7 +43,7 @@ def start_state(rec, record_in, fitter_of):
         r = rec if mode == rec.state_mode else record_in(mode)
         base, keep = _delay._probe_record(r)
         try:
-            probed[mode] = (r, _fitted_rms(fitter_of(base.taken(keep, 0))))
+            probed[mode] = (r, _delay.probe_rms(fitter_of(base.taken(keep, 0)), on="fitted"))
         except FitError:
             probed[mode] = (r, np.inf)
     first, second = probed[modes[0]][1], probed[modes[1]][1]
