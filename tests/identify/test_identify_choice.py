@@ -142,7 +142,7 @@ def test_report_gives_errors_per_kind_latency_and_what_is_undetermined():
     assert any("minor loops" in t and "never reverses inside" in t
                for t in rep["undetermined"])
     # the kp basis is eligible: its regularization fixes the minor loops the record
-    # leaves open (a density as constant along the diagonal as the record allows), and
+    # leaves open (a density as near separable as the record allows), and
     # it takes the strongest regularization that still fits the major loop
     kp = res.report.family("kp")
     assert not kp["excluded"]
