@@ -167,3 +167,31 @@ def test_kp_predicts_minor_loops_of_an_asymmetric_preisach_actuator_from_a_major
     yr = h.run(ur)
     err = 100 * np.mean(np.abs(model.predict(ur) - yr)) / np.ptp(yr)
     assert err <= 0.7, err
+
+
+def test_kp_width_penalty_leaves_densities_of_the_loop_width_free():
+    fam = KrasnoselskiiPokrovskii(6)
+    pairs = fam.pairs()
+    P = fam.penalty(pairs, "width")
+    w = np.array([1.0 / (1 + j - i) for i, j in pairs])          # h(c_j - c_i)
+    assert w @ P @ w <= 1e-12
+    w[3] += 1.0
+    assert w @ P @ w > 0
+    with pytest.raises(FitError, match="unknown penalty"):
+        fam.penalty(pairs, "smooth")
+
+
+def test_kp_chooses_its_penalty_shape_on_held_back_minor_loops():
+    from pihyst.sim._preisach import Preisach
+    from pihyst.sim.signals import decaying_triangles, triangle
+    h = Preisach(150.0, [(60.0, -1.0, 2.0)], reversible=(10.0, 4.0))
+    _, u = decaying_triangles(period_s=8.0, dt=2e-3)
+    reg = fit(u, h.run(u), family="kp", delay=0).report.family("kp")["regularization"]
+    assert {t["penalty"] for t in reg["tried"]} == {"separable", "width"}
+    best = min(reg["tried"], key=lambda t: t["rms"])
+    assert (reg["penalty_shape"], reg["lambda"]) == (best["penalty"], best["lambda"])
+    # a major loop alone cannot judge the shape: the separable prior
+    h.reset()
+    _, u = triangle(period_s=8.0, n_cycles=2, dt=2e-3)
+    reg = fit(u, h.run(u), family="kp", delay=0).report.family("kp")["regularization"]
+    assert {t["penalty"] for t in reg["tried"]} == {"separable"}

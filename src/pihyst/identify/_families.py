@@ -402,10 +402,19 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
         falling = [_ramp(centres[i] - w / 2, w, 1.0) for i, _ in pairs]
         return rising, falling
 
-    def penalty(self, pairs):
+    # the penalty's shapes (see penalty); the first is the prior where the record has no
+    # minor loops, and with minor loops the held-back cycles choose between them
+    PENALTIES = {
+        "separable": "mixed differences of the kernel weights (a separable density) and "
+                     "second differences of the diagonal ones (a smooth reversible part)",
+        "width": "differences of neighbouring kernels along the diagonal (a density of "
+                 "the loop width)",
+    }
+
+    def penalty(self, pairs, shape="separable"):
         """D^T D of the differences that the kernel weights w_ij are pulled towards zero
         where the data cannot decide (docs/theory/identification.md, "What a major loop
-        leaves open"):
+        leaves open"). ``shape`` "separable":
 
             mixed:      w_ij - w_i+1,j - w_i,j+1 + w_i+1,j+1      (off the diagonal)
             reversible: sqrt(REVERSIBLE_SMOOTHING) (w_ii - 2 w_i+1,i+1 + w_i+2,i+2)
@@ -417,8 +426,11 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
         diagonal kernels) a smooth curve, so the mean branch's curvature is left to the
         hysteretic kernels. Measured on 49 random Preisach actuators recorded on a
         two-cycle triangle (no creep): ramps and staircases 0.18 / 0.49 / 0.67 % of
-        range (median / p90 / max), against 0.24 / 0.57 / 1.37 % pulled towards a PI
-        density (differences along the diagonal alone)."""
+        range (median / p90 / max), against 0.24 / 0.57 / 1.37 % with ``shape``
+        "width": w_ij - w_i+1,j+1, a density of the loop width alone (a PI density)."""
+        if shape not in self.PENALTIES:
+            raise FitError(f"{self.name}: unknown penalty {shape!r}; expected one of "
+                           f"{', '.join(self.PENALTIES)}")
         index = {p: k for k, p in enumerate(pairs)}
         rows = []
 
@@ -429,6 +441,11 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
             rows.append(r)
 
         for (i, j), k in index.items():
+            if shape == "width":
+                nb = index.get((i + 1, j + 1))
+                if nb is not None:
+                    row([(k, 1.0), (nb, -1.0)])
+                continue
             square = [index.get(p) for p in ((i + 1, j), (i, j + 1), (i + 1, j + 1))]
             if j >= i + 2 and None not in square:
                 row([(k, 1.0), (square[0], -1.0), (square[1], -1.0), (square[2], 1.0)])

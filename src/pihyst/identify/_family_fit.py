@@ -445,17 +445,24 @@ class FamilyFitter:
         names = [f"kernel {p}" for p in pairs]
         prob = on.problem(fam, parts, rows, len(pairs), names)
         n_ops = len(pairs)
-        P = fam.penalty(pairs)
-        scale = np.trace(prob.fit.G[:n_ops, :n_ops]) / max(np.trace(P), 1e-300)
         cols = list(range(len(prob.lower)))
         chosen = tuple(range(n_ops))
-
-        # a record without minor loops leaves the density's spread over the plane open
+        trace = np.trace(prob.fit.G[:n_ops, :n_ops])
+        # a record without minor loops leaves the density's spread over the plane open:
+        # the first penalty shape is the prior; with minor loops in the fitted and the
+        # held-back cycles, those choose the shape as they choose the strength
         open_loops = rec.has_held_back and not minor_loops_determined(rec, None)[0]
+        shapes = list(fam.PENALTIES)
+        if open_loops or not rec.has_held_back:
+            shapes = shapes[:1]
+        penalties = {}
+        for shape in shapes:
+            P = fam.penalty(pairs, shape)
+            penalties[shape] = (trace / max(np.trace(P), 1e-300)) * P
 
-        def solve(lam, gram, product=None, warn=False):
+        def solve(shape, lam, gram, product=None, warn=False):
             H = gram.G.copy()
-            H[:n_ops, :n_ops] += lam * scale * P
+            H[:n_ops, :n_ops] += lam * penalties[shape]
             x = solve_qp(H, gram.b, lower=prob.lower, upper=prob.upper, A_eq=prob.A_eq,
                          b_eq=prob.b_eq, warn=warn, names=prob.names).x
             return x if product is None else 0.5 * (x + product)
@@ -468,20 +475,22 @@ class FamilyFitter:
 
         product = product_of(prob.fit)
         tried = []
+        shape = shapes[0]
         if rec.has_held_back:
-            for lam in KP_LAMBDAS:
-                tried.append({"lambda": float(lam),
-                              "rms": prob.judge.rms(cols, solve(lam, prob.fit, product))})
-            lam, rule = _kernel_lambda(tried, not open_loops)
+            for sh in shapes:
+                for lam in KP_LAMBDAS:
+                    rms = prob.judge.rms(cols, solve(sh, lam, prob.fit, product))
+                    tried.append({"penalty": sh, "lambda": float(lam), "rms": rms})
+            shape, lam, rule = _kernel_lambda(tried, not open_loops)
         else:
             lam = KP_DEFAULT_LAMBDA
             rule = "default (nothing held back to choose it on)"
             self.notes.append("nothing held back: regularization strength not chosen from data")
-        x = solve(lam, prob.fit, product, warn=True)
-        reg = {"lambda": lam, "scale": float(scale), "rule": rule, "tried": tried,
-               "kernels": len(pairs),
-               "penalty": "mixed differences of the kernel weights (a separable density) and "
-                          "second differences of the diagonal ones (a smooth reversible part)",
+        x = solve(shape, lam, prob.fit, product, warn=True)
+        reg = {"lambda": lam, "scale": float(trace / max(np.trace(fam.penalty(pairs, shape)),
+                                                          1e-300)),
+               "rule": rule, "tried": tried, "kernels": len(pairs),
+               "penalty": fam.PENALTIES[shape], "penalty_shape": shape,
                "product_density": None if not open_loops else {
                    "held_back_rms": None if product is None else prob.judge.rms(cols,
                                                                                 product),
@@ -492,7 +501,8 @@ class FamilyFitter:
 
         def refit():
             both = _both(prob)
-            return self._model(fam, pairs, chosen, solve(lam, both, product_of(both), warn=True),
+            return self._model(fam, pairs, chosen,
+                               solve(shape, lam, both, product_of(both), warn=True),
                                state0)[0]
 
         model, ops, w, c = self._model(fam, pairs, chosen, x, state0)
@@ -579,17 +589,21 @@ def _reason(r, cand, base, judged_on):
 
 
 def _kernel_lambda(tried, minor_loops_known):
-    """(lambda, rule) of a kernel basis from the held-back RMS of each strength tried.
+    """(penalty shape, lambda, rule) of a kernel basis from the held-back RMS of each
+    shape and strength tried.
 
     A record with minor loops in both its fitted and held-back parts judges the minor
-    loops: the lowest held-back RMS. One without them judges the major loop only, and
-    any strength that fits it leaves the interior of the Preisach plane to the penalty:
-    the strongest within KP_UNDETERMINED_TOLERANCE of the lowest RMS is taken.
+    loops: the lowest held-back RMS. One without them judges the major loop only (one
+    shape is tried), and any strength that fits it leaves the interior of the Preisach
+    plane to the penalty: the strongest within KP_UNDETERMINED_TOLERANCE of the lowest
+    RMS is taken.
     """
     best = min(t["rms"] for t in tried)
     if minor_loops_known:
-        return min(tried, key=lambda t: t["rms"])["lambda"], "lowest held-back RMS"
+        t = min(tried, key=lambda t: t["rms"])
+        return t["penalty"], t["lambda"], "lowest held-back RMS"
     near = [t for t in tried if t["rms"] <= best * (1 + KP_UNDETERMINED_TOLERANCE)]
-    return (max(t["lambda"] for t in near),
+    t = max(near, key=lambda t: t["lambda"])
+    return (t["penalty"], t["lambda"],
             f"the strongest within {100 * KP_UNDETERMINED_TOLERANCE:g} % of the lowest "
             f"held-back RMS (the record has no minor loops to judge)")
