@@ -65,15 +65,18 @@ def record_for(seed, rate_hz, samples_per_cycle=10_000):
     return kind, t, u, period
 
 
-def judged_signals(seed, rate_hz, period, lo, hi):
-    """The random-ramp and staircase signals between ``lo`` and ``hi``."""
+def judged_signals(seed, rate_hz, period, lo, hi, fine=False):
+    """The random-ramp and staircase signals between ``lo`` and ``hi``; the staircase at
+    up to 100 Hz, or at the record's rate when ``fine`` (a model with a delay runs only
+    at sample times its delay is a whole number of)."""
     rng = np.random.default_rng([0x51C, int(seed)])
     dt = 1.0 / rate_hz
     ramps = signals.random_ramps(u_min=lo, u_max=hi, n_ramps=12,
                                  rate=(hi - lo) / (period / 2), dt=dt,
                                  seed=int(rng.integers(1 << 30)))
     stairs = signals.staircase(u_min=lo, u_max=hi, n_steps=6,
-                               step_s=float(rng.uniform(10.0, 60.0)), dt=max(dt, 0.01))
+                               step_s=float(rng.uniform(10.0, 60.0)),
+                               dt=dt if fine else max(dt, 0.01))
     return {"ramps": ramps, "staircase": stairs}
 
 
@@ -84,7 +87,6 @@ def evaluate_plant(seed, samples_per_cycle=10_000):
     kind, t, u, period = record_for(seed, desc["rate_hz"], samples_per_cycle)
     y = plant.run(u, t)
     result = PlantResult(seed=int(seed), description=desc, record=kind)
-    voltages = judged_signals(seed, desc["rate_hz"], period, 0.0, plant.u_max)
     for creep in (False, True):
         # the drive range is known: a record whose peak sample falls just short of u_max
         # must not shrink the model's input range below the signals it is judged on
@@ -98,7 +100,9 @@ def evaluate_plant(seed, samples_per_cycle=10_000):
         # the rise without the delay, whose output would still be the held first input
         rise = model.replace(delay=0).predict(np.array([0.0, model.input_range[1]]))
         lo, hi = rise[0] + 0.02 * (rise[1] - rise[0]), rise[0] + 0.95 * (rise[1] - rise[0])
-        desired = judged_signals(seed, desc["rate_hz"], period, lo, hi)
+        fine = creeps and model.delay != 0
+        voltages = judged_signals(seed, desc["rate_hz"], period, 0.0, plant.u_max, fine)
+        desired = judged_signals(seed, desc["rate_hz"], period, lo, hi, fine)
         for name in JUDGED:
             tv, uv = voltages[name]
             plant.reset()
