@@ -28,19 +28,22 @@ def _stair_error(model, truth):
 
 @pytest.mark.parametrize("name", ["classical", "wide classical"])
 @pytest.mark.parametrize("record", ["decaying", "triangle"])
-def test_a_record_from_the_zero_state_is_fitted_from_it(name, record):
+@pytest.mark.parametrize("noise", [0.0, 0.005])
+def test_a_record_from_the_zero_state_is_fitted_from_it(name, record, noise):
     truth = _truths()[name]                       # operators start at 0
     if record == "decaying":
         u = signals.decaying_triangles(period_s=60.0, dt=0.1)[1]
     else:
         u = signals.triangle(period_s=60.0, n_cycles=2, dt=0.1)[1]
-    result = pihyst.fit(u, truth.predict(u))
+    y = truth.predict(u)
+    y = y + noise * np.ptp(y) * np.random.default_rng(0).normal(size=y.size)
+    result = pihyst.fit(u, y)
     data = result.report.to_dict()["data"]
     assert data["initial_state"] == "zero"
     rms = data["initial_state_choice"]["probe_fitted_rms"]
-    assert rms["zero"] < 0.8 * rms["cycled"]
+    assert rms["zero"] < 0.5 * rms["cycled"]
     assert "chosen from the record" in str(result.report)
-    assert _stair_error(result.model, truth) < 0.002
+    assert _stair_error(result.model, truth) < (0.002 if noise == 0 else 0.005)
     assert np.all(np.asarray(result.model.initial_state) == 0)
 
 

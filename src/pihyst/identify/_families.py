@@ -378,10 +378,11 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
     # a kernel basis has a weight for every minor loop: a record of major loops alone
     # leaves the interior of the Preisach plane to the regularization, which fixes it:
     # of the densities that fit the record, the one closest to separable with a smooth
-    # reversible part (see penalty). Measured on the 30 random actuators
+    # reversible part (see penalty), averaged with the product-form one
+    # (_kernel_product). Measured on the 30 random actuators
     # (benchmarks/bench_population.py), the eight Preisach ones recorded on a two-cycle
-    # triangle: 0.08-0.81 % of range on ramps and staircases; on the P-885 pair 0.30 um
-    # on the test record
+    # triangle: 0.08-0.42 % of range on ramps and staircases (validation, with creep);
+    # on the P-885 pair 0.30 um on the test record
     minor_loops_fixed = True
 
     def __init__(self, grid=16):

@@ -13,7 +13,8 @@ range off on staircases with the cycled assumption, 0.02 % with the zero state.
 
 Both are tried with the delay probe's structure (a classical PI with equally spaced
 plays, one fast Gram pass each) on the same samples, and the zero state is taken when it
-fits the record clearly better: a fitted RMS lower by more than :data:`ZERO_GAIN`. The
+fits the record clearly better: a fitted RMS lower by more than :data:`ZERO_GAIN`
+(half). The
 held-back cycles cannot tell (they come after the first rise); the fitted samples can,
 since the two assumptions differ only on the first rise, which both fit with the same
 number of weights.
@@ -24,7 +25,13 @@ import numpy as np
 from pihyst.exceptions import FitError
 from pihyst.identify import _delay
 
-ZERO_GAIN = 0.2
+# the probe has no creep, and a creep transient at the start of a record from rest can
+# look like an initial loading curve: population seed 46 (Preisach, 1.9 %/decade,
+# triangle) fitted 1.4x better from zero, and from zero its model erred 0.78 % of range
+# on ramps and staircases, against 0.08 % from rest. Records truly from zero fitted
+# 13-25x better from it, 3-6x with sensor noise of 0.5 % of range
+# (tests/identify/test_start_state.py); a factor 2 is asked
+ZERO_GAIN = 0.5
 
 
 def start_state(rec, record_in, fitter_of):
