@@ -455,10 +455,11 @@ class FamilyFitter:
         shapes = list(fam.PENALTIES)
         if open_loops or not rec.has_held_back:
             shapes = shapes[:1]
-        penalties = {}
+        scales, penalties = {}, {}
         for shape in shapes:
             P = fam.penalty(pairs, shape)
-            penalties[shape] = (trace / max(np.trace(P), 1e-300)) * P
+            scales[shape] = float(trace / max(np.trace(P), 1e-300))
+            penalties[shape] = scales[shape] * P
 
         def solve(shape, lam, gram, product=None, warn=False):
             H = gram.G.copy()
@@ -487,9 +488,8 @@ class FamilyFitter:
             rule = "default (nothing held back to choose it on)"
             self.notes.append("nothing held back: regularization strength not chosen from data")
         x = solve(shape, lam, prob.fit, product, warn=True)
-        reg = {"lambda": lam, "scale": float(trace / max(np.trace(fam.penalty(pairs, shape)),
-                                                          1e-300)),
-               "rule": rule, "tried": tried, "kernels": len(pairs),
+        reg = {"lambda": lam, "scale": scales[shape], "rule": rule, "tried": tried,
+               "kernels": len(pairs),
                "penalty": fam.PENALTIES[shape], "penalty_shape": shape,
                "product_density": None if not open_loops else {
                    "held_back_rms": None if product is None else prob.judge.rms(cols,
