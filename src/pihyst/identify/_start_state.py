@@ -1,5 +1,5 @@
 """Where a record that starts at the bottom of its range starts from (``fit``'s default
-``initial_state="auto"``; docs/theory/identification.md, "The record's initial state").
+``initial_state="auto"``; docs/theory/identification.md, "Initial state and settling").
 
 A record that begins at the bottom of the range is taken to start at rest there after a
 full cycle (docs/interfaces.md): every play operator at z_r = r, every relay off. An
