@@ -285,9 +285,15 @@ class FitReport:
                          + ", ".join(f"{t:.4g}" for t in best["thresholds"]))
         if "regularization" in best:
             reg = best["regularization"]
+            towards = {"separable": "a separable density with a smooth reversible part",
+                       "width": "a density of the loop width"}.get(reg.get("penalty_shape"),
+                                                                   "its penalty")
             lines.append(f"{reg['kernels']} kernels on a grid, {best['n_operators']} with "
-                         f"non-zero weight; regularized towards a width-only density, lambda = "
+                         f"non-zero weight; regularized towards {towards}, lambda = "
                          f"{reg['lambda']:.3g} ({reg['rule']})")
+            product = reg.get("product_density")
+            if product:
+                lines.append(product["rule"])
         ch = best.get("threshold_choice")
         if ch:
             where = "held-back" if ch["judged_on"] == "held_back" else "fitted"
