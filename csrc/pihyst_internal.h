@@ -45,6 +45,16 @@ typedef double real;
 #define PIHYST_HOT
 #endif
 
+/* `restrict` (C99) through a macro: MSVC's C dialect spells it __restrict. Every other
+ * compiler-specific construct of the core (attributes, builtins, vector extensions,
+ * pragmas) sits under #if defined(__GNUC__) or a narrower test, so the sources also
+ * compile as plain C11 (make -C csrc portable checks it). */
+#if defined(_MSC_VER) && !defined(__clang__)
+#define PIHYST_RESTRICT __restrict
+#else
+#define PIHYST_RESTRICT restrict
+#endif
+
 /* Compiler vector extensions (the K <= 16 kernels, the ramp probe, the banks) only where
  * the target has a vector unit: SSE2 on x86, NEON / Advanced SIMD on ARM. Without one
  * (Cortex-M4F: single-precision scalar FPU only) GCC lowers them to scalar code through
