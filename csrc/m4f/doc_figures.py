@@ -13,7 +13,10 @@ between the markers <!-- figures:NAME --> and <!-- /figures:NAME -->:
   bench-m4f       instructions per sample of every model kind on the emulated M4F
                   (tests/m4f/bench.out, written by `make bench-m4f`) with the highest
                   sample rate each fits at 168 MHz with half the CPU left for the rest of
-                  the firmware, counting one cycle per instruction.
+                  the firmware, counting one cycle per instruction;
+  m4f-targets     the same figures against the targets of issue 23 (a classical K = 16
+                  compensator in 600 instructions per tracking sample, every path of
+                  the default fit's models in 8,000).
 """
 
 import re
@@ -86,7 +89,17 @@ def m4f_sizes():
     return rows
 
 
-def bench_m4f():
+def rate_text(hz):
+    if hz >= 1e6:
+        return f"{hz / 1e6:.1f} MHz"
+    if hz >= 1e4:
+        return f"{hz / 1e3:.0f} kHz"
+    if hz >= 1e3:
+        return f"{hz / 1e3:.1f} kHz"
+    return f"{hz:.0f} Hz"
+
+
+def bench_figures():
     if not BENCH_OUT.exists():
         raise SystemExit(f"doc_figures: {BENCH_OUT} missing: run make -C csrc bench-m4f first")
     figures = {}
@@ -94,15 +107,35 @@ def bench_m4f():
         m = re.match(r"m4f: (\S+) (\S+) (\d+) instructions/sample$", line)
         if m:
             figures.setdefault(m[1], {})[m[2]] = int(m[3])
+    return figures
+
+
+# item 4 of issue 23: a classical K = 16 compensator in at most 600 instructions per
+# tracking sample; no path of a model the default fit produces above 8,000
+def m4f_targets():
+    figures = bench_figures()
+    rows = ["| model | path | instructions/sample | target | |", "| --- | --- | ---: | ---: | --- |"]
+
+    def row(name, path, n, target):
+        rows.append(f"| {name} | {path} | {n:,} | ≤ {target:,} | "
+                    f"{'met' if n <= target else '**above**'} |")
+
+    row("classical-K16", "compensator-tracking", figures["classical-K16"]["compensator-tracking"], 600)
+    for name, by_path in figures.items():
+        if name.startswith("kp-"):
+            for path, n in by_path.items():
+                row(name, path, n, 8000)
+    return rows
+
+
+def bench_m4f():
+    figures = bench_figures()
     paths = ["model-tracking", "model-worst", "compensator-tracking", "compensator-worst"]
     rows = ["| model | model step, tracking | model step, worst | compensator, tracking "
             "| compensator, worst |", "| --- | ---: | ---: | ---: | ---: |"]
 
     def cell(n):
-        if n is None:
-            return ""
-        rate = SHARE * CLOCK_HZ / n
-        return f"{n:,} ({rate / 1000:,.0f} kHz)" if rate < 1e6 else f"{n:,} ({rate / 1e6:.1f} MHz)"
+        return "" if n is None else f"{n:,} ({rate_text(SHARE * CLOCK_HZ / n)})"
 
     for name, by_path in figures.items():
         if not any(p in by_path for p in paths):
@@ -118,7 +151,8 @@ def bench_m4f():
     return rows
 
 
-TABLES = {"configurations": configurations, "m4f-sizes": m4f_sizes, "bench-m4f": bench_m4f}
+TABLES = {"configurations": configurations, "m4f-sizes": m4f_sizes, "bench-m4f": bench_m4f,
+          "m4f-targets": m4f_targets}
 
 
 def render(text, names):
