@@ -18,6 +18,7 @@ sibling of its own layer; nothing imports the top-level ``pihyst`` facade.
 """
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -79,6 +80,7 @@ def _imports(name, path):
 MODULES = _modules()
 
 
+@functools.cache
 def _graph():
     modules = MODULES
     return {name: {m for m in _imports(name, path) if m in modules and m != name}

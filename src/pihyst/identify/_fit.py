@@ -40,12 +40,11 @@ from pihyst.identify._assess import (
 from pihyst.identify._choice import Candidate, choose
 from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
-from pihyst.identify._latency import measure_latency
+from pihyst.identify._latency import estimate_latency
 from pihyst.identify._report import FitReport, FitResult
 from pihyst.identify._start_state import start_state
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
 from pihyst.identify._sufficiency import check_fit, check_record
-from pihyst.model import InvalidModelError
 from pihyst.model._delay import MAX_DELAY_SAMPLES
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
@@ -146,7 +145,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         Choose only among models with at most this many operators.
     max_latency : float, optional
         Choose only among models whose compensator's worst-case time per sample
-        (measured, see the report) is at most this many seconds.
+        (estimated from the model's structure by a calibrated cost model, never timed:
+        the same record gives the same model on every run; see the report) is at most
+        this many seconds.
     max_exhaustive : int
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
@@ -269,8 +270,22 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     chooses_thresholds = (thresholds is not None or candidates is not None
                           or n_operators is not None)
 
+    known, unknown_reason = minor_loops_determined(rec, validation)
     results, skipped, caught = [], [], {}
-    for fam in families:
+    # where the data cannot tell the minor loops, a family whose structure does not fix
+    # them cannot be chosen while one that does is fitted (_choice): it is fitted only
+    # if none of those could be (a list of families given included: the rule is the
+    # choice's)
+    deferred = [] if known else [
+        f for f in families if not f.minor_loops_fixed]
+    if len(deferred) == len(families):
+        deferred = []
+    for fam in [f for f in families if f not in deferred] + deferred:
+        if fam in deferred and results:
+            skipped.append({"family": fam.name, "reason": (
+                f"its minor loops are not fixed by its structure and the data "
+                f"cannot determine them: {unknown_reason}")})
+            continue
         kernels = fam.operators_key == "kernels"
         if not explicit_family and not fam.has_thresholds and chooses_thresholds:
             skipped.append({"family": fam.name, "reason": "has no thresholds (" + (
@@ -283,7 +298,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
             try:
-                res = fitter.fit(fam)
+                res = fitter.fit(fam, rival_rms=min((r.judged_rms for r in results),
+                                                    default=None))
             except FitError as err:
                 if explicit_family:
                     raise
@@ -298,7 +314,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         raise FitError("no family could be fitted: " + "; ".join(
             f"{s['family']}: {s['reason']}" for s in skipped))
 
-    known, unknown_reason = minor_loops_determined(rec, validation)
+    results.sort(key=lambda r: [f.name for f in families].index(r.name))
     cands = []
     for r in results:
         by_kind = errors_by_kind(r.judged_on or fitter, r.model, validation)
@@ -341,7 +357,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         if validation is not None:
             final_errors["validation"] = validation.errors(model)
     check_fit(rec, best_c.judged_rms, model)
-    undetermined = _undetermined(rec, validation, known, unknown_reason, delay_info, cands)
+    undetermined = _undetermined(rec, validation, known, unknown_reason, delay_info, cands,
+                                 skipped)
     report = FitReport.build(rec, cands, skipped, best.name, criterion,
                              refit=bool(refit and rec.has_held_back),
                              final_errors=final_errors, delay=delay_info,
@@ -478,20 +495,20 @@ def _delay_refused(rec, fitter_of, best, judged, validate, delay_info):
 
 
 def _latency(model):
-    try:
-        return measure_latency(model)
-    except InvalidModelError:        # negative weights (nonnegative=False): no compensator
-        return None
+    if model.family != "bouc-wen" and np.any(model.weights < 0):
+        return None                  # negative weights (nonnegative=False): no compensator
+    return estimate_latency(model)
 
 
-def _undetermined(rec, validation, known, unknown_reason, delay_info, cands):
+def _undetermined(rec, validation, known, unknown_reason, delay_info, cands, skipped):
     """What the data could not determine, as sentences for the report."""
     out = []
     if not rec.has_held_back and validation is None:
         out.append("nothing is held back and there is no validation record: every error "
                    "is on the fitted data (optimistic), and the choices were made by BIC")
     if not known:
-        dropped = [c.name for c in cands if c.excluded and "minor loops" in c.excluded]
+        dropped = [c.name for c in cands if c.excluded and "minor loops" in c.excluded] + [
+            x["family"] for x in skipped if "minor loops" in x["reason"]]
         out.append(f"the minor loops (reversals inside the range): {unknown_reason}. "
                    f"Families whose structure fixes them from the major loop were preferred"
                    + (f" ({', '.join(dropped)} not chosen)" if dropped else "")
