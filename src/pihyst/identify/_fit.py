@@ -23,6 +23,7 @@
 """
 
 import contextvars
+import functools
 import warnings
 from dataclasses import replace
 
@@ -41,6 +42,7 @@ from pihyst.identify._choice import Candidate, choose
 from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
 from pihyst.identify._latency import estimate_latency
+from pihyst.identify._progress import Steps
 from pihyst.identify._report import FitReport, FitResult
 from pihyst.identify._start_state import start_state
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
@@ -58,11 +60,26 @@ DELAY_NOTE_GAIN = 0.02   # a delay is worth a note when it lowers the probe's RM
 _REFUSED_DELAY = contextvars.ContextVar("pihyst_refused_delay", default=None)
 
 
+def _one_blas_thread(function):
+    """Runs ``function`` with BLAS on one thread: the fit's matrices are small (tens to a
+    few hundred columns), where a second thread only waits (on a loaded 2-core machine
+    an SVD of 300 x 150 took 15 times longer with two), and the sums then run in one
+    order, so the same record gives the same model bit for bit whatever the core count."""
+    @functools.wraps(function)
+    def wrapped(*args, **kwargs):
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1, user_api="blas"):
+            return function(*args, **kwargs)
+    return wrapped
+
+
+@_one_blas_thread
 def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
         n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
         through=None, initial_state="auto", holdout="alternate", refit=True,
         input_range=None, validate=None, delay="auto", max_operators=None, max_latency=None,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep="auto"):
+        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep="auto", progress=None):
     """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
     one of those that generalize best.
 
@@ -161,6 +178,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         fitted on the fitted cycles and kept only if it lowers the held-back RMS by more
         than 2 % (the report's ``creep`` entry says which and why); without ``t``, none.
         ``False``: none.
+    progress : callable, optional
+        Called with one line of text as each step ends (the step and its time in
+        seconds): the command line prints them on a terminal.
 
     Returns
     -------
@@ -244,6 +264,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         return FramedRecord(u, y, input_range=input_range, initial_state=state,
                             holdout=holdout, offset=offset, through=through)
 
+    step = Steps(progress)
     rec = record_in(initial_state)
     check_record(rec.u, rec.y)
     if isinstance(initial_state, str) and initial_state == "auto" and \
@@ -254,10 +275,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PihystWarning)
             rec, rec.state_choice = start_state(rec, record_in, fitter_of)
+    step.done(f"start state: {rec.state_mode}")
     if rec.state_mode == "explicit" and thresholds is None:
         raise FitError("an explicit initial_state needs explicit thresholds (one value "
                        "per operator)")
     delay_info = _delay_choice(rec, fitter_of, delay, _delay.confirming_family(families))
+    step.done(f"delay: {delay_info['samples']} samples")
     refused = _REFUSED_DELAY.get()
     if refused is not None:
         delay_info.update(refused)
@@ -310,6 +333,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
             if not issubclass(x.category, PihystWarning):
                 warnings.warn_explicit(x.message, x.category, x.filename, x.lineno)
         results.append(replace(res, warnings=tuple(str(x.message) for x in caught[fam.name])))
+        step.done(f"{fam.name} fitted: judged RMS {res.judged_rms:.4g}")
     if not results:
         raise FitError("no family could be fitted: " + "; ".join(
             f"{s['family']}: {s['reason']}" for s in skipped))
@@ -338,7 +362,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                            initial_state=initial_state, holdout=holdout, refit=refit,
                            input_range=input_range, validate=validate, delay=0,
                            max_operators=max_operators, max_latency=max_latency,
-                           max_exhaustive=max_exhaustive, t=t, creep=False)
+                           max_exhaustive=max_exhaustive, t=t, creep=False,
+                           progress=progress)
             finally:
                 _REFUSED_DELAY.reset(token)
     for x in caught[best.name]:
@@ -350,6 +375,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
             model = best.refit()
+        step.done(f"{best.name} refitted on all cycles")
         if not caught[best.name]:
             for x in w:
                 warnings.warn(f"{best.name} (refit): {x.message}", x.category, stacklevel=2)
