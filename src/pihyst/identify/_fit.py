@@ -67,6 +67,7 @@ def _one_blas_thread(function):
     order, so the same record gives the same model bit for bit whatever the core count."""
     @functools.wraps(function)
     def wrapped(*args, **kwargs):
+        import scipy.linalg  # noqa: F401  SciPy's own BLAS: limited only once loaded
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(1, user_api="blas"):
