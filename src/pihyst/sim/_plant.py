@@ -35,7 +35,7 @@ import numpy as np
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._boucwen import BoucWen
-from pihyst.sim._lti import beam_filter, creep_filter
+from pihyst.sim._lti import beam_filter, creep_filter, modes_filter
 from pihyst.sim._preisach import Preisach
 from pihyst.sim._runs import checked_seed
 
@@ -63,6 +63,8 @@ class Plant:
         Supply resolution (V); 0 passes voltages unchanged.
     dynamics : tuple (resonance_hz, damping) or None
         Second-order beam dynamics.
+    modes : sequence of (resonance_hz, damping, share) or None
+        Several modes instead (:func:`pihyst.sim._lti.modes_filter`; a stage's).
     seed : int
         Seed of the noise generator.
     summary : str
@@ -70,7 +72,7 @@ class Plant:
     """
 
     def __init__(self, name, hysteresis, *, creep_per_decade=0.0, noise_um=0.0, quantum_V=0.0,
-                 dynamics=None, seed=0, summary=""):
+                 dynamics=None, modes=None, seed=0, summary=""):
         self.name = name
         self.hysteresis = hysteresis
         self.u_min = 0.0
@@ -82,7 +84,8 @@ class Plant:
         self.seed = seed
         self.summary = summary
         self._creep = creep_filter(self.creep_per_decade) if self.creep_per_decade > 0 else None
-        self._beam = beam_filter(*dynamics) if dynamics else None
+        self._beam = (modes_filter(modes) if modes else
+                      beam_filter(*dynamics) if dynamics else None)
         self.reset()
 
     def reset(self):
@@ -161,7 +164,8 @@ class Plant:
         parts.append(f"sensor noise sigma {self.noise_um:g} um" if self.noise_um
                      else "no sensor noise")
         parts.append(f"second-order beam dynamics ({self.dynamics[0]:g} Hz, damping "
-                     f"{self.dynamics[1]:g})" if self._beam else "no beam dynamics")
+                     f"{self.dynamics[1]:g})" if self.dynamics
+                     else "modes after the hysteresis" if self._beam else "no beam dynamics")
         return parts[0] + " " + "; ".join(parts[1:]) + (
             f". Starts at rest at 0 V after a full 0-{self.u_max:g}-0 V cycle; noise seed "
             f"{self.seed}.")
