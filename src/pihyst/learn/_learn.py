@@ -1,0 +1,286 @@
+"""Inversion-based iterative learning of one period of feedforward voltages
+(docs/theory/learning.md).
+
+Trial j plays the voltages u_j (one period, repeated until steady) and measures y_j. With
+h_j = H[u_j] the static model's hysteresis output, R, Y_j, H_j the rfft's of the desired
+period, the measured one and h_j, and G_k the response on line k (:mod:`._response`), the
+next hysteresis target is
+
+    H_{j+1,k} = H_{b,k} + gamma Q_k (R_k - Y_{b,k}) / G_k,          (learning law)
+
+b the best trial so far, gamma the learning gain (1 at first), Q_k the robustness filter:
+1 on the lines whose G_k is trusted (measured to ``TRUST_REL_STD``, or the Hammerstein
+model's below half its resonance before a measurement there), with |G_k| at least
+``MIN_GAIN`` of the static gain and f_k within ``bandwidth_hz``; 0 elsewhere. The
+voltages are h_{j+1}'s exact periodic inverse, then made feasible: within [u_min, u_max]
+and within the slew limit round the cycle (:mod:`._feasible`), whatever the law asked for.
+
+On a line where G_k is trusted the error then evolves as
+
+    E_{j+1,k} = (1 - gamma Q_k G_k / Ghat_k) E_{j,k},
+
+which shrinks when |1 - gamma G_k / Ghat_k| < 1, i.e. for gamma <= 1 whenever Ghat_k is
+within a factor (and 90 degrees of phase) of the true G_k.
+
+The first update also probes the lines nothing is known about yet (between DC and
+``bandwidth_hz``): a small multisine of random phases, PROBE_SNR times the noise level per
+line, whose response the next estimate reads. A trial whose RMS error is above the best
+so far is undone (the next update starts again from the best) and the gain halved; the
+learning stops after ``trials`` trials, when the gain falls below MIN_LEARNING_GAIN (no
+trial improves any more: the error is at what the noise and the robustness filter
+allow), or when the error is at ``tolerance``.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pihyst.exceptions import InvalidArgumentError
+from pihyst.learn._feasible import feasible_periodic
+from pihyst.learn._model_parts import model_parts, periodic_inverse
+from pihyst.learn._response import ResponseEstimate, noise_sigma
+
+MIN_GAIN = 0.1            # lines where |G_k| < MIN_GAIN * |G_0| are not learned
+MIN_LEARNING_GAIN = 1 / 16
+PROBE_SNR = 4.0
+SIGMA_FLOOR = 1e-6        # of the desired trajectory's standard deviation
+
+
+@dataclass(frozen=True)
+class LearningResult:
+    """What :func:`learn_periodic` learned.
+
+    Attributes
+    ----------
+    voltage : ndarray
+        The best period of voltages found (the lowest RMS error of all trials).
+    displacement : ndarray
+        The period measured with it.
+    rms : ndarray
+        RMS tracking error (measured - desired, um) per trial; trial 0: the starting
+        feedforward.
+    accepted : ndarray of bool
+        Per trial: kept (its error not above the best before it) or undone.
+    gain : ndarray
+        The learning gain of the update each trial played (NaN for trial 0).
+    learned_lines : ndarray of int
+        Per trial: how many harmonics the robustness filter let learn (0 for trial 0).
+    best_trial : int
+    reason : str
+        Why the learning stopped.
+    converged : bool
+        It stopped because no trial improved any more or the tolerance was met (not for
+        want of trials).
+    noise_um : float
+        The sensor noise the learning estimated (standard deviation, um).
+    response : ndarray of complex
+        The estimated response per rfft line of the period (NaN where not known).
+    trusted : ndarray of bool
+        The lines whose response estimate was trusted at the end.
+    """
+
+    voltage: np.ndarray
+    displacement: np.ndarray
+    rms: np.ndarray
+    accepted: np.ndarray
+    gain: np.ndarray
+    learned_lines: np.ndarray
+    best_trial: int
+    reason: str
+    converged: bool
+    noise_um: float
+    response: np.ndarray = field(repr=False)
+    trusted: np.ndarray = field(repr=False)
+    voltages: list = field(repr=False, default=None)
+
+    @property
+    def trials(self):
+        return int(self.rms.size)
+
+
+def _rms(e):
+    return float(np.sqrt(np.mean(np.square(e))))
+
+
+def _checked(desired, sample_period, u_min, u_max, slew_rate, trials):
+    desired = np.asarray(desired, dtype=float)
+    if desired.ndim != 1 or desired.size < 4:
+        raise InvalidArgumentError(f"desired must be one period of at least 4 samples, got "
+                                   f"shape {desired.shape}")
+    if not np.all(np.isfinite(desired)):
+        bad = np.flatnonzero(~np.isfinite(desired))[0]
+        raise InvalidArgumentError(f"desired sample {bad} is not a finite number")
+    if not (np.isfinite(sample_period) and sample_period > 0):
+        raise InvalidArgumentError(f"sample_period must be > 0 s, got {sample_period!r}")
+    if not (np.isfinite(u_min) and np.isfinite(u_max) and u_min < u_max):
+        raise InvalidArgumentError(f"need finite u_min < u_max, got {u_min!r}, {u_max!r}")
+    if slew_rate is not None and not (np.isfinite(slew_rate) and slew_rate > 0):
+        raise InvalidArgumentError(f"slew_rate must be > 0 V/s or None, got {slew_rate!r}")
+    if int(trials) != trials or trials < 0:
+        raise InvalidArgumentError(f"trials must be a whole number >= 0, got {trials!r}")
+    return desired
+
+
+def _start(parts, desired, G_model, model_lines, lo, hi, max_step):
+    """Trial 0's voltages: the model's inverse (with its dynamics inverted on the lines
+    it is trusted on), or without a model the desired shape over the middle half of the
+    voltage range."""
+    if parts.static is None and G_model is None:
+        span = max(float(np.ptp(desired)), 1e-300)
+        return (lo + hi) / 2 + (desired - desired.mean()) / span * (hi - lo) / 2
+    R = np.fft.rfft(desired)
+    if G_model is not None:
+        R = np.where(model_lines, R / np.where(model_lines, G_model, 1.0), R)
+    return periodic_inverse(parts, np.fft.irfft(R, desired.size), lo, hi, max_step)
+
+
+def _static_gain(G, trusted, on_reference):
+    """|G_0| when the DC line is trusted, else the magnitude on the lowest trusted line of
+    the desired trajectory (the static gain the DC line is learned with), else 1."""
+    if trusted[0]:
+        return float(abs(G[0]))
+    lines = np.flatnonzero(on_reference & trusted)
+    return float(abs(G[lines[0]])) if lines.size else 1.0
+
+
+def _model_lines(G_model, n, sample_period):
+    """Lines where the Hammerstein model's response is trusted before any measurement:
+    below half the frequency of its largest gain when that is a resonance (> 1.5 times
+    the static gain), else all of them."""
+    if G_model is None:
+        return None
+    mag = np.abs(G_model)
+    peak = int(np.argmax(mag))
+    if mag[peak] > 1.5 * mag[0]:
+        return np.arange(mag.size) <= peak // 2
+    return np.ones(mag.size, dtype=bool)
+
+
+def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_max=150.0,
+                   slew_rate=None, trials=10, *, bandwidth_hz=None, tolerance=None, seed=0,
+                   keep_voltages=False):
+    """Learn one period of feedforward voltages that make the actuator follow ``desired``
+    (module notes; docs/theory/learning.md).
+
+    Parameters
+    ----------
+    run_period : callable u -> y
+        Plays one period of voltages ``u`` on the actuator (repeated until steady) and
+        returns one period measured (um), as many samples as ``u``.
+    desired : array_like
+        One period of the desired displacement (um), a sample every ``sample_period``.
+    sample_period : float
+        Seconds between samples.
+    model : PI, Bouc-Wen or SISO Hammerstein model, or None
+        The starting feedforward is its inverse; the learning inverts its hysteresis
+        exactly and, for a Hammerstein model, starts from its dynamics. None: the
+        voltages themselves are learned (starting from the desired shape over the middle
+        half of [u_min, u_max]).
+    u_min, u_max : float
+        Voltage limits: no trial sends a voltage outside them.
+    slew_rate : float or None
+        V/s: no trial steps faster, round the whole cycle.
+    trials : int
+        Learning trials after trial 0 (the starting feedforward).
+    bandwidth_hz : float, optional
+        Learn only harmonics up to this frequency (default: up to Nyquist).
+    tolerance : float, optional
+        Stop once the RMS error is at most this (um).
+    seed : int
+        Seed of the probe's random phases.
+    keep_voltages : bool
+        Keep every trial's voltages in ``result.voltages``.
+
+    Returns
+    -------
+    LearningResult
+    """
+    desired = _checked(desired, sample_period, u_min, u_max, slew_rate, trials)
+    parts = model_parts(model, float(sample_period))
+    n = desired.size
+    lo, hi = float(u_min), float(u_max)
+    max_step = None if slew_rate is None else float(slew_rate) * float(sample_period)
+    freqs = np.fft.rfftfreq(n, sample_period)
+    in_band = np.ones(freqs.size, dtype=bool) if bandwidth_hz is None else freqs <= bandwidth_hz
+    G_model = parts.response(n)
+    model_lines = _model_lines(G_model, n, sample_period)
+    R = np.fft.rfft(desired)
+    sigma_floor = SIGMA_FLOOR * max(float(np.std(desired)), 1e-12)
+    rng = np.random.default_rng(seed)
+    estimate = ResponseEstimate(desired)
+
+    def play(u):
+        u = feasible_periodic(u, lo, hi, max_step)
+        y = np.asarray(run_period(u.copy()), dtype=float)
+        if y.shape != u.shape:
+            raise InvalidArgumentError(f"run_period returned {y.shape} samples for a period "
+                                       f"of {u.shape}")
+        return u, y
+
+    u, y = play(_start(parts, desired, G_model, model_lines, lo, hi, max_step))
+    sigma = noise_sigma(y, sigma_floor)
+    estimate.add(parts.hysteresis_output(u), y, sigma)
+    best = (_rms(y - desired), u, y)
+    rms, accepted, gains, learned = [best[0]], [True], [np.nan], [0]
+    voltages = [u] if keep_voltages else None
+    gamma, probed, reason, converged = 1.0, False, None, False
+    G, trusted = None, None
+    for _ in range(int(trials)):
+        if tolerance is not None and best[0] <= tolerance:
+            reason, converged = f"the RMS error {best[0]:.4g} um is within the tolerance", True
+            break
+        if gamma < MIN_LEARNING_GAIN:
+            reason = (f"no trial improved on trial {rms.index(best[0])} after the gain fell "
+                      f"to {2 * gamma:g}: the error is at what the noise and the robustness "
+                      f"filter allow")
+            converged = True
+            break
+        G, rel = estimate.estimate()
+        trusted = estimate.trusted(rel)
+        if model_lines is not None:
+            use_model = ~trusted & model_lines
+            G = np.where(use_model, G_model, G)
+            trusted = trusted | use_model
+        static_gain = _static_gain(G, trusted, estimate.on_reference)
+        G[0], trusted[0] = (G[0], True) if trusted[0] else (static_gain, True)
+        Q = trusted & in_band & (np.abs(np.nan_to_num(G)) >= MIN_GAIN * static_gain)
+        u_b, y_b = best[1], best[2]
+        H_b = np.fft.rfft(parts.hysteresis_output(u_b))
+        E = R - np.fft.rfft(y_b)
+        H_next = H_b + gamma * np.where(Q, E / np.where(Q, G, 1.0), 0.0)
+        if not probed:
+            probe = ~Q & in_band
+            probe[0] = False
+            if n % 2 == 0:
+                probe[-1] = False
+            amplitude = PROBE_SNR * np.sqrt(n) * sigma / max(static_gain, 1e-300)
+            H_next = H_next + np.where(probe, amplitude * np.exp(
+                2j * np.pi * rng.random(probe.size)), 0.0)
+            probed = True
+        h_next = np.fft.irfft(H_next, n)
+        u, y = play(periodic_inverse(parts, h_next, lo, hi, max_step))
+        sigma = noise_sigma(y, sigma_floor)
+        estimate.add(parts.hysteresis_output(u), y, min(sigma, estimate.sigma))
+        e = _rms(y - desired)
+        rms.append(e)
+        gains.append(gamma)
+        learned.append(int(np.count_nonzero(Q)))
+        if keep_voltages:
+            voltages.append(u)
+        if e <= best[0]:
+            best = (e, u, y)
+            accepted.append(True)
+        else:
+            accepted.append(False)
+            gamma /= 2
+    if reason is None:
+        reason = (f"{len(rms) - 1} learning trials done" if trials else "no learning trials")
+    if G is None:
+        G, rel = estimate.estimate()
+        trusted = estimate.trusted(rel)
+    best_trial = int(np.flatnonzero(np.array(rms) == best[0])[-1])
+    return LearningResult(voltage=best[1], displacement=best[2], rms=np.array(rms),
+                          accepted=np.array(accepted), gain=np.array(gains),
+                          learned_lines=np.array(learned), best_trial=best_trial,
+                          reason=reason, converged=converged, noise_um=float(estimate.sigma),
+                          response=G, trusted=trusted, voltages=voltages)
