@@ -22,11 +22,15 @@ On a line where G_k is trusted the error then evolves as
 which shrinks when |1 - gamma G_k / Ghat_k| < 1, i.e. for gamma <= 1 whenever Ghat_k is
 within a factor (and 90 degrees of phase) of the true G_k.
 
-The first update also probes the lines nothing is known about yet (between DC and
-``bandwidth_hz``): a small multisine of random phases, PROBE_SNR times the noise level per
-line, whose response the next estimate reads. A trial whose RMS error is above the best
-so far is undone (the next update starts again from the best) and the gain halved; the
-learning stops after ``trials`` trials, when the gain falls below MIN_LEARNING_GAIN (no
+Trial 1 learns on the lines trial 0 tells about (those of the desired trajectory, and
+the Hammerstein model's). Trial 2 is the probe trial: the best drive so far plus a small
+multisine of random phases, PROBE_SNR times the noise level per line, on the lines
+nothing is known about yet (between DC and ``bandwidth_hz``), and nothing else, so that
+the change it measures is the probe's alone; from trial 3 on the law learns there too. A
+learning trial whose RMS error is above the best so far is undone (the next update starts
+again from the best) and the gain halved; a probe trial that is worse is undone, the
+gain kept (it learned nothing). The learning stops after ``trials`` trials, when the
+gain falls below MIN_LEARNING_GAIN (no
 trial improves any more: the error is at what the noise and the robustness filter
 allow), or when the error is at ``tolerance``.
 """
@@ -42,7 +46,8 @@ from pihyst.learn._response import ResponseEstimate, noise_sigma
 
 MIN_GAIN = 0.1            # lines where |G_k| < MIN_GAIN * |G_0| are not learned
 MIN_LEARNING_GAIN = 1 / 16
-PROBE_SNR = 4.0
+PROBE_SNR = 8.0
+PROBE_TRIAL = 2           # trial 1 learns what trial 0 tells; trial 2 probes
 SIGMA_FLOOR = 1e-6        # of the desired trajectory's standard deviation
 
 
@@ -62,9 +67,14 @@ class LearningResult:
     accepted : ndarray of bool
         Per trial: kept (its error not above the best before it) or undone.
     gain : ndarray
-        The learning gain of the update each trial played (NaN for trial 0).
+        The learning gain of the update each trial played (NaN for trial 0 and the probe
+        trial).
     learned_lines : ndarray of int
-        Per trial: how many harmonics the robustness filter let learn (0 for trial 0).
+        Per trial: how many harmonics the robustness filter let learn (0 for trial 0 and
+        the probe trial).
+    kinds : tuple of str
+        Per trial: ``"start"`` (trial 0), ``"learn"`` (the learning law) or ``"probe"``
+        (the best drive plus the probe, nothing learned).
     best_trial : int
     reason : str
         Why the learning stopped.
@@ -85,6 +95,7 @@ class LearningResult:
     accepted: np.ndarray
     gain: np.ndarray
     learned_lines: np.ndarray
+    kinds: tuple
     best_trial: int
     reason: str
     converged: bool
@@ -96,6 +107,27 @@ class LearningResult:
     @property
     def trials(self):
         return int(self.rms.size)
+
+
+@dataclass(frozen=True)
+class _Trial:
+    rms: float
+    voltage: np.ndarray
+    displacement: np.ndarray
+    probe: np.ndarray          # the probe's spectrum in the drive (zeros: none)
+    kind: str                  # "start", "learn" or "probe"
+
+
+def _response(estimate, G_model, model_lines):
+    """(G, trusted) per line: the trials' estimate where trusted, else the Hammerstein
+    model's on the lines it is trusted on before a measurement."""
+    G, rel = estimate.estimate()
+    trusted = estimate.trusted(rel)
+    if model_lines is not None:
+        use_model = ~trusted & model_lines
+        G = np.where(use_model, G_model, G)
+        trusted = trusted | use_model
+    return G, trusted
 
 
 def _rms(e):
@@ -132,6 +164,18 @@ def _start(parts, desired, G_model, model_lines, lo, hi, max_step):
     if G_model is not None:
         R = np.where(model_lines, R / np.where(model_lines, G_model, 1.0), R)
     return periodic_inverse(parts, np.fft.irfft(R, desired.size), lo, hi, max_step)
+
+
+def _probe(lines, sigma, static_gain, rng):
+    """The probe's spectrum: PROBE_SNR times the noise level sqrt(N) sigma per line (in
+    the hysteresis output, through the static gain), random phases, on ``lines`` (never
+    on DC nor the Nyquist line, whose phase is not free)."""
+    lines = lines.copy()
+    lines[0] = False
+    n = 2 * (lines.size - 1)
+    lines[-1] = False
+    amplitude = PROBE_SNR * np.sqrt(n) * sigma / max(static_gain, 1e-300)
+    return np.where(lines, amplitude * np.exp(2j * np.pi * rng.random(lines.size)), 0.0)
 
 
 def _static_gain(G, trusted, on_reference):
@@ -220,67 +264,60 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
     u, y = play(_start(parts, desired, G_model, model_lines, lo, hi, max_step))
     sigma = noise_sigma(y, sigma_floor)
     estimate.add(parts.hysteresis_output(u), y, sigma)
-    best = (_rms(y - desired), u, y)
-    rms, accepted, gains, learned = [best[0]], [True], [np.nan], [0]
-    voltages = [u] if keep_voltages else None
-    gamma, probed, reason, converged = 1.0, False, None, False
+    trial = [_Trial(_rms(y - desired), u, y, np.zeros(R.size, dtype=complex), "start")]
+    best = 0
+    accepted, gains, learned = [True], [np.nan], [0]
+    gamma, reason, converged = 1.0, None, False
     G, trusted = None, None
-    for _ in range(int(trials)):
-        if tolerance is not None and best[0] <= tolerance:
-            reason, converged = f"the RMS error {best[0]:.4g} um is within the tolerance", True
+    for j in range(1, int(trials) + 1):
+        if tolerance is not None and trial[best].rms <= tolerance:
+            reason, converged = (f"the RMS error {trial[best].rms:.4g} um is within the "
+                                 f"tolerance {tolerance:g} um"), True
             break
         if gamma < MIN_LEARNING_GAIN:
-            reason = (f"no trial improved on trial {rms.index(best[0])} after the gain fell "
-                      f"to {2 * gamma:g}: the error is at what the noise and the robustness "
+            reason = (f"no trial improved on trial {best} after the gain fell to "
+                      f"{2 * gamma:g}: the error is at what the noise and the robustness "
                       f"filter allow")
             converged = True
             break
-        G, rel = estimate.estimate()
-        trusted = estimate.trusted(rel)
-        if model_lines is not None:
-            use_model = ~trusted & model_lines
-            G = np.where(use_model, G_model, G)
-            trusted = trusted | use_model
+        G, trusted = _response(estimate, G_model, model_lines)
         static_gain = _static_gain(G, trusted, estimate.on_reference)
-        G[0], trusted[0] = (G[0], True) if trusted[0] else (static_gain, True)
+        if not trusted[0]:
+            G[0], trusted[0] = static_gain, True      # DC: learned with the static gain
         Q = trusted & in_band & (np.abs(np.nan_to_num(G)) >= MIN_GAIN * static_gain)
-        u_b, y_b = best[1], best[2]
-        H_b = np.fft.rfft(parts.hysteresis_output(u_b))
-        E = R - np.fft.rfft(y_b)
-        H_next = H_b + gamma * np.where(Q, E / np.where(Q, G, 1.0), 0.0)
-        if not probed:
-            probe = ~Q & in_band
-            probe[0] = False
-            if n % 2 == 0:
-                probe[-1] = False
-            amplitude = PROBE_SNR * np.sqrt(n) * sigma / max(static_gain, 1e-300)
-            H_next = H_next + np.where(probe, amplitude * np.exp(
-                2j * np.pi * rng.random(probe.size)), 0.0)
-            probed = True
-        h_next = np.fft.irfft(H_next, n)
-        u, y = play(periodic_inverse(parts, h_next, lo, hi, max_step))
-        sigma = noise_sigma(y, sigma_floor)
-        estimate.add(parts.hysteresis_output(u), y, min(sigma, estimate.sigma))
-        e = _rms(y - desired)
-        rms.append(e)
-        gains.append(gamma)
-        learned.append(int(np.count_nonzero(Q)))
-        if keep_voltages:
-            voltages.append(u)
-        if e <= best[0]:
-            best = (e, u, y)
-            accepted.append(True)
+        b = trial[best]
+        H_b = np.fft.rfft(parts.hysteresis_output(b.voltage))
+        untrusted = ~Q & in_band
+        untrusted[0] = False
+        if j == PROBE_TRIAL and np.any(untrusted[1:-1]):
+            # the probe trial: the best drive plus the probe, nothing learned
+            kind, probe = "probe", _probe(untrusted, sigma, static_gain, rng)
+            H_next = H_b + probe
         else:
-            accepted.append(False)
+            # the learning law; the best trial's probe leaves the lines not learned
+            kind, probe = "learn", np.zeros(R.size, dtype=complex)
+            E = R - np.fft.rfft(b.displacement)
+            H_next = (H_b + gamma * np.where(Q, E / np.where(Q, G, 1.0), 0.0)
+                      - np.where(Q, 0.0, b.probe))
+        u, y = play(periodic_inverse(parts, np.fft.irfft(H_next, n), lo, hi, max_step))
+        sigma = min(noise_sigma(y, sigma_floor), estimate.sigma)
+        estimate.add(parts.hysteresis_output(u), y, sigma, parent=best)
+        trial.append(_Trial(_rms(y - desired), u, y, probe, kind))
+        gains.append(gamma if kind == "learn" else np.nan)
+        learned.append(int(np.count_nonzero(Q)) if kind == "learn" else 0)
+        accepted.append(trial[-1].rms <= b.rms)
+        if accepted[-1]:
+            best = j
+        elif kind == "learn":
             gamma /= 2
     if reason is None:
-        reason = (f"{len(rms) - 1} learning trials done" if trials else "no learning trials")
-    if G is None:
-        G, rel = estimate.estimate()
-        trusted = estimate.trusted(rel)
-    best_trial = int(np.flatnonzero(np.array(rms) == best[0])[-1])
-    return LearningResult(voltage=best[1], displacement=best[2], rms=np.array(rms),
-                          accepted=np.array(accepted), gain=np.array(gains),
-                          learned_lines=np.array(learned), best_trial=best_trial,
-                          reason=reason, converged=converged, noise_um=float(estimate.sigma),
-                          response=G, trusted=trusted, voltages=voltages)
+        reason = (f"all {len(trial) - 1} learning trials done" if trials
+                  else "no learning trials")
+    G, trusted = _response(estimate, G_model, model_lines)
+    return LearningResult(voltage=trial[best].voltage, displacement=trial[best].displacement,
+                          rms=np.array([t.rms for t in trial]), accepted=np.array(accepted),
+                          gain=np.array(gains), learned_lines=np.array(learned),
+                          kinds=tuple(t.kind for t in trial), best_trial=best, reason=reason,
+                          converged=converged, noise_um=float(estimate.sigma), response=G,
+                          trusted=trusted,
+                          voltages=[t.voltage for t in trial] if keep_voltages else None)

@@ -7,13 +7,20 @@ for the voltages sent) and Y_j = rfft(y_j) of the measured period. On each line 
 
 and G_k is estimated by least squares over the trials so far:
 
-- on the lines the desired trajectory carries (|R_k| above a millionth of its largest
-  line, the DC line excepted), where H is large and what the model misses is small
-  beside it, through the origin: G_k = sum_j conj(H_jk) Y_jk / sum_j |H_jk|^2,
-  variance N sigma^2 / sum_j |H_jk|^2;
-- on every other line with an intercept (the unknown D_k): G_k = sum_j conj(dH_jk) dY_jk
-  / sum_j |dH_jk|^2 with dH, dY the deviations from the trials' means, variance
-  N sigma^2 / sum_j |dH_jk|^2 (nothing is known before two trials differ there).
+- from the changes: each trial j after the first was built from an earlier one p(j)
+  (the best so far), and G_k = sum_j conj(dH_jk) dY_jk / sum_j |dH_jk|^2 with
+  dH_jk = H_jk - H_p(j)k, dY_jk = Y_jk - Y_p(j)k: the local (incremental) gain the
+  learning needs, blind to D_k as long as a change does not move it, variance
+  2 N sigma^2 / sum_j |dH_jk|^2 (nothing is known before a trial changes the line); its
+  relative deviation is judged against min(|G_k|, the static gain), so that a line the
+  trials hardly changed is never trusted for a large ratio of what the model misses to
+  that change;
+- until that is trusted, on the lines the desired trajectory carries (|R_k| above a
+  millionth of its largest line, the DC line excepted), where H is large and what the
+  model misses is small beside it, through the origin:
+  G_k = sum_j conj(H_jk) Y_jk / sum_j |H_jk|^2, variance N sigma^2 / sum_j |H_jk|^2 (a
+  secant gain: with hysteresis the local gain differs from it, and the learning is
+  slower until the local one is known).
 
 A line's estimate is trusted when its relative standard deviation is at most
 ``TRUST_REL_STD`` (then the phase is known to about 17 degrees, well inside the 90 degrees
@@ -55,18 +62,20 @@ class ResponseEstimate:
     def __init__(self, desired):
         self.n = int(np.asarray(desired).size)
         self.on_reference = reference_lines(desired)
-        self._H, self._Y = [], []
+        self._H, self._Y, self._parent = [], [], []
         self.sigma = 0.0
 
     @property
     def trials(self):
         return len(self._H)
 
-    def add(self, h, y, sigma):
-        """One trial: hysteresis output ``h`` and measurement ``y`` of a period; the
-        noise estimate ``sigma`` (um) to judge the estimates by."""
+    def add(self, h, y, sigma, parent=None):
+        """One trial: hysteresis output ``h`` and measurement ``y`` of a period, the index
+        of the trial it was built from (None for the first); the noise estimate ``sigma``
+        (um) to judge the estimates by."""
         self._H.append(np.fft.rfft(h))
         self._Y.append(np.fft.rfft(y))
+        self._parent.append(parent)
         self.sigma = float(sigma)
 
     def estimate(self):
@@ -74,18 +83,36 @@ class ResponseEstimate:
         H, Y = np.array(self._H), np.array(self._Y)
         noise_var = self.n * self.sigma ** 2
         through_origin = np.sum(np.abs(H) ** 2, axis=0)
-        dH, dY = H - H.mean(axis=0), Y - Y.mean(axis=0)
+        pairs = [(j, p) for j, p in enumerate(self._parent) if p is not None]
+        dH = np.array([H[j] - H[p] for j, p in pairs]).reshape(-1, H.shape[1])
+        dY = np.array([Y[j] - Y[p] for j, p in pairs]).reshape(-1, H.shape[1])
         spread = np.sum(np.abs(dH) ** 2, axis=0)
-        ref = self.on_reference
         with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.where(ref, np.sum(np.conj(H) * Y, axis=0) / through_origin,
-                         np.sum(np.conj(dH) * dY, axis=0) / spread)
-            energy = np.where(ref, through_origin, spread)
-            rel = np.sqrt(noise_var / energy) / np.abs(g)
+            g_origin = np.sum(np.conj(H) * Y, axis=0) / through_origin
+            rel_origin = np.sqrt(noise_var / through_origin) / np.abs(g_origin)
+            g_local = np.sum(np.conj(dH) * dY, axis=0) / spread
+            # judged against at most the static gain: a large estimate from a tiny change
+            # is what the model misses moving, not a resonance
+            rel_local = np.sqrt(2 * noise_var / spread) / np.minimum(np.abs(g_local),
+                                                                     self.static_gain(
+                                                                         g_origin))
+        # the local (incremental) gain once the trials tell it, else through the origin
+        # on the desired trajectory's lines
+        local = np.nan_to_num(rel_local, nan=np.inf) <= TRUST_REL_STD
+        origin = self.on_reference & ~local
+        g = np.where(local, g_local, np.where(origin, g_origin, g_local))
+        rel = np.where(local, rel_local, np.where(origin, rel_origin, rel_local))
+        energy = np.where(origin, through_origin, spread)
         known = np.isfinite(g) & (energy > 0)
         g = np.where(known, g, np.nan)
         rel = np.where(known, rel, np.inf)
         return g, rel
+
+    def static_gain(self, g_origin):
+        """|G| through the origin on the lowest line of the desired trajectory (1 when
+        there is none)."""
+        lines = np.flatnonzero(self.on_reference)
+        return float(np.abs(g_origin[lines[0]])) if lines.size else 1.0
 
     def trusted(self, rel):
         return rel <= TRUST_REL_STD

@@ -74,6 +74,25 @@ class Stage(Plant):
         self._amplifier = 0.0
         self._tick = 0
 
+    def hold(self, voltage):
+        """As if the stage had been held at ``voltage`` for ever: from the rest state,
+        the hysteresis driven there, the creep lags settled at its output, the modes at
+        rest, the converter and the amplifier at that voltage (the start of a scan on a
+        stage that has been on, without simulating the hours it took)."""
+        voltage = float(voltage)
+        if not self.u_min <= voltage <= self.u_max:
+            raise InvalidArgumentError(f"voltage {voltage:g} V is outside the stage's drive "
+                                       f"range [{self.u_min:g}, {self.u_max:g}] V")
+        self.reset()
+        h = float(self.hysteresis.run(np.array([voltage]))[0])
+        y = h
+        if self._creep is not None:
+            self._creep.rest(h)
+            y = h * self._creep.dc_gain
+        self._beam.rest(y)
+        self._pending[:] = voltage
+        self._amplifier = voltage
+
     def _amplified(self, u):
         """v of the module notes: the delayed commands through the slew limit."""
         line = np.concatenate((self._pending, u))
