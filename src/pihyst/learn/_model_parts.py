@@ -27,7 +27,7 @@ import numpy as np
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse import compensate
 
-MAX_SAMPLES = 400_000
+MAX_SAMPLES = 100_000
 
 
 def _without_delay(model):

@@ -93,6 +93,26 @@ class Stage(Plant):
         self._pending[:] = voltage
         self._amplifier = voltage
 
+    def settle_on(self, u):
+        """As if the stage had been playing the period ``u`` over and over for ever: the
+        hysteresis from the rest state through two periods (its memory then repeats),
+        the creep lags settled at the mean hysteresis output of the period (where a
+        long periodic drive leaves the slow ones), the modes at rest at the output, the
+        converter and the amplifier at the period's last voltage. The next periods
+        settle the rest (the fast lags, the modes' transient): then the stage is in the
+        steady state of a scan that has run for hours, without simulating them."""
+        u = np.asarray(u, dtype=float)
+        self.reset()
+        h = self.hysteresis.run(np.clip(np.tile(u, 2), self.u_min, self.u_max))[u.size:]
+        y = float(h[-1])
+        if self._creep is not None:
+            self._creep.rest(float(np.mean(h)))
+            y = float(self._creep.run(np.array([h[-1]]), np.array([0.0]))[0])
+            self._creep._t = None
+        self._beam.rest(y)
+        self._pending[:] = u[-1]
+        self._amplifier = float(u[-1])
+
     def _amplified(self, u):
         """v of the module notes: the delayed commands through the slew limit."""
         line = np.concatenate((self._pending, u))
