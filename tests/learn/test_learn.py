@@ -51,7 +51,7 @@ def test_every_trial_is_within_the_limits_and_accepted_trials_never_worsen(
     u_max, dt = u_min + width, 1e-4
     plant = LinearPlant(gain, 0.5, 1, noise, seed)
     res = learn_periodic(plant, desired, dt, u_min=u_min, u_max=u_max, slew_rate=slew,
-                         trials=5, keep_voltages=True)
+                         trials=5, keep_trials=True)
     assert len(plant.sent) == res.trials
     for u in plant.sent:
         assert np.all(u >= u_min) and np.all(u <= u_max)

@@ -1,8 +1,8 @@
 """Voltages a periodic drive may send: within the limits and, around the whole cycle
 (the last sample followed by the first of the next period), within the slew limit.
 
-For limits [lo, hi] and a step limit s (volts per sample; slew rate times sample period)
-the periodic drive u[0..N-1] is feasible when
+For limits [lo, hi] and a step limit s (volts per sample; slew rate times sample
+period) the periodic drive u[0..N-1] is feasible when
 
     lo <= u[n] <= hi   and   |u[n] - u[(n - 1) mod N]| <= s   for every n.
 
@@ -40,7 +40,7 @@ def _rate_limited(u, step, start):
 def feasible_periodic(u, lo, hi, max_step=None):
     """The periodic drive ``u`` within [lo, hi] and, if ``max_step`` (V per sample) is
     given, within it on every step of the cycle (module notes)."""
-    u = np.clip(np.asarray(u, dtype=float), lo, hi)
+    u = np.clip(np.nan_to_num(np.asarray(u, dtype=float), nan=lo), lo, hi)
     if max_step is None or u.size < 2:
         return u
     step = max_step * (1 - STEP_MARGIN)

@@ -103,6 +103,7 @@ class LearningResult:
     response: np.ndarray = field(repr=False)
     trusted: np.ndarray = field(repr=False)
     voltages: list = field(repr=False, default=None)
+    displacements: list = field(repr=False, default=None)
 
     @property
     def trials(self):
@@ -174,17 +175,8 @@ def _probe(lines, sigma, static_gain, rng):
     lines[0] = False
     n = 2 * (lines.size - 1)
     lines[-1] = False
-    amplitude = PROBE_SNR * np.sqrt(n) * sigma / max(static_gain, 1e-300)
+    amplitude = PROBE_SNR * np.sqrt(n) * sigma / static_gain
     return np.where(lines, amplitude * np.exp(2j * np.pi * rng.random(lines.size)), 0.0)
-
-
-def _static_gain(G, trusted, on_reference):
-    """|G_0| when the DC line is trusted, else the magnitude on the lowest trusted line of
-    the desired trajectory (the static gain the DC line is learned with), else 1."""
-    if trusted[0]:
-        return float(abs(G[0]))
-    lines = np.flatnonzero(on_reference & trusted)
-    return float(abs(G[lines[0]])) if lines.size else 1.0
 
 
 def _model_lines(G_model, n, sample_period):
@@ -202,7 +194,7 @@ def _model_lines(G_model, n, sample_period):
 
 def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_max=150.0,
                    slew_rate=None, trials=10, *, bandwidth_hz=None, tolerance=None, seed=0,
-                   keep_voltages=False):
+                   keep_trials=False):
     """Learn one period of feedforward voltages that make the actuator follow ``desired``
     (module notes; docs/theory/learning.md).
 
@@ -232,8 +224,9 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
         Stop once the RMS error is at most this (um).
     seed : int
         Seed of the probe's random phases.
-    keep_voltages : bool
-        Keep every trial's voltages in ``result.voltages``.
+    keep_trials : bool
+        Keep every trial's voltages and measured period in ``result.voltages`` and
+        ``result.displacements``.
 
     Returns
     -------
@@ -281,15 +274,16 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
             converged = True
             break
         G, trusted = _response(estimate, G_model, model_lines)
-        static_gain = _static_gain(G, trusted, estimate.on_reference)
+        static_gain = estimate.reference_gain()
         if not trusted[0]:
             G[0], trusted[0] = static_gain, True      # DC: learned with the static gain
-        Q = trusted & in_band & (np.abs(np.nan_to_num(G)) >= MIN_GAIN * static_gain)
+        magnitude = np.abs(np.nan_to_num(G))
+        Q = trusted & in_band & (magnitude >= MIN_GAIN * static_gain) & (magnitude > 0)
         b = trial[best]
         H_b = np.fft.rfft(parts.hysteresis_output(b.voltage))
         untrusted = ~Q & in_band
         untrusted[0] = False
-        if j == PROBE_TRIAL and np.any(untrusted[1:-1]):
+        if j == PROBE_TRIAL and np.any(untrusted[1:-1]) and static_gain > 0:
             # the probe trial: the best drive plus the probe, nothing learned
             kind, probe = "probe", _probe(untrusted, sigma, static_gain, rng)
             H_next = H_b + probe
@@ -320,4 +314,6 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
                           kinds=tuple(t.kind for t in trial), best_trial=best, reason=reason,
                           converged=converged, noise_um=float(estimate.sigma), response=G,
                           trusted=trusted,
-                          voltages=[t.voltage for t in trial] if keep_voltages else None)
+                          voltages=[t.voltage for t in trial] if keep_trials else None,
+                          displacements=([t.displacement for t in trial] if keep_trials
+                                         else None))

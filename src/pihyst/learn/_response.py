@@ -94,8 +94,7 @@ class ResponseEstimate:
             # judged against at most the static gain: a large estimate from a tiny change
             # is what the model misses moving, not a resonance
             rel_local = np.sqrt(2 * noise_var / spread) / np.minimum(np.abs(g_local),
-                                                                     self.static_gain(
-                                                                         g_origin))
+                                                                     self.reference_gain())
         # the local (incremental) gain once the trials tell it, else through the origin
         # on the desired trajectory's lines
         local = np.nan_to_num(rel_local, nan=np.inf) <= TRUST_REL_STD
@@ -108,11 +107,17 @@ class ResponseEstimate:
         rel = np.where(known, rel, np.inf)
         return g, rel
 
-    def static_gain(self, g_origin):
+    def reference_gain(self):
         """|G| through the origin on the lowest line of the desired trajectory (1 when
-        there is none)."""
+        there is none): the static gain the DC line, the probe and the trust in an
+        estimate are measured by."""
         lines = np.flatnonzero(self.on_reference)
-        return float(np.abs(g_origin[lines[0]])) if lines.size else 1.0
+        if not lines.size:
+            return 1.0
+        H = np.array([h[lines[0]] for h in self._H])
+        Y = np.array([y[lines[0]] for y in self._Y])
+        energy = float(np.sum(np.abs(H) ** 2))
+        return float(abs(np.sum(np.conj(H) * Y)) / energy) if energy > 0 else 1.0
 
     def trusted(self, rel):
         return rel <= TRUST_REL_STD
