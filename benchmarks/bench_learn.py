@@ -20,10 +20,14 @@ of every trial is checked against 0-150 V.
 
 Targets: after 10 trials RMS <= 3 x the sensor noise at 10, 50 and 100 Hz; >= 25 x below
 the static inverse at 100 Hz; every voltage within the limits. The learning was tuned on
-the paper-beam stage (800 Hz, 4 %, seeds 1-4); the other stages, their seeds and
-the seeds of the 'random' row are held out.
+the paper-beam stage (800 Hz, 4 %) and, for the second probe, on the s-shaped stage at
+10 Hz; the lens and remanent stages, and the random stages of --fresh (hysteresis and
+creep of ``random_plant(seed)``, one or two modes drawn from 500 Hz - 2 kHz and 1 - 10 %
+damping), are held out.
 
-Run: python benchmarks/bench_learn.py [--quick]     (--quick: 10, 50, 100 Hz only)
+Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]]
+     (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
+     (default 1000) instead of the four named ones, at those rates)
 """
 
 import sys
@@ -36,7 +40,7 @@ import pihyst
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
 from pihyst.learn import learn_periodic
-from pihyst.sim import make_stage
+from pihyst.sim import Stage, make_stage, random_plant
 from pihyst.sim.signals import band_limited_triangle, decaying_triangles
 
 CLOCK_HZ = 20_000.0
@@ -53,9 +57,30 @@ STAGES = [
 ]
 
 
-def fitted_model(name, modes, seed):
-    """The default pihyst.fit model of a slow record of the stage (with its creep)."""
-    stage = make_stage(name, modes=modes, rate_hz=200.0, noise_um=NOISE_UM, seed=seed + 100)
+def named_stage(name, modes, seed, rate_hz=CLOCK_HZ):
+    return make_stage(name, modes=modes, rate_hz=rate_hz, delay_samples=1,
+                      noise_um=NOISE_UM, seed=seed)
+
+
+def random_stage(seed, rate_hz=CLOCK_HZ):
+    """The hysteresis and creep of random_plant(seed), then one or two modes from
+    500 Hz - 2 kHz with 1 - 10 % damping (log-uniform), at the benchmark's clock."""
+    plant, d = random_plant(seed)
+    rng = np.random.default_rng([0xBE7C, seed])
+    f1 = float(10 ** rng.uniform(np.log10(500.0), np.log10(2000.0)))
+    modes = [(f1, float(10 ** rng.uniform(-2, -1)), 1.0)]
+    if rng.random() < 0.5:
+        modes = [(f1, modes[0][1], 0.8), (f1 * float(rng.uniform(1.5, 4.0)),
+                                          float(10 ** rng.uniform(-2, -1)), 0.2)]
+    return Stage(f"random-{seed}", plant.hysteresis, modes=modes, rate_hz=rate_hz,
+                 delay_samples=1, creep_per_decade=d["creep_per_decade"], noise_um=NOISE_UM,
+                 quantum_V=0.01, seed=seed), modes
+
+
+def fitted_model(make):
+    """The default pihyst.fit model of a slow record (200 Hz) of the stage ``make(rate)``
+    builds (with its creep)."""
+    stage = make(200.0)
     t, u = decaying_triangles(U_MIN, U_MAX, period_s=1.0, n_triangles=4, dt=1 / 200.0)
     return pihyst.fit(u, stage.run(u), t=t).model
 
@@ -86,14 +111,12 @@ def rms(e):
     return float(np.sqrt(np.mean(np.square(e))))
 
 
-def run_stage(label, name, modes, seed, rates):
-    model = fitted_model(name, modes, seed)
-    fmode = modes[0][0]
+def run_stage(make, fmode, rates):
+    model = fitted_model(make)
     rows = []
     for rate in rates:
         desired = scan(model, rate, fmode)
-        stage = make_stage(name, modes=modes, rate_hz=CLOCK_HZ, delay_samples=1,
-                           noise_um=NOISE_UM, seed=seed)
+        stage = make(CLOCK_HZ)
         player = CheckedStage(stage)
         t0 = time.perf_counter()
         start = compensate(model.replace(creep=None), desired, u_min=U_MIN, u_max=U_MAX)
@@ -114,7 +137,22 @@ def main():
           f"{NOISE_UM} um RMS (3 x = {3 * NOISE_UM:.3f} um); RMS errors in um; "
           f"'replay': the learned voltages played again")
     checks = []
-    for label, name, modes, seed, tuned in STAGES:
+    args = [a for a in sys.argv[1:] if a != "--quick"]
+    if args and args[0] == "--fresh":
+        n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
+        quick = True
+        stages = []
+        for seed in range(first, first + n):
+            modes = random_stage(seed)[1]
+            label = f"random {seed}: " + " + ".join(f"{m[0]:.0f} Hz {100 * m[1]:.1f} %"
+                                                    for m in modes)
+            stages.append((label, lambda r, seed=seed: random_stage(seed, r)[0], modes, seed,
+                           False))
+    else:
+        stages = [(label, lambda r, name=name, modes=modes, seed=seed: named_stage(
+            name, modes, seed if r == CLOCK_HZ else seed + 100, r), modes, seed, tuned)
+                  for label, name, modes, seed, tuned in STAGES]
+    for label, make, modes, seed, tuned in stages:
         fmode = modes[0][0]
         rates = [10.0, 50.0, 100.0] if quick else [1.0, 10.0, 50.0, 100.0]
         rates += [] if fmode / 8 in rates else [fmode / 8]
@@ -123,8 +161,7 @@ def main():
         print(f"{'rate Hz':>8} {'N':>6} {'static':>7} "
               + " ".join(f"{'t' + str(j):>6}" for j in range(1, TRIALS + 1))
               + f" {'replay':>7} {'/noise':>6} {'gain':>6} {'V out':>5} {'s':>5}  stop")
-        for rate, n, res, replay, outside, _, secs in run_stage(label, name, modes, seed,
-                                                                   rates):
+        for rate, n, res, replay, outside, _, secs in run_stage(make, fmode, rates):
             improvement = res.rms[0] / replay
             print(f"{rate:8.4g} {n:6d} {res.rms[0]:7.4f} "
                   + " ".join(f"{e:6.4f}" for e in res.rms[1:])
@@ -144,7 +181,7 @@ def main():
           f"{min(c[3] for c in held if c[1] == 100.0):.1f} x")
     print(f"  voltages outside {U_MIN:g}-{U_MAX:g} V in any trial, any stage: "
           f"{sum(c[4] for c in checks)}")
-    print(f"total {time.perf_counter() - t_all:.0f} s")
+    print(f"total {time.perf_counter() - t_all:.0f} s wall, {time.process_time():.0f} s CPU")
 
 
 if __name__ == "__main__":

@@ -6,9 +6,12 @@ h_j = H[u_j] the static model's hysteresis output, R, Y_j, H_j the rfft's of the
 period, the measured one and h_j, and G_k the response on line k (:mod:`._response`), the
 next hysteresis target is
 
-    H_{j+1,k} = H_{b,k} + gamma Q_k (R_k - Y_{b,k}) / G_k,          (learning law)
+    H_{j+1,k} = H_{b,k} + gamma g_k Q_k (R_k - Y_{b,k}) / G_k,      (learning law)
 
-b the best trial so far, gamma the learning gain (1 at first), Q_k the robustness filter:
+b the best trial so far, gamma the learning gain (1 at first), g_k a gain per line (1 at
+first; halved each time the line's error grew by more than LINE_GROWTH_NOISE noise levels
+in a trial that learned it, and the line no longer learned once g_k < MIN_LINE_GAIN:
+an estimate biased by what the model misses shows itself so), Q_k the robustness filter:
 1 on the lines whose G_k is trusted (measured to ``TRUST_REL_STD``, or the Hammerstein
 model's below half its resonance before a measurement there), with |G_k| at least
 ``MIN_GAIN`` of the static gain and f_k within ``bandwidth_hz``; 0 elsewhere. The
@@ -26,7 +29,10 @@ Trial 1 learns on the lines trial 0 tells about (those of the desired trajectory
 the Hammerstein model's). Trial 2 is the probe trial: the best drive so far plus a small
 multisine of random phases, PROBE_SNR times the noise level per line, on the lines
 nothing is known about yet (between DC and ``bandwidth_hz``), and nothing else, so that
-the change it measures is the probe's alone; from trial 3 on the law learns there too. A
+the change it measures is the probe's alone; from trial 3 on the law learns there too.
+Where what the model misses is large, it moves with every change of the drive and hides
+a probe that small: trial 6 probes again the lines still untrusted whose error is above
+PROBE_SNR times the noise level, each with its error's amplitude. A
 learning trial whose RMS error is above the best so far is undone (the next update starts
 again from the best) and the gain halved; a probe trial that is worse is undone, the
 gain kept (it learned nothing). The learning stops after ``trials`` trials, when the
@@ -48,6 +54,9 @@ MIN_GAIN = 0.1            # lines where |G_k| < MIN_GAIN * |G_0| are not learned
 MIN_LEARNING_GAIN = 1 / 16
 PROBE_SNR = 8.0
 PROBE_TRIAL = 2           # trial 1 learns what trial 0 tells; trial 2 probes
+SECOND_PROBE_TRIAL = 6    # probes again where the error stays large and nothing is known
+LINE_GROWTH_NOISE = 3.0   # a line's error grew: by more than this many noise levels
+MIN_LINE_GAIN = 1 / 8     # a line whose gain fell below this is no longer learned
 SIGMA_FLOOR = 1e-6        # of the desired trajectory's standard deviation
 
 
@@ -167,16 +176,14 @@ def _start(parts, desired, G_model, model_lines, lo, hi, max_step):
     return periodic_inverse(parts, np.fft.irfft(R, desired.size), lo, hi, max_step)
 
 
-def _probe(lines, sigma, static_gain, rng):
-    """The probe's spectrum: PROBE_SNR times the noise level sqrt(N) sigma per line (in
-    the hysteresis output, through the static gain), random phases, on ``lines`` (never
-    on DC nor the Nyquist line, whose phase is not free)."""
+def _probe(lines, amplitude, static_gain, rng):
+    """The probe's spectrum on ``lines`` (never on DC nor the Nyquist line, whose phase is
+    not free): ``amplitude`` per line (the output's, um in rfft units) through the static
+    gain into the hysteresis output, random phases."""
     lines = lines.copy()
-    lines[0] = False
-    n = 2 * (lines.size - 1)
-    lines[-1] = False
-    amplitude = PROBE_SNR * np.sqrt(n) * sigma / static_gain
-    return np.where(lines, amplitude * np.exp(2j * np.pi * rng.random(lines.size)), 0.0)
+    lines[0] = lines[-1] = False
+    return np.where(lines, amplitude / static_gain * np.exp(2j * np.pi * rng.random(lines.size)),
+                    0.0)
 
 
 def _model_lines(G_model, n, sample_period):
@@ -261,6 +268,7 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
     best = 0
     accepted, gains, learned = [True], [np.nan], [0]
     gamma, reason, converged = 1.0, None, False
+    line_gain = np.ones(R.size)
     G, trusted = None, None
     for j in range(1, int(trials) + 1):
         if tolerance is not None and trial[best].rms <= tolerance:
@@ -283,20 +291,34 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
         H_b = np.fft.rfft(parts.hysteresis_output(b.voltage))
         untrusted = ~Q & in_band
         untrusted[0] = False
-        if j == PROBE_TRIAL and np.any(untrusted[1:-1]) and static_gain > 0:
-            # the probe trial: the best drive plus the probe, nothing learned
-            kind, probe = "probe", _probe(untrusted, sigma, static_gain, rng)
+        E = R - np.fft.rfft(b.displacement)
+        noise_line = np.sqrt(n) * sigma
+        if j == PROBE_TRIAL:
+            lines, amplitude = untrusted, PROBE_SNR * noise_line
+        elif j == SECOND_PROBE_TRIAL:
+            lines = untrusted & (np.abs(E) > PROBE_SNR * noise_line)
+            amplitude = np.abs(E)
+        else:
+            lines = None
+        if lines is not None and np.any(lines[1:-1]) and static_gain > 0:
+            # a probe trial: the best drive plus the probe, nothing learned
+            kind, probe = "probe", _probe(lines, amplitude, static_gain, rng)
             H_next = H_b + probe
         else:
             # the learning law; the best trial's probe leaves the lines not learned
             kind, probe = "learn", np.zeros(R.size, dtype=complex)
-            E = R - np.fft.rfft(b.displacement)
-            H_next = (H_b + gamma * np.where(Q, E / np.where(Q, G, 1.0), 0.0)
+            Q = Q & (line_gain >= MIN_LINE_GAIN)
+            H_next = (H_b + gamma * np.where(Q, line_gain * E / np.where(Q, G, 1.0), 0.0)
                       - np.where(Q, 0.0, b.probe))
         u, y = play(periodic_inverse(parts, np.fft.irfft(H_next, n), lo, hi, max_step))
         sigma = min(noise_sigma(y, sigma_floor), estimate.sigma)
         estimate.add(parts.hysteresis_output(u), y, sigma, parent=best)
         trial.append(_Trial(_rms(y - desired), u, y, probe, kind))
+        if kind == "learn":
+            # a line whose error grew when learned is learned with half its gain next
+            E_new = R - np.fft.rfft(y)
+            grew = Q & (np.abs(E_new) > np.abs(E) + LINE_GROWTH_NOISE * np.sqrt(n) * sigma)
+            line_gain[grew] /= 2
         gains.append(gamma if kind == "learn" else np.nan)
         learned.append(int(np.count_nonzero(Q)) if kind == "learn" else 0)
         accepted.append(trial[-1].rms <= b.rms)
