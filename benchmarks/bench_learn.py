@@ -6,6 +6,9 @@ tick of converter delay, a 20 kHz clock, 0.005 um sensor noise; pihyst.sim.make_
 and per scan rate (1, 10, 50, 100 Hz and fmode/8): a band-limited triangle (harmonics
 below fmode/2) over 80 % of the stage's range, tracked with
 
+The scan covers 80 % of the range the stage reaches at that rate (driven 0-150 V by the
+same band-limited triangle, settled; with creep that is less than the settled loop).
+
 - the static inverse: the default ``pihyst.fit`` model (fitted with creep on a slow
   record, 1 s decaying triangles at 200 Hz) inverted exactly, played periodically
   (the learning's trial 0);
@@ -23,9 +26,10 @@ the static inverse at 100 Hz; every voltage within the limits. The learning was 
 the paper-beam stage (800 Hz, 4 %) and, for the second probe, on the s-shaped stage at
 10 Hz; the lens and remanent stages, and the random stages of --fresh (hysteresis and
 creep of ``random_plant(seed)``, one or two modes drawn from 500 Hz - 2 kHz and 1 - 10 %
-damping), are held out.
+damping; their hysteresis scaled to the issue's stages' 45 um range unless --unscaled),
+are held out.
 
-Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]]
+Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates)
 """
@@ -47,6 +51,7 @@ CLOCK_HZ = 20_000.0
 NOISE_UM = 0.005
 U_MIN, U_MAX = 0.0, 150.0
 TRIALS = 10
+RANDOM_RANGE_UM = 45.0
 #: (label, beam, modes, seed, tuned on)
 STAGES = [
     ("paper-beam 800 Hz 4 %", "paper-beam", ((800.0, 0.04),), 11, True),
@@ -57,23 +62,41 @@ STAGES = [
 ]
 
 
-def named_stage(name, modes, seed, rate_hz=CLOCK_HZ):
+def named_stage(name, modes, seed, rate_hz=CLOCK_HZ, noise=True):
     return make_stage(name, modes=modes, rate_hz=rate_hz, delay_samples=1,
-                      noise_um=NOISE_UM, seed=seed)
+                      noise_um=NOISE_UM if noise else 0.0, seed=seed)
 
 
-def random_stage(seed, rate_hz=CLOCK_HZ):
-    """The hysteresis and creep of random_plant(seed), then one or two modes from
-    500 Hz - 2 kHz with 1 - 10 % damping (log-uniform), at the benchmark's clock."""
+class ScaledHysteresis:
+    """A hysteresis model's output times ``gain`` (the same loop shape, another range)."""
+
+    def __init__(self, hysteresis, gain):
+        self.hysteresis, self.gain, self.u_max = hysteresis, float(gain), hysteresis.u_max
+
+    def reset(self):
+        self.hysteresis.reset()
+
+    def run(self, u):
+        return self.gain * self.hysteresis.run(u)
+
+
+def random_stage(seed, rate_hz=CLOCK_HZ, range_um=RANDOM_RANGE_UM, noise=True):
+    """The hysteresis (scaled to a ``range_um`` rise from 0 V to 150 V, the issue's
+    stages' range; None: as drawn) and creep of random_plant(seed), then one or two modes
+    from 500 Hz - 2 kHz with 1 - 10 % damping (log-uniform), at the benchmark's clock."""
     plant, d = random_plant(seed)
+    hysteresis = plant.hysteresis
+    if range_um is not None:
+        hysteresis = ScaledHysteresis(hysteresis, range_um / d["range_um"])
     rng = np.random.default_rng([0xBE7C, seed])
     f1 = float(10 ** rng.uniform(np.log10(500.0), np.log10(2000.0)))
     modes = [(f1, float(10 ** rng.uniform(-2, -1)), 1.0)]
     if rng.random() < 0.5:
         modes = [(f1, modes[0][1], 0.8), (f1 * float(rng.uniform(1.5, 4.0)),
                                           float(10 ** rng.uniform(-2, -1)), 0.2)]
-    return Stage(f"random-{seed}", plant.hysteresis, modes=modes, rate_hz=rate_hz,
-                 delay_samples=1, creep_per_decade=d["creep_per_decade"], noise_um=NOISE_UM,
+    return Stage(f"random-{seed}", hysteresis, modes=modes, rate_hz=rate_hz,
+                 delay_samples=1, creep_per_decade=d["creep_per_decade"],
+                 noise_um=NOISE_UM if noise else 0.0,
                  quantum_V=0.01, seed=seed), modes
 
 
@@ -85,10 +108,17 @@ def fitted_model(make):
     return pihyst.fit(u, stage.run(u), t=t).model
 
 
-def scan(model, rate_hz, fmode):
-    """One period of the band-limited triangle over 80 % of the model's range."""
-    rise = model.replace(creep=None).predict(np.linspace(U_MIN, U_MAX, 301))
-    lo, hi = float(rise[0]), float(rise[-1])
+def scan(make, rate_hz, fmode):
+    """One period of the band-limited triangle over 80 % of the stage's range at that
+    scan: the span a settled, noise-free copy of the stage covers when driven 0-150 V by
+    the same band-limited triangle (the slow creep then sits at the scan's mean, so the
+    range is less than the settled loop's)."""
+    stage = make(CLOCK_HZ, noise=False)
+    _, drive = band_limited_triangle(U_MIN, U_MAX, period_s=1 / rate_hz, max_hz=fmode / 2,
+                                     dt=1 / CLOCK_HZ)
+    stage.settle_on(drive)
+    y = stage.run_periodic(drive)
+    lo, hi = float(y.min()), float(y.max())
     span = hi - lo
     _, desired = band_limited_triangle(lo + 0.1 * span, lo + 0.9 * span, period_s=1 / rate_hz,
                                        max_hz=fmode / 2, dt=1 / CLOCK_HZ)
@@ -115,7 +145,7 @@ def run_stage(make, fmode, rates):
     model = fitted_model(make)
     rows = []
     for rate in rates:
-        desired = scan(model, rate, fmode)
+        desired = scan(make, rate, fmode)
         stage = make(CLOCK_HZ)
         player = CheckedStage(stage)
         t0 = time.perf_counter()
@@ -137,7 +167,8 @@ def main():
           f"{NOISE_UM} um RMS (3 x = {3 * NOISE_UM:.3f} um); RMS errors in um; "
           f"'replay': the learned voltages played again")
     checks = []
-    args = [a for a in sys.argv[1:] if a != "--quick"]
+    scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
+    args = [a for a in sys.argv[1:] if a not in ("--quick", "--unscaled")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -146,11 +177,11 @@ def main():
             modes = random_stage(seed)[1]
             label = f"random {seed}: " + " + ".join(f"{m[0]:.0f} Hz {100 * m[1]:.1f} %"
                                                     for m in modes)
-            stages.append((label, lambda r, seed=seed: random_stage(seed, r)[0], modes, seed,
-                           False))
+            stages.append((label, lambda r, noise=True, seed=seed: random_stage(
+                seed, r, scale, noise)[0], modes, seed, False))
     else:
-        stages = [(label, lambda r, name=name, modes=modes, seed=seed: named_stage(
-            name, modes, seed if r == CLOCK_HZ else seed + 100, r), modes, seed, tuned)
+        stages = [(label, lambda r, noise=True, name=name, modes=modes, seed=seed: named_stage(
+            name, modes, seed if r == CLOCK_HZ else seed + 100, r, noise), modes, seed, tuned)
                   for label, name, modes, seed, tuned in STAGES]
     for label, make, modes, seed, tuned in stages:
         fmode = modes[0][0]
