@@ -32,13 +32,12 @@ nothing is known about yet (between DC and ``bandwidth_hz``), and nothing else, 
 the change it measures is the probe's alone; from trial 3 on the law learns there too.
 Where what the model misses is large, it moves with every change of the drive and hides
 a probe that small: trial 6 probes again the lines still untrusted whose error is above
-PROBE_SNR times the noise level, each with its error's amplitude. A
-learning trial whose RMS error is above the best so far is undone (the next update starts
-again from the best) and the gain halved; a probe trial that is worse is undone, the
-gain kept (it learned nothing). The learning stops after ``trials`` trials, when the
-gain falls below MIN_LEARNING_GAIN (no
-trial improves any more: the error is at what the noise and the robustness filter
-allow), or when the error is at ``tolerance``.
+PROBE_SNR times the noise level, each with its error's amplitude. A learning trial whose
+RMS error is above the best so far is undone (the next update starts again from the
+best) and the gain halved; a probe trial that is worse is undone, the gain kept (it
+learned nothing). The learning stops after ``trials`` trials, when the gain falls below
+MIN_LEARNING_GAIN (no trial improves any more: the error is at what the noise and the
+robustness filter allow), or when the error is at ``tolerance``.
 """
 
 from dataclasses import dataclass, field
@@ -50,7 +49,7 @@ from pihyst.learn._feasible import feasible_periodic
 from pihyst.learn._model_parts import model_parts, periodic_inverse
 from pihyst.learn._response import ResponseEstimate, noise_sigma
 
-MIN_GAIN = 0.1            # lines where |G_k| < MIN_GAIN * |G_0| are not learned
+MIN_GAIN = 0.1            # lines where |G_k| < MIN_GAIN * the static gain are not learned
 MIN_LEARNING_GAIN = 1 / 16
 PROBE_SNR = 8.0
 PROBE_TRIAL = 2           # trial 1 learns what trial 0 tells; trial 2 probes
@@ -182,11 +181,37 @@ def _probe(lines, amplitude, static_gain, rng):
     gain into the hysteresis output, random phases."""
     lines = lines.copy()
     lines[0] = lines[-1] = False
-    return np.where(lines, amplitude / static_gain * np.exp(2j * np.pi * rng.random(lines.size)),
-                    0.0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        size = amplitude / static_gain
+        return np.where(lines, size * np.exp(2j * np.pi * rng.random(lines.size)), 0.0)
 
 
-def _model_lines(G_model, n, sample_period):
+def learning_law(H_best, E_best, G, Q, gain, probe_best):
+    """The next hysteresis target's spectrum (module notes):
+
+        H_{j+1,k} = H_{b,k} + gain_k Q_k E_{b,k} / G_k - (1 - Q_k) P_{b,k},
+
+    gain_k = gamma g_k, E_b = R - Y_b the best trial's error and P_b the probe its drive
+    still carries, taken out where the law does not learn. A step that overflows (a plant
+    that hardly responds) is not finite; the drive made of it is then made feasible
+    like any other (:func:`pihyst.learn.feasible_periodic`)."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        step = np.where(Q, gain * E_best / np.where(Q, G, 1.0), 0.0)
+    return H_best + step - np.where(Q, 0.0, probe_best)
+
+
+def _probe_lines(trial, untrusted, E, noise_line):
+    """(lines, amplitude per line) of the probe trial ``trial`` is, or (None, None):
+    trial PROBE_TRIAL on every untrusted line at PROBE_SNR noise levels; trial
+    SECOND_PROBE_TRIAL on the untrusted lines whose error is above that, at its error."""
+    if trial == PROBE_TRIAL:
+        return untrusted, PROBE_SNR * noise_line
+    if trial == SECOND_PROBE_TRIAL:
+        return untrusted & (np.abs(E) > PROBE_SNR * noise_line), np.abs(E)
+    return None, None
+
+
+def _model_lines(G_model):
     """Lines where the Hammerstein model's response is trusted before any measurement:
     below half the frequency of its largest gain when that is a resonance (> 1.5 times
     the static gain), else all of them."""
@@ -247,7 +272,7 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
     freqs = np.fft.rfftfreq(n, sample_period)
     in_band = np.ones(freqs.size, dtype=bool) if bandwidth_hz is None else freqs <= bandwidth_hz
     G_model = parts.response(n)
-    model_lines = _model_lines(G_model, n, sample_period)
+    model_lines = _model_lines(G_model)
     R = np.fft.rfft(desired)
     sigma_floor = SIGMA_FLOOR * max(float(np.std(desired)), 1e-12)
     rng = np.random.default_rng(seed)
@@ -293,13 +318,7 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
         untrusted[0] = False
         E = R - np.fft.rfft(b.displacement)
         noise_line = np.sqrt(n) * sigma
-        if j == PROBE_TRIAL:
-            lines, amplitude = untrusted, PROBE_SNR * noise_line
-        elif j == SECOND_PROBE_TRIAL:
-            lines = untrusted & (np.abs(E) > PROBE_SNR * noise_line)
-            amplitude = np.abs(E)
-        else:
-            lines = None
+        lines, amplitude = _probe_lines(j, untrusted, E, noise_line)
         if lines is not None and np.any(lines[1:-1]) and static_gain > 0:
             # a probe trial: the best drive plus the probe, nothing learned
             kind, probe = "probe", _probe(lines, amplitude, static_gain, rng)
@@ -308,8 +327,7 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
             # the learning law; the best trial's probe leaves the lines not learned
             kind, probe = "learn", np.zeros(R.size, dtype=complex)
             Q = Q & (line_gain >= MIN_LINE_GAIN)
-            H_next = (H_b + gamma * np.where(Q, line_gain * E / np.where(Q, G, 1.0), 0.0)
-                      - np.where(Q, 0.0, b.probe))
+            H_next = learning_law(H_b, E, G, Q, gamma * line_gain, b.probe)
         u, y = play(periodic_inverse(parts, np.fft.irfft(H_next, n), lo, hi, max_step))
         sigma = min(noise_sigma(y, sigma_floor), estimate.sigma)
         estimate.add(parts.hysteresis_output(u), y, sigma, parent=best)

@@ -87,7 +87,7 @@ class ResponseEstimate:
         dH = np.array([H[j] - H[p] for j, p in pairs]).reshape(-1, H.shape[1])
         dY = np.array([Y[j] - Y[p] for j, p in pairs]).reshape(-1, H.shape[1])
         spread = np.sum(np.abs(dH) ** 2, axis=0)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             g_origin = np.sum(np.conj(H) * Y, axis=0) / through_origin
             rel_origin = np.sqrt(noise_var / through_origin) / np.abs(g_origin)
             g_local = np.sum(np.conj(dH) * dY, axis=0) / spread
@@ -117,7 +117,9 @@ class ResponseEstimate:
         H = np.array([h[lines[0]] for h in self._H])
         Y = np.array([y[lines[0]] for y in self._Y])
         energy = float(np.sum(np.abs(H) ** 2))
-        return float(abs(np.sum(np.conj(H) * Y)) / energy) if energy > 0 else 1.0
+        with np.errstate(over="ignore", invalid="ignore"):
+            gain = float(abs(np.sum(np.conj(H) * Y)) / energy) if energy > 0 else 1.0
+        return gain if np.isfinite(gain) else 1.0
 
     def trusted(self, rel):
         return rel <= TRUST_REL_STD
