@@ -6,12 +6,9 @@ h_j = H[u_j] the static model's hysteresis output, R, Y_j, H_j the rfft's of the
 period, the measured one and h_j, and G_k the response on line k (:mod:`._response`), the
 next hysteresis target is
 
-    H_{j+1,k} = H_{b,k} + gamma g_k Q_k (R_k - Y_{b,k}) / G_k,      (learning law)
+    H_{j+1,k} = H_{b,k} + gamma Q_k (R_k - Y_{b,k}) / G_k,          (learning law)
 
-b the best trial so far, gamma the learning gain (1 at first), g_k a gain per line (1 at
-first; halved each time the line's error grew by more than LINE_GROWTH_NOISE noise levels
-in a trial that learned it, and the line no longer learned once g_k < MIN_LINE_GAIN:
-an estimate biased by what the model misses shows itself so), Q_k the robustness filter:
+b the best trial so far, gamma the learning gain (1 at first), Q_k the robustness filter:
 1 on the lines whose G_k is trusted (measured to ``TRUST_REL_STD``, or the Hammerstein
 model's below half its resonance before a measurement there), with |G_k| at least
 ``MIN_GAIN`` of the static gain and f_k within ``bandwidth_hz``; 0 elsewhere. The
@@ -54,8 +51,6 @@ MIN_LEARNING_GAIN = 1 / 16
 PROBE_SNR = 8.0
 PROBE_TRIAL = 2           # trial 1 learns what trial 0 tells; trial 2 probes
 SECOND_PROBE_TRIAL = 6    # probes again where the error stays large and nothing is known
-LINE_GROWTH_NOISE = 3.0   # a line's error grew: by more than this many noise levels
-MIN_LINE_GAIN = 1 / 8     # a line whose gain fell below this is no longer learned
 SIGMA_FLOOR = 1e-6        # of the desired trajectory's standard deviation
 
 
@@ -186,17 +181,17 @@ def _probe(lines, amplitude, static_gain, rng):
         return np.where(lines, size * np.exp(2j * np.pi * rng.random(lines.size)), 0.0)
 
 
-def learning_law(H_best, E_best, G, Q, gain, probe_best):
+def learning_law(H_best, E_best, G, Q, gamma, probe_best):
     """The next hysteresis target's spectrum (module notes):
 
-        H_{j+1,k} = H_{b,k} + gain_k Q_k E_{b,k} / G_k - (1 - Q_k) P_{b,k},
+        H_{j+1,k} = H_{b,k} + gamma Q_k E_{b,k} / G_k - (1 - Q_k) P_{b,k},
 
-    gain_k = gamma g_k, E_b = R - Y_b the best trial's error and P_b the probe its drive
-    still carries, taken out where the law does not learn. A step that overflows (a plant
+    E_b = R - Y_b the best trial's error and P_b the probe its drive still carries, taken
+    out where the law does not learn. A step that overflows (a plant
     that hardly responds) is not finite; the drive made of it is then made feasible
     like any other (:func:`pihyst.learn.feasible_periodic`)."""
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        step = np.where(Q, gain * E_best / np.where(Q, G, 1.0), 0.0)
+        step = np.where(Q, gamma * E_best / np.where(Q, G, 1.0), 0.0)
     return H_best + step - np.where(Q, 0.0, probe_best)
 
 
@@ -293,7 +288,6 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
     best = 0
     accepted, gains, learned = [True], [np.nan], [0]
     gamma, reason, converged = 1.0, None, False
-    line_gain = np.ones(R.size)
     G, trusted = None, None
     for j in range(1, int(trials) + 1):
         if tolerance is not None and trial[best].rms <= tolerance:
@@ -326,17 +320,11 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
         else:
             # the learning law; the best trial's probe leaves the lines not learned
             kind, probe = "learn", np.zeros(R.size, dtype=complex)
-            Q = Q & (line_gain >= MIN_LINE_GAIN)
-            H_next = learning_law(H_b, E, G, Q, gamma * line_gain, b.probe)
+            H_next = learning_law(H_b, E, G, Q, gamma, b.probe)
         u, y = play(periodic_inverse(parts, np.fft.irfft(H_next, n), lo, hi, max_step))
         sigma = min(noise_sigma(y, sigma_floor), estimate.sigma)
         estimate.add(parts.hysteresis_output(u), y, sigma, parent=best)
         trial.append(_Trial(_rms(y - desired), u, y, probe, kind))
-        if kind == "learn":
-            # a line whose error grew when learned is learned with half its gain next
-            E_new = R - np.fft.rfft(y)
-            grew = Q & (np.abs(E_new) > np.abs(E) + LINE_GROWTH_NOISE * np.sqrt(n) * sigma)
-            line_gain[grew] /= 2
         gains.append(gamma if kind == "learn" else np.nan)
         learned.append(int(np.count_nonzero(Q)) if kind == "learn" else 0)
         accepted.append(trial[-1].rms <= b.rms)
