@@ -46,6 +46,14 @@ BEAM_RESONANCE_HZ = 54.0
 BEAM_DAMPING = 0.02
 
 
+def check_finite(values, what):
+    """InvalidArgumentError naming the first sample of ``values`` that is not finite."""
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InvalidArgumentError(f"sample {bad[0]}: {what} {values[bad[0]]} is not a "
+                                   f"finite number")
+
+
 class Plant:
     """A simulated piezo beam; build one with :func:`make_plant`.
 
@@ -120,11 +128,8 @@ class Plant:
         if u.ndim != 1 or t.shape != u.shape:
             raise InvalidArgumentError(f"u and t must be one-dimensional and of equal length, got "
                              f"shapes {u.shape} and {t.shape}")
-        for arr, what in ((u, "voltage"), (t, "time")):
-            bad = np.flatnonzero(~np.isfinite(arr))
-            if bad.size:
-                raise InvalidArgumentError(f"sample {bad[0]}: {what} {arr[bad[0]]} is not a "
-                                           f"finite number")
+        check_finite(u, "voltage")
+        check_finite(t, "time")
         if u.size == 0:
             return np.empty(0)
         back = np.flatnonzero(np.diff(t) < 0)

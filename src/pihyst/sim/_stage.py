@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from pihyst.exceptions import InvalidArgumentError
-from pihyst.sim._plant import Plant
+from pihyst.sim._plant import Plant, check_finite
 
 
 class Stage(Plant):
@@ -144,10 +144,7 @@ class Stage(Plant):
                                        f"must be the next {u.size} ticks from {ticks[:1]} s")
         if u.ndim != 1:
             raise InvalidArgumentError(f"u must be one-dimensional, got shape {u.shape}")
-        bad = np.flatnonzero(~np.isfinite(u))
-        if bad.size:
-            raise InvalidArgumentError(f"sample {bad[0]}: voltage {u[bad[0]]} is not a finite "
-                                       f"number")
+        check_finite(u, "voltage")      # before the converter holds it
         if u.size == 0:
             return np.empty(0)
         y = super().run(self._amplified(u), ticks)
