@@ -6,9 +6,10 @@ period) the periodic drive u[0..N-1] is feasible when
 
     lo <= u[n] <= hi   and   |u[n] - u[(n - 1) mod N]| <= s   for every n.
 
-:func:`feasible_periodic` makes any drive feasible: clipped to the limits, then through a
-rate limiter v[n] = v[n-1] + clip(u[n] - v[n-1], -s, s) run round the cycle until it
-repeats (it settles once it meets the drive, and the drive is periodic); if a cycle
+:func:`feasible_periodic` makes any drive feasible: clipped to the limits (a NaN counts
+as lo), then through a rate limiter v[n] = v[n-1] + clip(u[n] - v[n-1], -s, s) run round
+the cycle until it repeats (it settles once it meets the drive, and the drive is
+periodic); if a cycle
 still does not close within s, the drive is shrunk towards its mean,
 v = m + a (v - m) with a = s / max_n |v[n] - v[n-1]|, which keeps it within the limits
 (a convex combination of values within them) and closes every step within s.
