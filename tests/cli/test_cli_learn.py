@@ -42,3 +42,28 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, capsys, monkeypatch, optio
     assert main(["learn", *options, "-o", str(out)]) == 2
     assert expected in error_line(capsys)
     assert not out.exists()
+
+
+def test_learn_a_desired_period_from_a_file_with_a_model(tmp_path, capsys):
+    """A period given with its times is resampled at the clock; a model file starts it."""
+    desired, model, out = (tmp_path / n for n in ("period.csv", "model.json", "run.csv"))
+    t = np.arange(50) * 2e-4                               # 100 Hz, 50 points
+    y = 22 - 15 * np.cos(2 * np.pi * 100 * t)
+    desired.write_text("time_s,displacement_um\n"
+                       + "".join(f"{a:.6g},{b:.6f}\n" for a, b in zip(t, y)))
+    model.write_text('{"family": "classical", "thresholds": [0, 10, 30], '
+                     '"weights": [0.22, 0.06, 0.03]}')
+    assert main(["learn", "--model", str(model), "--desired", str(desired), "--trials", "3",
+                 "-o", str(out)]) == 0
+    data, _ = read_columns(out, ["trial", "time_s", "desired_um"])
+    first = data["trial"] == 0
+    assert first.sum() == 200                              # 10 ms at 20 kHz
+    np.testing.assert_allclose(data["desired_um"][first][::4], y, atol=1e-6)
+    assert "trial   3" in capsys.readouterr().out
+
+
+def test_a_period_too_short_is_one_line(tmp_path, capsys):
+    desired = tmp_path / "period.csv"
+    desired.write_text("displacement_um\n1\n2\n")
+    assert main(["learn", "--desired", str(desired), "-o", str(tmp_path / "o.csv")]) == 2
+    assert "2 samples in the period; need 4" in error_line(capsys)
