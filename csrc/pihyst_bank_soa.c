@@ -260,9 +260,9 @@ typedef real vlane __attribute__((vector_size(L * sizeof(real))));
         }                                                    \
     } while (0)
 
-static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *restrict ops, int cur,
-                                        const real *restrict yt_in,
-                          real *restrict u_out)
+static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *PIHYST_RESTRICT ops, int cur,
+                                        const real *PIHYST_RESTRICT yt_in,
+                          real *PIHYST_RESTRICT u_out)
 {
     vlane yt, s0 = {RC(0.0)}, s1 = {RC(0.0)}, s2 = {RC(0.0)}, s3 = {RC(0.0)}, u;
     vlane *v = (vlane *)__builtin_assume_aligned(ops, 64);
@@ -287,9 +287,9 @@ static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *restrict ops, int cu
     memcpy(u_out, &u, sizeof u);
 }
 #else
-static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *restrict ops, int cur,
-                                        const real *restrict yt,
-                          real *restrict u_out)
+static PIHYST_INLINE void inverse_lanes(size_t n_ops, real *PIHYST_RESTRICT ops, int cur,
+                                        const real *PIHYST_RESTRICT yt,
+                          real *PIHYST_RESTRICT u_out)
 {
     real s[4][L];
     size_t k, l, q;
@@ -341,8 +341,8 @@ static pihyst_flags exact_step(pihyst_compbank *b, real *grp, size_t i, size_t l
  * limits and slew limit; its u_last and y_last are updated. exact[l] = 1 marks the lanes
  * left for the exact path (exact-mode and padding lanes, and fast lanes out of bounds). */
 PIHYST_HOT
-static void group_tick(size_t n_ops, real *restrict grp, int cur, const real *restrict yd,
-                       real *restrict uo, real *restrict yo, real *restrict exact)
+static void group_tick(size_t n_ops, real *PIHYST_RESTRICT grp, int cur, const real *PIHYST_RESTRICT yd,
+                       real *PIHYST_RESTRICT uo, real *PIHYST_RESTRICT yo, real *PIHYST_RESTRICT exact)
 {
     real yt[L], ug[L];
     size_t l;

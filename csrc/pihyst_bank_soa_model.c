@@ -97,8 +97,8 @@ typedef real vlane __attribute__((vector_size(L * sizeof(real))));
  * model's v < h ? v : h, v > l ? v : l per lane, and the sum its tree (see above),
  * written as the same expression of products so that it contracts alike */
 PIHYST_HOT
-static void model_lanes(real *restrict ops, const real *restrict u_in,
-                        const real *restrict offset_in, real *restrict y_out)
+static void model_lanes(real *PIHYST_RESTRICT ops, const real *PIHYST_RESTRICT u_in,
+                        const real *PIHYST_RESTRICT offset_in, real *PIHYST_RESTRICT y_out)
 {
     vlane *v = (vlane *)__builtin_assume_aligned(ops, 64);
     vlane u, off, s0, s1, s2, s3, y;

@@ -237,7 +237,7 @@ static PIHYST_INLINE int walk_classical(const pihyst_model *m, int up, real base
                                         real q_p, real target, real span, real *d_out)
 {
     const size_t K = m->n_ops;
-    const real *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
+    const real *PIHYST_RESTRICT w = m->weights, *PIHYST_RESTRICT r = m->coef + K, *PIHYST_RESTRICT f = m->state;
     const real sign = up ? RC(1.0) : -RC(1.0), v = sign * base;
     real z = RC(0.0), d0 = RC(0.0), s = slope[0], e = *ahead;
     size_t k = next[0];
@@ -321,8 +321,8 @@ PIHYST_HOT
 static int collect_classical(const pihyst_model *m, int up, real u_p, events *e)
 {
     const size_t K = m->n_ops;
-    const real *restrict w = m->weights, *restrict r = m->coef + K, *restrict f = m->state;
-    real *restrict ad = e->ad, *restrict as = e->as;
+    const real *PIHYST_RESTRICT w = m->weights, *PIHYST_RESTRICT r = m->coef + K, *PIHYST_RESTRICT f = m->state;
+    real *PIHYST_RESTRICT ad = e->ad, *PIHYST_RESTRICT as = e->as;
     size_t k;
     if (up) {
         for (k = 0; k < K; ++k) {
@@ -358,12 +358,12 @@ static int collect_multislope(const pihyst_model *m, const real *kinks, int up,
     const size_t K = m->n_ops;
     const real a_ = m->shape.a, ba = m->shape.b - m->shape.a;
     const real ia = RC(1.0) / a_, ib = RC(1.0) / m->shape.b;
-    const real *restrict w = m->weights, *restrict f = m->state, *restrict c = m->coef;
-    real *restrict ad = e->ad, *restrict as = e->as, *restrict bd = e->bd,
-                     *restrict bs = e->bs;
+    const real *PIHYST_RESTRICT w = m->weights, *PIHYST_RESTRICT f = m->state, *PIHYST_RESTRICT c = m->coef;
+    real *PIHYST_RESTRICT ad = e->ad, *PIHYST_RESTRICT as = e->as, *PIHYST_RESTRICT bd = e->bd,
+                     *PIHYST_RESTRICT bs = e->bs;
     size_t k;
     if (up) {
-        const real *restrict kr = kinks;
+        const real *PIHYST_RESTRICT kr = kinks;
         for (k = 0; k < K; ++k) {
             /* R(u) = max(a u + c1, b u + c2) >= f  <=>  u >= min((f - c1)/a, (f - c2)/b) */
             const real x1 = (f[k] - c[k]) * ia, x2 = (f[k] - c[K + k]) * ib;
@@ -372,7 +372,7 @@ static int collect_multislope(const pihyst_model *m, const real *kinks, int up,
             bd[k] = (kr[k] > xt ? kr[k] : xt) - u_p;
         }
     } else {
-        const real *restrict kf = kinks + K;
+        const real *PIHYST_RESTRICT kf = kinks + K;
         for (k = 0; k < K; ++k) {
             /* F(u) = min(b u, a u + c3) <= f  <=>  u <= max(f/b, (f - c3)/a) */
             const real x1 = f[k] * ib, x2 = (f[k] - c[2 * K + k]) * ia;
@@ -604,11 +604,11 @@ static void ramps_init(pihyst_compensator *c)
 /* lo, hi of (R1) going up from u_p: crossing c = x1 + (f - y1) dx/dy of the rising ramp,
  * from x1 on (f <= y1: the ramp's start), joined at u_p if already passed */
 PIHYST_HOT
-static void ramps_reverse_up(size_t K, const real *restrict x1, const real *restrict x2,
-                             const real *restrict y1, const real *restrict y2,
-                             const real *restrict inv, const real *restrict s,
-                             const real *restrict f, real u_p, real *restrict lo,
-                             real *restrict hi)
+static void ramps_reverse_up(size_t K, const real *PIHYST_RESTRICT x1, const real *PIHYST_RESTRICT x2,
+                             const real *PIHYST_RESTRICT y1, const real *PIHYST_RESTRICT y2,
+                             const real *PIHYST_RESTRICT inv, const real *PIHYST_RESTRICT s,
+                             const real *PIHYST_RESTRICT f, real u_p, real *PIHYST_RESTRICT lo,
+                             real *PIHYST_RESTRICT hi)
 {
     size_t k;
     for (k = 0; k < K; ++k) {
@@ -624,10 +624,10 @@ static void ramps_reverse_up(size_t K, const real *restrict x1, const real *rest
 
 /* going down, in p = -u: the falling ramp's crossing (up to x2), down to x1 */
 PIHYST_HOT
-static void ramps_reverse_down(size_t K, const real *restrict x1, const real *restrict x2,
-                               const real *restrict y1, const real *restrict inv,
-                               const real *restrict s, const real *restrict f, real u_p,
-                               real *restrict lo, real *restrict hi)
+static void ramps_reverse_down(size_t K, const real *PIHYST_RESTRICT x1, const real *PIHYST_RESTRICT x2,
+                               const real *PIHYST_RESTRICT y1, const real *PIHYST_RESTRICT inv,
+                               const real *PIHYST_RESTRICT s, const real *PIHYST_RESTRICT f, real u_p,
+                               real *PIHYST_RESTRICT lo, real *PIHYST_RESTRICT hi)
 {
     size_t k;
     for (k = 0; k < K; ++k) {
@@ -695,8 +695,8 @@ typedef real rvec __attribute__((vector_size(RAMP_LANES * sizeof(real))));
 #endif
 
 /* z(m) - z(q) and the rest of ramp_probe (with `full`), in RAMP_LANES partial results */
-static PIHYST_INLINE void probe(size_t K, const real *restrict lo, const real *restrict hi,
-                                const real *restrict s, real m, real q, int full,
+static PIHYST_INLINE void probe(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
+                                const real *PIHYST_RESTRICT s, real m, real q, int full,
                                 ramp_probe *r)
 {
 #ifdef RAMP_VECTOR
@@ -736,8 +736,9 @@ static PIHYST_INLINE void probe(size_t K, const real *restrict lo, const real *r
         k += RAMP_LANES;
     }
 #else
-    for (; k + RAMP_LANES <= K; k += RAMP_LANES)
-        for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(k + j, j);
+    /* one lane: on a scalar FPU the lanes' partial results do not fit in its registers
+     * (5 x RAMP_LANES of them), and spilling them cost more than the dependency chain
+     * (bench-m4f: a KP jump of K = 134 took 83,000 instructions in lanes, 71,000 so) */
     for (; k < K; ++k) RAMP_PROBE_TERM(k, 0);
 #endif
     r->z = z[0];
@@ -757,15 +758,15 @@ static PIHYST_INLINE void probe(size_t K, const real *restrict lo, const real *r
 
 /* a probe from the left (tracking): z, right, next; left = 0, prev = -inf */
 PIHYST_HOT
-static void ramps_probe_right(size_t K, const real *restrict lo, const real *restrict hi,
-                              const real *restrict s, real m, real q, ramp_probe *r)
+static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
+                              const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
 {
     probe(K, lo, hi, s, m, q, 0, r);
 }
 
 PIHYST_HOT
-static void ramps_probe(size_t K, const real *restrict lo, const real *restrict hi,
-                        const real *restrict s, real m, real q, ramp_probe *r)
+static void ramps_probe(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
+                        const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
 {
     probe(K, lo, hi, s, m, q, 1, r);
 }

@@ -8,17 +8,6 @@ import pihyst
 from pihyst.io import write_columns
 
 
-def without_timings(value):
-    """A fit's metadata or report without its measured compensator latencies: they are
-    wall-clock timings, different on every run, the one part of a fit that cannot be
-    bit for bit."""
-    if isinstance(value, dict):
-        return {k: without_timings(v) for k, v in value.items() if k != "latency"}
-    if isinstance(value, list):
-        return [without_timings(v) for v in value]
-    return value
-
-
 def ramps(levels, n=25):
     levels = np.asarray(levels, dtype=float)
     return np.concatenate([np.linspace(a, b, n, endpoint=False) for a, b in

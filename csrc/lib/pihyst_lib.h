@@ -24,6 +24,14 @@ extern "C" {
                                      3: creep lags, pihyst_lib_set_creep and the flat
                                         file's creep line) */
 
+/* On Windows the DLL exports exactly these functions: the library's build defines
+ * PIHYST_LIB_BUILD (make -C csrc shared / dll); a user of the header needs nothing. */
+#if defined(_WIN32) && defined(PIHYST_LIB_BUILD)
+#define PIHYST_LIB_API __declspec(dllexport)
+#else
+#define PIHYST_LIB_API
+#endif
+
 typedef struct pihyst_lib_model pihyst_lib_model; /* opaque */
 
 /* Library status codes beyond the core's (pihyst.h: 0 ... -13). */
@@ -39,10 +47,10 @@ typedef struct pihyst_lib_model pihyst_lib_model; /* opaque */
 #define PIHYST_LIB_ECREEP_BASE (-110)
 
 /** PIHYST_LIB_ABI_VERSION of the library actually loaded. */
-int32_t pihyst_lib_abi_version(void);
+PIHYST_LIB_API int32_t pihyst_lib_abi_version(void);
 
 /** Text of a status code (static storage; never NULL). */
-const char *pihyst_lib_status_text(int32_t status);
+PIHYST_LIB_API const char *pihyst_lib_status_text(int32_t status);
 
 /** A model from arrays. family: 0 classical, 1 multislope, 2 pwl; n_ops = K.
  *  thresholds: K values (classical, multislope; NULL for pwl). weights: K values.
@@ -50,7 +58,7 @@ const char *pihyst_lib_status_text(int32_t status);
  *  pwl only (else NULL): rise_len/fall_len K point counts, rise_x/rise_y and
  *  fall_x/fall_y the points of every polyline concatenated (sum of the counts each).
  *  initial_state: K values or NULL for zeros. Copies everything it is given. */
-pihyst_lib_model *pihyst_lib_create(int32_t family, int32_t n_ops, const double *thresholds,
+PIHYST_LIB_API pihyst_lib_model *pihyst_lib_create(int32_t family, int32_t n_ops, const double *thresholds,
                                     const double *weights, double offset, double u_min,
                                     double u_max, const double *shape, const int32_t *rise_len,
                                     const double *rise_x, const double *rise_y,
@@ -62,12 +70,12 @@ pihyst_lib_model *pihyst_lib_create(int32_t family, int32_t n_ops, const double 
  *  gamma, n, hysteretic, linear, quadratic, offset, u_min, u_max, initial u, initial z.
  *  Its state is (u, z): pihyst_lib_get_state and pihyst_lib_reset take n = 2, and
  *  pihyst_lib_n_operators gives 1. */
-pihyst_lib_model *pihyst_lib_create_boucwen(const double *params, int32_t *status);
+PIHYST_LIB_API pihyst_lib_model *pihyst_lib_create_boucwen(const double *params, int32_t *status);
 
 /** A model from a flat model file (`pihyst export MODEL.json --flat -o FILE`); a
  *  Bouc-Wen model's file has family 3. A file with a creep line (`pihyst-flat 2`) gives a
  *  model with creep lags, as pihyst_lib_set_creep. */
-pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status);
+PIHYST_LIB_API pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status);
 
 /** Creep (pihyst_creep.h, docs/theory/creep.md): n first-order lags with time constants
  *  tau (> 0, seconds) and gains gain (>= 0, summing to less than 1) at the fixed sample
@@ -77,45 +85,45 @@ pihyst_lib_model *pihyst_lib_load(const char *path, int32_t *status);
  *  compensator, if one was started, is stopped. PI and Bouc-Wen models alike (the lags
  *  are driven by the hysteresis output). Invalid lags give PIHYST_LIB_ECREEP_BASE plus
  *  their pihyst_creep_status, and leave the handle as it was. */
-int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const double *gain,
+PIHYST_LIB_API int32_t pihyst_lib_set_creep(pihyst_lib_model *h, const double *tau, const double *gain,
                              int32_t n, double dt);
 
 /** Number of creep lags (0: none), or a negative status. */
-int32_t pihyst_lib_n_creep_lags(const pihyst_lib_model *h);
+PIHYST_LIB_API int32_t pihyst_lib_n_creep_lags(const pihyst_lib_model *h);
 
 /** Copy the creep lag states z_i into z[0..n-1]; n must be pihyst_lib_n_creep_lags. */
-int32_t pihyst_lib_get_creep_state(const pihyst_lib_model *h, double *z, int32_t n);
+PIHYST_LIB_API int32_t pihyst_lib_get_creep_state(const pihyst_lib_model *h, double *z, int32_t n);
 
 /** Set the creep lag states to z (n values; NULL: at rest at the present hysteresis
  *  output). A running compensator keeps running, from these lag states. */
-int32_t pihyst_lib_set_creep_state(pihyst_lib_model *h, const double *z, int32_t n);
+PIHYST_LIB_API int32_t pihyst_lib_set_creep_state(pihyst_lib_model *h, const double *z, int32_t n);
 
 /** Free a handle (NULL is fine). */
-void pihyst_lib_free(pihyst_lib_model *h);
+PIHYST_LIB_API void pihyst_lib_free(pihyst_lib_model *h);
 
 /** Number of operators K, or a negative status. */
-int32_t pihyst_lib_n_operators(const pihyst_lib_model *h);
+PIHYST_LIB_API int32_t pihyst_lib_n_operators(const pihyst_lib_model *h);
 
 /** y[t] for u[t], t < n, advancing the operator state and the creep lags (chunks
  *  continue exactly). Returns 0, or PIHYST_LIB_EINPUT (and changes nothing) if an input
  *  is NaN or outside the model's input range. Stops the compensator, if one was
  *  started. */
-int32_t pihyst_lib_predict(pihyst_lib_model *h, const double *u, double *y, int32_t n);
+PIHYST_LIB_API int32_t pihyst_lib_predict(pihyst_lib_model *h, const double *u, double *y, int32_t n);
 
 /** Copy the operator state (K values) into state[0..n-1]; n must be K. */
-int32_t pihyst_lib_get_state(const pihyst_lib_model *h, double *state, int32_t n);
+PIHYST_LIB_API int32_t pihyst_lib_get_state(const pihyst_lib_model *h, double *state, int32_t n);
 
 /** Set the operator state to state (K values; NULL: the model's initial state) and stop
  *  the compensator, if one was started. Creep lags go to rest at the new state's
  *  hysteresis output. */
-int32_t pihyst_lib_reset(pihyst_lib_model *h, const double *state, int32_t n);
+PIHYST_LIB_API int32_t pihyst_lib_reset(pihyst_lib_model *h, const double *state, int32_t n);
 
 /** Start the feedforward compensator on the current state: voltage limits u_min, u_max
  *  (NaN: the model's input range), slew limit max_step in volts per sample (<= 0 or
  *  infinite: none), u_initial the voltage applied last. Needs every weight >= 0. Creep
  *  lags go to rest at the output at u_initial, as pihyst.compensate starts them
  *  (pihyst_lib_set_creep_state after this continues from other lag states). */
-int32_t pihyst_lib_compensator_start(pihyst_lib_model *h, double u_min, double u_max,
+PIHYST_LIB_API int32_t pihyst_lib_compensator_start(pihyst_lib_model *h, double u_min, double u_max,
                                      double max_step, double u_initial);
 
 /** u[t] for the desired outputs y_desired[t], t < n, within the limits whatever the input
@@ -123,7 +131,7 @@ int32_t pihyst_lib_compensator_start(pihyst_lib_model *h, double u_min, double u
  *  PIHYST_COMP_* bits. With creep each sample's hysteresis target comes from the lags
  *  (pihyst_creep_compensator_step at the fixed interval). Returns the number of flagged
  *  samples or a negative status. */
-int32_t pihyst_lib_compensate(pihyst_lib_model *h, const double *y_desired, double *u,
+PIHYST_LIB_API int32_t pihyst_lib_compensate(pihyst_lib_model *h, const double *y_desired, double *u,
                               uint8_t *flags, int32_t n);
 
 #ifdef __cplusplus

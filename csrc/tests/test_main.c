@@ -52,7 +52,12 @@ int main(void)
 #endif
 #ifdef PIHYST_TEST_F32
     run_twin_tests();
+#if PIHYST_STATE_ALIGN == 0
+    printf("single precision, PIHYST_STATE_ALIGN=0: %d passed, %d failed\n", test_passed,
+           test_failed);
+#else
     printf("single precision: %d passed, %d failed\n", test_passed, test_failed);
+#endif
 #elif PIHYST_STATE_ALIGN == 0
     printf("double precision, PIHYST_STATE_ALIGN=0: %d passed, %d failed\n", test_passed,
            test_failed);

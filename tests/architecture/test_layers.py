@@ -18,6 +18,7 @@ sibling of its own layer; nothing imports the top-level ``pihyst`` facade.
 """
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -79,6 +80,7 @@ def _imports(name, path):
 MODULES = _modules()
 
 
+@functools.cache
 def _graph():
     modules = MODULES
     return {name: {m for m in _imports(name, path) if m in modules and m != name}
@@ -139,3 +141,17 @@ def test_the_checker_sees_a_cycle_and_an_upward_import(tmp_path):
                                "from . import _n\nfrom ..io import y\n", encoding="utf-8")
     found = _imports("pihyst.model._m", src / "_m.py")
     assert {"pihyst.study", "pihyst.model", "pihyst.io"} <= found
+
+
+def test_the_module_maps_list_every_identification_module():
+    """identify/__init__'s docstring and docs/architecture.md name every module of
+    pihyst.identify (the procedure a newcomer reads)."""
+    import pihyst.identify
+
+    architecture = (PACKAGE.parents[1] / "docs" / "architecture.md").read_text(
+        encoding="utf-8")
+    names = sorted(p.stem for p in (PACKAGE / "identify").glob("_*.py")
+                   if p.stem != "__init__")
+    missing_init = [n for n in names if f"``{n}``" not in pihyst.identify.__doc__]
+    missing_docs = [n for n in names if n not in architecture]
+    assert not missing_init and not missing_docs, (missing_init, missing_docs)

@@ -171,3 +171,21 @@ def test_creep_is_decided_with_a_time_column_and_skipped_with_a_broken_one(tmp_p
     captured = capsys.readouterr()
     assert len(captured.err.strip().splitlines()) == 1, captured.err
     assert "time column" not in captured.err and not out.exists()
+
+
+def test_fit_prints_each_step_with_its_time_when_asked(tmp_path, capsys, monkeypatch):
+    """On a terminal (PIHYST_PROGRESS=1 here) each step of the fit is one stderr line
+    with its time; PIHYST_PROGRESS=0 (and a pipe) prints none."""
+    import re
+
+    data, _, _ = record(tmp_path)
+    monkeypatch.setenv("PIHYST_PROGRESS", "1")
+    assert main(["fit", str(data), "--no-creep", "-o", str(tmp_path / "a.json")]) == 0
+    lines = [x for x in capsys.readouterr().err.splitlines() if x.startswith("pihyst fit: ")]
+    steps = [re.sub(r" \(\d+\.\d\d s\)$", "", x[len("pihyst fit: "):]) for x in lines]
+    assert all(re.search(r" \(\d+\.\d\d s\)$", x) for x in lines)
+    assert steps[0].startswith("start state:") and steps[1].startswith("delay:")
+    assert any(s.startswith("classical fitted: judged RMS") for s in steps)
+    monkeypatch.setenv("PIHYST_PROGRESS", "0")
+    assert main(["fit", str(data), "--no-creep", "-o", str(tmp_path / "b.json")]) == 0
+    assert "pihyst fit: " not in capsys.readouterr().err

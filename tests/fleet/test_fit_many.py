@@ -8,7 +8,7 @@ import pihyst
 from pihyst.fleet import _fit_many
 from pihyst.io import read_columns
 
-from fleets import actuator_record, local_client, make_fleet_dir, without_timings, write_record
+from fleets import actuator_record, local_client, make_fleet_dir, write_record
 
 FAST = {"family": "classical"}   # one family: quick fits; the default is tested once
 SEVERAL = {"family": ["classical", "multislope"], "n_candidates": 8}   # and a choice
@@ -30,10 +30,10 @@ def assert_same_fit(outcome, alone):
     got = outcome.result
     assert got.model == alone.model
     np.testing.assert_array_equal(got.model.weights, alone.model.weights)
-    assert without_timings(got.model.to_dict()) == without_timings(alone.model.to_dict())
-    assert without_timings(got.report.to_dict()) == without_timings(alone.report.to_dict())
-    assert {k: without_timings(m.to_dict()) for k, m in got.models.items()} == \
-        {k: without_timings(m.to_dict()) for k, m in alone.models.items()}
+    assert got.model.to_dict() == alone.model.to_dict()
+    assert got.report.to_dict() == alone.report.to_dict()
+    assert {k: m.to_dict() for k, m in got.models.items()} == \
+        {k: m.to_dict() for k, m in alone.models.items()}
 
 
 def test_serial_fleet_equals_fitting_each_record_alone(tmp_path):

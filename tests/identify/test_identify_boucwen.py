@@ -208,3 +208,22 @@ def test_shape_search_refuses_the_rounded_edge():
     assert searched_shape(np.array([0.0, 30.0, 1.0])) is None     # gamma = beta
     assert searched_shape(np.array([0.0, -30.0, 1.0])) is None    # gamma = -beta
     assert searched_shape(np.array([0.0, 0.5, 1.0])) is not None
+
+
+def test_the_shape_is_refined_only_where_bouc_wen_can_come_near_the_best_family():
+    """Nelder-Mead after the grid costs most of a Bouc-Wen fit; in the comparison of
+    families it runs only where the grid's best shape is within REFINE_REACH of the best
+    PI family's judged RMS (identify/_boucwen.py)."""
+    from pihyst import ClassicalPI
+    from pihyst.identify._boucwen import REFINE_REACH
+
+    u, y_true = record(TRUE)
+    pi = ClassicalPI([0, 20, 50], [0.2, 0.1, 0.05])
+    y = pi.predict(u) + np.random.default_rng(0).normal(0, 1e-4, u.size)
+    bw = fit(u, y).report.family("bouc-wen")
+    assert any("not refined" in n and f"{REFINE_REACH:g} times" in n for n in bw["notes"])
+    alone = fit(u, y, family="bouc-wen").report.family("bouc-wen")
+    assert not any("not refined" in n for n in alone["notes"])
+    own = fit(u, y_true).report.family("bouc-wen")
+    assert not any("not refined" in n for n in own["notes"])
+    assert own["judged_rms"] < 1e-3 * np.ptp(y_true)

@@ -14,7 +14,10 @@ import pihyst
 from pihyst.sim import PLANT_NAMES, make_plant, signals
 
 
-@pytest.fixture(scope="module", params=PLANT_NAMES)
+# one beam in the quick suite, every beam in the slow one (each fit takes seconds)
+@pytest.fixture(scope="module", params=[
+    pytest.param(name, marks=() if i == 0 else pytest.mark.slow)
+    for i, name in enumerate(PLANT_NAMES)])
 def fitted(request):
     beam = make_plant(request.param, seed=1)
     t, u = signals.decaying_triangles()

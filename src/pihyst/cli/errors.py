@@ -206,3 +206,15 @@ def _detach_stdout():
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError, AttributeError):  # not a real file (e.g. in tests)
         pass
+
+
+def step_printer(prefix):
+    """A progress callable that prints each step to stderr as ``PREFIX: step (time)``,
+    on a terminal or with PIHYST_PROGRESS=1 (PIHYST_PROGRESS=0: never); else None."""
+    wanted = os.environ.get("PIHYST_PROGRESS")
+    if wanted == "0" or (wanted != "1" and not sys.stderr.isatty()):
+        return None
+
+    def say(line):
+        print(f"{prefix}: {line}", file=sys.stderr, flush=True)
+    return say

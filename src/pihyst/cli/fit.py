@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError, check_output, count
+from pihyst.cli.errors import UsageError, check_output, count, step_printer
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, RecordError
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
@@ -208,7 +208,8 @@ def run(args):
                          offset=not args.no_offset, validate=validate, delay=delay,
                          max_operators=args.max_operators,
                          max_latency=(None if args.max_latency is None
-                                      else 1e-6 * args.max_latency), t=t)
+                                      else 1e-6 * args.max_latency), t=t,
+                         progress=step_printer("pihyst fit"))
         except FitError as err:
             if other is not None and str(err).startswith("validate:"):
                 raise _error(err, other) from None

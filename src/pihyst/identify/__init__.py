@@ -14,14 +14,28 @@ for the family with its default options). It is not the model's operator kind
 (``model.family``: classical, multislope or pwl); ``model.metadata["fit"]["family"]``
 records the fitting family.
 
-Behind it, one private module per step: ``_cycles`` (cutting a record),
-``_families`` (the fitting families: candidate operators, frames, how each is fitted),
-``_gram`` (normal equations), ``_qp`` (constrained least squares), ``_subsets``
-(threshold subset search), ``_shape`` (multislope shape search), ``_family_fit`` (one
-family's fit) and ``_family_result`` (its :class:`FamilyFit`), ``_delay`` (the
-input-output delay), ``_assess`` (errors per kind of held-back data, what the data
-cannot determine), ``_latency`` (compensator cost), ``_choice`` (which family is
-returned), ``_fit`` (all of it), ``_report`` (the result).
+Behind it, one private module per step (the order of docs/theory/identification.md's
+table of decisions):
+
+- ``_fit``: :func:`fit`, the steps in order; ``_progress``: each step's end, for the
+  command line;
+- ``_sufficiency``: whether the record can be fitted at all, and whether the fit explains it;
+- ``_family_fit``: the record in the fitting frame (``FramedRecord``) and one family's fit
+  (``FamilyFitter``); ``_family_result``: its :class:`FamilyFit`;
+- ``_start_state``: the operator state before the first sample (``initial_state="auto"``);
+- ``_cycles``: cutting a record into settle, fitted and held-back cycles;
+- ``_delay``: the input-output delay;
+- ``_families``: the fitting families (candidate operators, frames, how each is fitted);
+- ``_gram``: normal equations; ``_qp``: constrained least squares;
+- ``_subsets``: the threshold subset search; ``_shape``: the multislope shape search;
+- ``_kernel_product``: the product-form kernel density (kp, records without minor loops);
+- ``_boucwen``: the Bouc-Wen family; ``_boucwen_creep``: its shape fitted with creep;
+- ``_assess``: errors per kind of held-back data, what the data cannot determine;
+- ``_latency``: compensator cost, estimated from the model's structure;
+- ``_choice``: which family is returned;
+- ``_creep``: creep lags fitted with the weights, and whether to keep them;
+  ``_record_start``: whether a record's lags started at rest;
+- ``_report``: the result and its report.
 """
 
 from pihyst.exceptions import FitError, IllConditionedWarning, InfeasibleConstraintsError

@@ -2,8 +2,8 @@
 "Choosing the family").
 
 Each candidate has a judged error (``_assess``: the worst RMS over the record's held-back
-cycles and a validation record), an operator count and a measured compensator latency
-(``_latency``). The rule:
+cycles and a validation record), an operator count and a compensator latency estimated
+from its structure (``_latency``: a cost model, never a clock). The rule:
 
 1. **Eligible**: within ``max_operators`` and ``max_latency`` (worst case), if given;
    and, when the data do not determine the minor loops, only families whose structure
@@ -15,9 +15,9 @@ cycles and a validation record), an operator count and a measured compensator la
    iterates (Bouc-Wen: Newton on its Runge-Kutta step, 10-100 times the cost per sample,
    far more on jumps), so an iterative model is chosen only when it is more accurate by
    more than the tolerance; then the fewest operators, then the lowest judged error. The
-   measured latency bounds the choice (``max_latency``) and is reported, but breaks no
-   tie: timings vary from run to run, and the same record must give the same model.
-   (A ``max_latency`` close to a candidate's measured latency can still go either way.)
+   estimated latency bounds the choice (``max_latency``) and is reported; being computed
+   from the model's structure, it is the same on every run, so the same record gives
+   the same model.
 
 With nothing held back and no validation record, step 2 compares the BIC on the fitted
 data, n ln(RMS^2) + p ln n, instead (the lowest wins; p counts non-zero weights and the

@@ -38,6 +38,7 @@ from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
 from pihyst.identify._choice import TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._family_fit import FramedRecord
+from pihyst.identify._progress import Steps
 from pihyst.identify._qp import solve_qp
 from pihyst.identify._record_start import record_start_check
 from pihyst.model._boucwen import BoucWenModel
@@ -227,7 +228,9 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
                 "kept": False, "reason": "through= (equality constraints) is not available "
                                          "with creep"})
         raise FitError("through= (equality constraints) is not available with creep=True")
+    step = Steps(kwargs.get("progress"))
     first = fit(u, y, **kwargs)         # the record's own errors (too short, ...) first
+    step.done(f"fit without creep: {first.report.chosen}")
     dt_fixed, dt, duration = _times(t, u.size)
     tau = (default_time_constants(dt_fixed, duration) if time_constants is None
            else np.sort(np.asarray(time_constants, dtype=np.float64)))
@@ -300,8 +303,12 @@ def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs)
         def judged_structure(model, families=None):
             second = structure_without_creep(model, families)
             start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
-            return second, start, _judge(first, second, ua, ya, ta, dta, tau, start, rows,
-                                         rec.layout.indices("held_back"), qp, fixed_n)
+            judged = _judge(first, second, ua, ya, ta, dta, tau, start, rows,
+                            rec.layout.indices("held_back"), qp, fixed_n)
+            step.done(f"creep estimated with "
+                      f"{model.metadata.get('fit', {}).get('family', model.family)}: "
+                      f"{judged['family_with']} holds back {judged['held_back_rms_with']:.4g}")
+            return second, start, judged
 
         second, start, judged = judged_structure(start_model)
         other = _other_kind(first, start_model)

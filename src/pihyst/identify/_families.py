@@ -128,7 +128,7 @@ class Family(ABC):
     def v_state(self, state_u, lo):
         return np.asarray(state_u, dtype=float)
 
-    def fit(self, fitter):
+    def fit(self, fitter, rival_rms=None):
         """Fit this family to ``fitter``'s record: a :class:`FamilyFit`. Default: the
         thresholds chosen by subset search over ``candidates(S, n_candidates)``."""
         return fitter.fit_subsets(self)
@@ -390,7 +390,7 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
             raise FitError(f"{self.name}: grid must be an integer >= 2, got {grid}")
         self.grid = int(grid)
 
-    def fit(self, fitter):
+    def fit(self, fitter, rival_rms=None):
         return fitter.fit_kernels(self)
 
     def pairs(self):
@@ -485,9 +485,9 @@ class BoucWen(Family):
     def __init__(self, n=None):
         self.n = None if n is None else float(n)
 
-    def fit(self, fitter):
+    def fit(self, fitter, rival_rms=None):
         from pihyst.identify._boucwen import family_fit
-        return family_fit(self, fitter)
+        return family_fit(self, fitter, rival_rms)
 
     def template(self, thresholds, S):
         raise FitError("bouc-wen has no PI operators (it is fitted by its own search)")

@@ -261,10 +261,12 @@ class FamilyFitter:
                           f"spaced, and every input extremum); errors on all")
         return out
 
-    def fit(self, family):
-        """``family`` fitted to the record (notes collected afresh)."""
+    def fit(self, family, rival_rms=None):
+        """``family`` fitted to the record (notes collected afresh); ``rival_rms``, the
+        lowest judged RMS of the families fitted before it, lets a family with an
+        expensive search stop early where it cannot come near (Bouc-Wen)."""
         self.notes = []
-        return family.fit(self)
+        return family.fit(self, rival_rms)
 
     # ---------------------------------------------------------------- columns
     def grams(self, family, template, roles=("fit", "held_back")):

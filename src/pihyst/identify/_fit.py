@@ -23,6 +23,7 @@
 """
 
 import contextvars
+import functools
 import warnings
 from dataclasses import replace
 
@@ -40,12 +41,12 @@ from pihyst.identify._assess import (
 from pihyst.identify._choice import Candidate, choose
 from pihyst.identify._families import FAMILY_NAMES, as_family
 from pihyst.identify._family_fit import INITIAL_STATES, FamilyFitter, FramedRecord, cycled_state
-from pihyst.identify._latency import measure_latency
+from pihyst.identify._latency import estimate_latency
+from pihyst.identify._progress import Steps
 from pihyst.identify._report import FitReport, FitResult
 from pihyst.identify._start_state import start_state
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
 from pihyst.identify._sufficiency import check_fit, check_record
-from pihyst.model import InvalidModelError
 from pihyst.model._delay import MAX_DELAY_SAMPLES
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
@@ -59,11 +60,27 @@ DELAY_NOTE_GAIN = 0.02   # a delay is worth a note when it lowers the probe's RM
 _REFUSED_DELAY = contextvars.ContextVar("pihyst_refused_delay", default=None)
 
 
+def _one_blas_thread(function):
+    """Runs ``function`` with BLAS on one thread: the fit's matrices are small (tens to a
+    few hundred columns), where a second thread only waits (on a loaded 2-core machine
+    an SVD of 300 x 150 took 15 times longer with two), and the sums then run in one
+    order, so the same record gives the same model bit for bit whatever the core count."""
+    @functools.wraps(function)
+    def wrapped(*args, **kwargs):
+        import scipy.linalg  # noqa: F401  SciPy's own BLAS: limited only once loaded
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1, user_api="blas"):
+            return function(*args, **kwargs)
+    return wrapped
+
+
+@_one_blas_thread
 def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
         n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
         through=None, initial_state="auto", holdout="alternate", refit=True,
         input_range=None, validate=None, delay="auto", max_operators=None, max_latency=None,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep="auto"):
+        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep="auto", progress=None):
     """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
     one of those that generalize best.
 
@@ -146,7 +163,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         Choose only among models with at most this many operators.
     max_latency : float, optional
         Choose only among models whose compensator's worst-case time per sample
-        (measured, see the report) is at most this many seconds.
+        (estimated from the model's structure by a calibrated cost model, never timed:
+        the same record gives the same model on every run; see the report) is at most
+        this many seconds.
     max_exhaustive : int
         Largest number of subsets of the requested size searched exhaustively (the
         automatic size search uses at most 600 per size, then greedy selection + swaps).
@@ -160,6 +179,9 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         fitted on the fitted cycles and kept only if it lowers the held-back RMS by more
         than 2 % (the report's ``creep`` entry says which and why); without ``t``, none.
         ``False``: none.
+    progress : callable, optional
+        Called with one line of text as each step ends (the step and its time in
+        seconds): the command line prints them on a terminal.
 
     Returns
     -------
@@ -243,6 +265,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         return FramedRecord(u, y, input_range=input_range, initial_state=state,
                             holdout=holdout, offset=offset, through=through)
 
+    step = Steps(progress)
     rec = record_in(initial_state)
     check_record(rec.u, rec.y)
     if isinstance(initial_state, str) and initial_state == "auto" and \
@@ -253,10 +276,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PihystWarning)
             rec, rec.state_choice = start_state(rec, record_in, fitter_of)
+    step.done(f"start state: {rec.state_mode}")
     if rec.state_mode == "explicit" and thresholds is None:
         raise FitError("an explicit initial_state needs explicit thresholds (one value "
                        "per operator)")
     delay_info = _delay_choice(rec, fitter_of, delay, _delay.confirming_family(families))
+    step.done(f"delay: {delay_info['samples']} samples")
     refused = _REFUSED_DELAY.get()
     if refused is not None:
         delay_info.update(refused)
@@ -269,8 +294,22 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     chooses_thresholds = (thresholds is not None or candidates is not None
                           or n_operators is not None)
 
+    known, unknown_reason = minor_loops_determined(rec, validation)
     results, skipped, caught = [], [], {}
-    for fam in families:
+    # where the data cannot tell the minor loops, a family whose structure does not fix
+    # them cannot be chosen while one that does is fitted (_choice): it is fitted only
+    # if none of those could be (a list of families given included: the rule is the
+    # choice's)
+    deferred = [] if known else [
+        f for f in families if not f.minor_loops_fixed]
+    if len(deferred) == len(families):
+        deferred = []
+    for fam in [f for f in families if f not in deferred] + deferred:
+        if fam in deferred and results:
+            skipped.append({"family": fam.name, "reason": (
+                f"its minor loops are not fixed by its structure and the data "
+                f"cannot determine them: {unknown_reason}")})
+            continue
         kernels = fam.operators_key == "kernels"
         if not explicit_family and not fam.has_thresholds and chooses_thresholds:
             skipped.append({"family": fam.name, "reason": "has no thresholds (" + (
@@ -283,7 +322,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
             try:
-                res = fitter.fit(fam)
+                res = fitter.fit(fam, rival_rms=min((r.judged_rms for r in results),
+                                                    default=None))
             except FitError as err:
                 if explicit_family:
                     raise
@@ -294,11 +334,12 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
             if not issubclass(x.category, PihystWarning):
                 warnings.warn_explicit(x.message, x.category, x.filename, x.lineno)
         results.append(replace(res, warnings=tuple(str(x.message) for x in caught[fam.name])))
+        step.done(f"{fam.name} fitted: judged RMS {res.judged_rms:.4g}")
     if not results:
         raise FitError("no family could be fitted: " + "; ".join(
             f"{s['family']}: {s['reason']}" for s in skipped))
 
-    known, unknown_reason = minor_loops_determined(rec, validation)
+    results.sort(key=lambda r: [f.name for f in families].index(r.name))
     cands = []
     for r in results:
         by_kind = errors_by_kind(r.judged_on or fitter, r.model, validation)
@@ -322,7 +363,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
                            initial_state=initial_state, holdout=holdout, refit=refit,
                            input_range=input_range, validate=validate, delay=0,
                            max_operators=max_operators, max_latency=max_latency,
-                           max_exhaustive=max_exhaustive, t=t, creep=False)
+                           max_exhaustive=max_exhaustive, t=t, creep=False,
+                           progress=progress)
             finally:
                 _REFUSED_DELAY.reset(token)
     for x in caught[best.name]:
@@ -334,6 +376,7 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always", PihystWarning)
             model = best.refit()
+        step.done(f"{best.name} refitted on all cycles")
         if not caught[best.name]:
             for x in w:
                 warnings.warn(f"{best.name} (refit): {x.message}", x.category, stacklevel=2)
@@ -341,7 +384,8 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
         if validation is not None:
             final_errors["validation"] = validation.errors(model)
     check_fit(rec, best_c.judged_rms, model)
-    undetermined = _undetermined(rec, validation, known, unknown_reason, delay_info, cands)
+    undetermined = _undetermined(rec, validation, known, unknown_reason, delay_info, cands,
+                                 skipped)
     report = FitReport.build(rec, cands, skipped, best.name, criterion,
                              refit=bool(refit and rec.has_held_back),
                              final_errors=final_errors, delay=delay_info,
@@ -478,20 +522,20 @@ def _delay_refused(rec, fitter_of, best, judged, validate, delay_info):
 
 
 def _latency(model):
-    try:
-        return measure_latency(model)
-    except InvalidModelError:        # negative weights (nonnegative=False): no compensator
-        return None
+    if model.family != "bouc-wen" and np.any(model.weights < 0):
+        return None                  # negative weights (nonnegative=False): no compensator
+    return estimate_latency(model)
 
 
-def _undetermined(rec, validation, known, unknown_reason, delay_info, cands):
+def _undetermined(rec, validation, known, unknown_reason, delay_info, cands, skipped):
     """What the data could not determine, as sentences for the report."""
     out = []
     if not rec.has_held_back and validation is None:
         out.append("nothing is held back and there is no validation record: every error "
                    "is on the fitted data (optimistic), and the choices were made by BIC")
     if not known:
-        dropped = [c.name for c in cands if c.excluded and "minor loops" in c.excluded]
+        dropped = [c.name for c in cands if c.excluded and "minor loops" in c.excluded] + [
+            x["family"] for x in skipped if "minor loops" in x["reason"]]
         out.append(f"the minor loops (reversals inside the range): {unknown_reason}. "
                    f"Families whose structure fixes them from the major loop were preferred"
                    + (f" ({', '.join(dropped)} not chosen)" if dropped else "")

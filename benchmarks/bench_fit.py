@@ -1,0 +1,137 @@
+"""The default fit end to end, as a user runs it (the identification issue's targets).
+
+1. `pihyst fit` on the P-885 identification file (the README's command), default
+   against `--model classical` in the same run (target: <= 3x and <= 2 s), and on the
+   SmartHysteresis raw file (target <= 3 s); measured data from ../shared/data or
+   $PIHYST_DATA (skipped if absent).
+2. The same file fitted twice: identical model files (no clock in any decision), and
+   the README's `--max-latency` example on it twice: the same answer.
+3. 10^6 rows with a time column, `pihyst fit FILE.csv` end to end against
+   `np.loadtxt` of the same file (target <= 20x, peak memory <= 1 GB).
+4. `pihyst.fit(u, y)` on 10^6 samples without times (random level ramps) against one
+   `scipy.optimize.nnls` of a 10^6 x 16 matrix (target <= 3x).
+
+Times are CPU seconds of the process (user + system; wall beside them): on a shared
+machine the wall time also counts other jobs' share of the cores.
+
+Run: python benchmarks/bench_fit.py [--quick]   (--quick: parts 1 and 2 only)
+"""
+
+import filecmp
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import nnls
+
+import pihyst
+from pihyst.io import datasets
+from pihyst.sim import make_plant
+
+
+def run_cli(args):
+    """(cpu s, wall s, peak RSS MB, stdout) of `pihyst ARGS` in a child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-m", "pihyst", *args], capture_output=True,
+                         text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if out.returncode:
+        raise SystemExit(f"pihyst {' '.join(args)} failed:\n{out.stderr}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, wall, after.ru_maxrss / 1024, out.stdout
+
+
+def measured(tmp):
+    root = datasets.data_root()
+    if root is None:
+        print("measured data not found (../shared/data or $PIHYST_DATA): skipped")
+        return
+    p885, smart = root / datasets.P885_DIR, root / datasets.SMART_DIR
+    p885_args = [str(p885 / "Model_Vi_Do.dat"), "--voltage", "1", "--displacement", "5",
+                 "--lag", "1", "--rate", "200"]
+    print("1. pihyst fit, end to end (CPU s / wall s)")
+    cpu_c, wall_c, _, _ = run_cli(["fit", *p885_args, "--model", "classical", "-o",
+                                   str(tmp / "c.json")])
+    cpu_d, wall_d, _, text = run_cli(["fit", *p885_args, "-o", str(tmp / "a.json")])
+    chosen = next((line for line in text.splitlines() if line.startswith("wrote")), "")
+    print(f"  P-885 --model classical : {cpu_c:6.2f} / {wall_c:6.2f}")
+    print(f"  P-885 default           : {cpu_d:6.2f} / {wall_d:6.2f}   "
+          f"{cpu_d / cpu_c:.1f}x classical (target <= 3x, <= 2 s)")
+    print(f"    {chosen}")
+    smart_args = [str(smart / "hysteresis_v_150_1hz.csv"), "--time", "2", "--displacement",
+                  "3", "--voltage", "4", "--skip-until", "4.26"]
+    cpu_s, wall_s, _, _ = run_cli(["fit", *smart_args, "-o", str(tmp / "s.json")])
+    print(f"  SmartHysteresis default : {cpu_s:6.2f} / {wall_s:6.2f}   (target <= 3 s)")
+
+    print("2. the same model every time")
+    run_cli(["fit", *p885_args, "-o", str(tmp / "b.json")])
+    same = filecmp.cmp(tmp / "a.json", tmp / "b.json", shallow=False)
+    print(f"  P-885 fitted twice: model files {'identical' if same else 'DIFFERENT'}")
+    answers = []
+    for name in ("l1.json", "l2.json"):
+        run_cli(["fit", *p885_args, "--max-operators", "8", "--max-latency", "0.5", "-o",
+                 str(tmp / name)])
+        answers.append(pihyst.load_model(tmp / name).metadata["fit"]["family"])
+    print(f"  --max-operators 8 --max-latency 0.5 twice: {answers[0]}, {answers[1]} "
+          f"({'the same' if answers[0] == answers[1] else 'DIFFERENT'}; files "
+          f"{'identical' if filecmp.cmp(tmp / 'l1.json', tmp / 'l2.json', False) else 'differ'})")
+
+
+def level_ramps(n, seed=0, per_level=200):
+    rng = np.random.default_rng(seed)
+    levels = np.r_[0.0, 150.0, 0.0, rng.uniform(0, 150, n // per_level)]
+    u = np.concatenate([np.linspace(a, b, per_level, endpoint=False)
+                        for a, b in zip(levels[:-1], levels[1:])])
+    return u[:n]
+
+
+def large(tmp, n=1_000_000):
+    beam = make_plant("paper-beam", seed=1)
+    u = level_ramps(n)
+    t = np.arange(n) * 1e-3
+    y = beam.run(u, t)
+    path = tmp / "large.csv"
+    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", fmt="%.9g",
+               header="time_s,voltage_V,displacement_um", comments="")
+    print(f"3. 10^6 rows with a time column ({path.stat().st_size / 1e6:.0f} MB CSV)")
+    t0, c0 = time.perf_counter(), time.process_time()
+    np.loadtxt(path, delimiter=",", skiprows=1)
+    wall_l, cpu_l = time.perf_counter() - t0, time.process_time() - c0
+    cpu_f, wall_f, rss, _ = run_cli(["fit", str(path), "-o", str(tmp / "large.json")])
+    print(f"  np.loadtxt        : {cpu_l:6.2f} / {wall_l:6.2f}")
+    print(f"  pihyst fit        : {cpu_f:6.2f} / {wall_f:6.2f}   {cpu_f / cpu_l:.1f}x "
+          f"loadtxt (target <= 20x), peak memory {rss:.0f} MB (target <= 1024)")
+
+    print("4. pihyst.fit(u, y), 10^6 samples, no times")
+    rng = np.random.default_rng(1)
+    A = np.abs(rng.normal(size=(n, 16)))
+    b = A @ rng.uniform(0, 1, 16) + rng.normal(0, 0.01, n)
+    c0 = time.process_time()
+    nnls(A, b)
+    cpu_n = time.process_time() - c0
+    c0 = time.process_time()
+    res = pihyst.fit(u, y)
+    cpu_p = time.process_time() - c0
+    print(f"  scipy nnls 10^6 x 16 : {cpu_n:6.2f} CPU s")
+    print(f"  pihyst.fit           : {cpu_p:6.2f} CPU s   {cpu_p / cpu_n:.1f}x nnls "
+          f"(target <= 3x); chosen {res.report.chosen}, {res.model.n_operators} operators")
+
+
+def main():
+    os.environ.setdefault("PIHYST_PROGRESS", "0")
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        measured(tmp)
+        if "--quick" not in sys.argv:
+            large(tmp)
+
+
+if __name__ == "__main__":
+    main()
