@@ -74,8 +74,8 @@ __all__ = [
 ]
 
 # imported on first access (PEP 562): they bring SciPy, matplotlib or optional extras
-_SUBPACKAGES = ("control", "dynamics", "fleet", "identify", "inverse", "io", "model", "rig",
-               "sim", "study", "cli")
+_SUBPACKAGES = ("control", "dynamics", "fleet", "identify", "inverse", "io", "learn", "model",
+                "rig", "sim", "study", "cli")
 
 
 def __getattr__(name):

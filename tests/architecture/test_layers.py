@@ -9,7 +9,7 @@ import hides a cycle from Python, not from this test). Layers, lowest first
 1. ``model``
 2. ``io``, ``inverse``
 3. ``identify``, ``sim``, ``control``, ``dynamics``
-4. ``rig``, ``fleet``
+4. ``rig``, ``fleet``, ``learn``
 5. ``study`` (the paper's experiment runs through everything below, the rig included)
 6. ``cli``
 
@@ -32,7 +32,7 @@ LAYERS = [
     {"model"},
     {"io", "inverse"},
     {"identify", "sim", "control", "dynamics"},
-    {"rig", "fleet"},
+    {"rig", "fleet", "learn"},
     {"study"},
     {"cli"},
 ]

@@ -12,6 +12,7 @@ TRACK = ["track", "{model}", "{desired}", "-o", "{out}"]
 SIMULATE = ["simulate", "-o", "{out}", "--period", "20", "--dt", "1"]
 REPORT = ["report", "{loop}", "--out", "{out}"]
 DEMO = ["demo", "--out", "{out}"]
+LEARN = ["learn", "--scan", "100", "--trials", "1", "-o", "{out}"]
 
 NUMBERS_BAD = ("nan", "inf", "-inf", "abc", "", "1e400")
 
@@ -117,6 +118,29 @@ case(DEMO[:2] + ["{tmp}/file.txt"], 2, "file.txt")
 case(DEMO + ["--seed", "-1"], 2, "--seed")
 case(DEMO + ["--seed", "x"], 2, "--seed")
 case(DEMO + ["--plant", "granite"], 2, "--plant")
+
+# learn (a simulated stage): every number checked before any trial
+o = LEARN.index("{out}")
+case(LEARN[:o] + ["{tmp}/missing-folder/out.csv"], 2, "missing-folder/out.csv")
+case(LEARN[:o] + ["{tmp}"], 2, "is a folder")
+for option in ("--clock", "--slew", "--bandwidth"):
+    for v in NUMBERS_BAD + ("0", "-1"):
+        case(LEARN + [option, v], 2, option)
+for v in NUMBERS_BAD + ("-1",):
+    case(LEARN + ["--noise", v], 2, "--noise")
+for v in ("nan", "inf", "-inf", "200", "-1"):
+    case(LEARN + ["--u-min", v], 2, "--u-min")
+for v in ("nan", "0", "1e400", "1e-300", "500"):
+    case(["learn", "--scan", v, "-o", "{out}"], 2, "--scan")
+for v in ("0", "x", "1e9", "nan", "0,0.04", "800,0", "800,1", "800,nan", "800,0.04,1"):
+    case(LEARN + ["--mode", v], 2, "--mode")
+for v in ("-1", "x", "101"):
+    case(LEARN + ["--delay", v], 2, "--delay")
+case(LEARN + ["--clock", "1e9"], 2, "--scan 100 at --clock 1e+09")
+case(LEARN + ["--model", "{tmp}/no-such-model.json"], 2, "no-such-model.json")
+case(["learn", "--desired", "{tmp}/no-such.csv", "-o", "{out}"], 2, "no-such.csv")
+case(["learn", "-o", "{out}"], 2, "--scan")
+case(LEARN, 0)
 
 # the command line itself
 case([], 2, "COMMAND")

@@ -175,3 +175,27 @@ def test_demo_command_is_the_papers_study(tmp_path, capsys):
     assert len([n for n in os.listdir(out) if n.endswith(".png")]) == 11   # Fig. 17: the rig
     assert metrics["rig"]["tracking"]["feedback"]["mean_abs"] < \
         metrics["rig"]["tracking"]["open_loop"]["mean_abs"]
+
+
+def test_report_shows_a_learning_run(tmp_path, capsys):
+    """--learning: the error per trial and the tracking before and after, as figures, a
+    table and metrics; a file that is not a learning run is a one-line error."""
+    data, run = tmp_path / "loop.csv", tmp_path / "run.csv"
+    assert main(["simulate", "--dt", "5", "-o", str(data)]) == 0
+    assert main(["learn", "--scan", "500", "--mode", "2000,0.05", "--trials", "3",
+                 "-o", str(run)]) == 0
+    out = tmp_path / "rep"
+    assert main(["report", str(data), "--out", str(out), "--learning", str(run)]) == 0
+    text = (out / "report.html").read_text(encoding="utf-8")
+    assert "<h2>Learning feedforward</h2>" in text and "Learning curve" in text
+    names = set(os.listdir(out))
+    assert any(n.endswith("_learning_curve.png") for n in names)
+    assert any(n.endswith("_learning_tracking.png") for n in names)
+    metrics = json.loads((out / "metrics.json").read_text())
+    learning = metrics["learning"]
+    assert learning["trials"] == 4 and len(learning["rms_um"]) == 4     # trial 0 and 3
+    assert learning["rms_um"][learning["best_trial"]] == min(learning["rms_um"])
+    capsys.readouterr()
+    assert main(["report", str(data), "--out", str(out), "--learning", str(data)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "loop.csv" in err[0]

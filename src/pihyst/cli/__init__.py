@@ -17,6 +17,7 @@ from pihyst.cli import (
     export,
     fit,
     fit_many,
+    learn,
     predict,
     report,
     rig,
@@ -26,8 +27,8 @@ from pihyst.cli import (
 )
 from pihyst.cli.errors import ArgumentParser, run_command
 
-COMMANDS = [predict, fit, validate, fit_many, simulate, compensate, track, demo, report, export,
-            rig]
+COMMANDS = [predict, fit, validate, fit_many, simulate, compensate, track, learn, demo, report,
+            export, rig]
 
 
 def build_parser():

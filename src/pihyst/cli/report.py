@@ -26,6 +26,9 @@ def register(sub):
     add_figure_format_option(p)
     p.add_argument("--paper", action="store_true",
                    help="show the paper's numbers (its own beam's) beside this record's")
+    p.add_argument("--learning", metavar="RUN.csv", default=None,
+                   help="also show a learning run of pihyst learn or pihyst rig learn: the "
+                        "error per trial and the tracking before and after")
     add_record_options(p, "DATA")
     p.set_defaults(run=run)
 
@@ -46,6 +49,10 @@ def run(args):
     from pihyst.exceptions import FitError
     from pihyst.study import loop_study
 
+    learning = None
+    if args.learning is not None:
+        from pihyst.study._learning import read_learning_run
+        learning = read_learning_run(args.learning)
     rec = read_from_args(args, args.data, need=("voltage", "displacement"))
     u, y = rec.voltage, rec.displacement
     if np.ptp(u) <= 0:
@@ -64,9 +71,14 @@ def run(args):
         study = loop_study(t, u, y, source=source, progress=say)
     except FitError as err:
         raise UsageError(f"{args.data}: {err}") from None
+    if learning is not None:
+        study.learning = learning
+        study.metrics["learning"] = learning.summary()
     try:
         given = options_text(args)
+        learning_option = f" --learning {args.learning}" if args.learning else ""
         files = write_report(study, out, command=f"pihyst report {args.data} --out {out}"
+                                                 + learning_option
                                                  + (f" {given}" if given else ""),
                              figure_formats=args.figure_format, paper=args.paper,
                              progress=say)

@@ -1,4 +1,4 @@
-"""pihyst rig check|record|track|emulate --config RIG.toml
+"""pihyst rig check|record|track|learn|emulate --config RIG.toml
 
 Runs the experiment on the instruments of a rig configuration: the real supply and
 sensor, or the emulated ones (ports ``pihystsim://...``: started in this process, in
@@ -93,6 +93,28 @@ def register(sub):
     _common(t)
     t.set_defaults(run=run_track)
 
+    le = rig_sub.add_parser(
+        "learn", help="learn the feedforward of a repeated trajectory (iterative learning)",
+        description="Learn one period of voltages for the periodic desired displacement_um "
+                    "of DESIRED.csv (resampled at the tick rate; one period) by iterative "
+                    "learning from MODEL.json (pihyst.learn): each trial is one run of the "
+                    "rig that plays the period --periods times and measures the last one; "
+                    "the next trial's period is updated through the model's exact inverse. "
+                    "Every trial starts at 0 V and ends at 0 V with the output off, whatever "
+                    "stops it; voltages stay within [rig] u_min..u_max and slew_V_per_s. "
+                    "Writes every trial's period to RUN.csv (trial, probe, accepted, rms_um, "
+                    "time_s, voltage_V, desired_um, displacement_um) and each trial's tick "
+                    "log beside it (RUN.trial-NN.csv); prints the error per trial.")
+    le.add_argument("model", metavar="MODEL.json")
+    le.add_argument("desired", metavar="DESIRED.csv",
+                    help="one period: CSV with time_s, displacement_um")
+    le.add_argument("--periods", type=_periods, default=2, metavar="P",
+                    help="periods played per trial, the last one measured (default 2)")
+    from pihyst.cli.learn import add_learning_options
+    add_learning_options(le)
+    _common(le)
+    le.set_defaults(run=run_learn)
+
     e = rig_sub.add_parser(
         "emulate", help="emulated instruments on pseudo-terminals",
         description="Start the emulated supply and sensor of the configuration on "
@@ -115,6 +137,11 @@ def _duration(text):
         raise argparse.ArgumentTypeError(f"must be at most {threading.TIMEOUT_MAX:g} s, got "
                                          f"{text!r}")
     return seconds
+
+
+def _periods(text):
+    from pihyst.cli.errors import count
+    return count(2, 1000)(text)
 
 
 def _fault_option(p):
@@ -395,3 +422,79 @@ def run_emulate(args):
                   f"sensor: {emu.emulators.sensor.requests} requests", flush=True)
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+class _TrialStopped(Exception):
+    """A trial's rig run stopped early (the controller has zeroed the supply)."""
+
+
+def _trial_log(output, trial):
+    import os
+    stem, ext = os.path.splitext(output)
+    return f"{stem}.trial-{trial:02d}{ext or '.csv'}"
+
+
+def run_learn(args):
+    """Each trial one rig run (module notes of pihyst.learn: ``run_period``)."""
+    from pihyst.cli.learn import desired_period, print_learning, write_learning
+    from pihyst.learn import learn_periodic
+    from pihyst.rig import VoltageProgram
+    config = _config(args)
+    r = config.rig
+    model = delay_for_run(load_model(args.model), args.config, period=1.0 / r.rate_hz)
+    desired = desired_period(args.desired, r.rate_hz)
+    if desired.size * args.periods > MAX_TICKS:
+        raise UsageError(f"{args.desired}: {desired.size} ticks x --periods {args.periods} is "
+                         f"more than the {MAX_TICKS:,} ticks of a run")
+    if args.output.lower().endswith((".h5", ".hdf5")):
+        raise UsageError(f"-o {args.output}: pihyst rig learn writes CSV")
+    _check_output(args.output)
+    trials = []
+    with _open(args, config) as rig:
+        def run_period(u):
+            trial = len(trials)
+            program = VoltageProgram(np.tile(u, args.periods),
+                                     f"learning trial {trial}: {args.periods} periods of "
+                                     f"{u.size} ticks for {args.desired}")
+            result = rig.run(program, _trial_log(args.output, trial),
+                             notes=[f"model: {args.model}: {model!r}"], fsync=args.fsync)
+            trials.append(result)
+            if not result.completed or not result.zeroed:
+                raise _TrialStopped(result)
+            y = result.column("displacement_um", phase="run")[-u.size:]
+            if y.size != u.size or not np.all(np.isfinite(y)):
+                raise _TrialStopped(result)
+            return y
+
+        from pihyst.exceptions import InvalidArgumentError
+        from pihyst.rig._controller import check_limits
+        try:
+            check_limits(rig.supply, r)
+        except InvalidArgumentError as err:
+            raise UsageError(f"{args.config}: {err}") from None
+        try:
+            res = learn_periodic(run_period, desired, 1.0 / r.rate_hz, model=model,
+                                 u_min=r.u_min, u_max=r.u_max, slew_rate=r.slew_V_per_s,
+                                 trials=args.trials, bandwidth_hz=args.bandwidth,
+                                 keep_trials=True)
+        except _TrialStopped as stop:
+            result = stop.args[0]
+            log = _trial_log(args.output, len(trials) - 1)
+            if not result.zeroed:
+                print(f"pihyst rig: error: learning trial {len(trials) - 1}: the supply could "
+                      f"not be zeroed (see the log {log}): the beam may still be charged",
+                      file=sys.stderr)
+            else:
+                why = (result.reason if not result.completed
+                       else "no valid reading on some tick of the measured period")
+                print(f"pihyst rig: error: learning trial {len(trials) - 1} stopped: {why}; "
+                      f"0 V, output off; log in {log}", file=sys.stderr)
+            raise SystemExit(1) from None
+    write_learning(args.output, res, desired, 1.0 / r.rate_hz,
+                   comments=[f"pihyst rig learn: {rig.describe()}", f"model: {args.model}",
+                             f"desired: {args.desired}"])
+    print(f"{rig.describe()}: {len(trials)} trials at {r.rate_hz:g} Hz, {args.periods} "
+          f"periods of {desired.size} ticks each; every trial ended at 0 V, output off")
+    print_learning(res)
+    print(f"wrote {args.output} (every trial's period) and the trials' tick logs "
+          f"{_trial_log(args.output, 0)} ..")

@@ -132,3 +132,24 @@ def beam_filter(resonance_hz, damping):
     # with residue 2 r gives the same real output.
     r = w * w / (p - p.conjugate())
     return ModalFilter([p], [2 * r])
+
+
+def modes_filter(modes):
+    """Several lightly damped modes in parallel, unit static gain overall:
+
+        G(s) = sum_i g_i w_i^2 / (s^2 + 2 zeta_i w_i s + w_i^2),   sum_i g_i = 1,
+
+    ``modes``: (resonance_hz, damping, share g_i) per mode (the shares are normalised to
+    sum 1). One complex modal state per mode, as :func:`beam_filter`."""
+    modes = [tuple(float(v) for v in m) for m in modes]
+    if not modes or any(len(m) != 3 for m in modes):
+        raise InvalidArgumentError("modes: one or more (resonance_hz, damping, share)")
+    total = sum(m[2] for m in modes)
+    if not all(m[2] > 0 for m in modes):
+        raise InvalidArgumentError("modes: every share must be > 0")
+    poles, residues = [], []
+    for hz, zeta, share in modes:
+        one = beam_filter(hz, zeta)
+        poles.append(one.poles[0])
+        residues.append(one.residues[0] * share / total)
+    return ModalFilter(poles, residues)

@@ -35,7 +35,7 @@ import numpy as np
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._boucwen import BoucWen
-from pihyst.sim._lti import beam_filter, creep_filter
+from pihyst.sim._lti import beam_filter, creep_filter, modes_filter
 from pihyst.sim._preisach import Preisach
 from pihyst.sim._runs import checked_seed
 
@@ -44,6 +44,14 @@ SUPPLY_STEP_V = 0.01          # the paper's DC supply resolution
 NOISE_UM = 0.01               # sensor noise, standard deviation
 BEAM_RESONANCE_HZ = 54.0
 BEAM_DAMPING = 0.02
+
+
+def check_finite(values, what):
+    """InvalidArgumentError naming the first sample of ``values`` that is not finite."""
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InvalidArgumentError(f"sample {bad[0]}: {what} {values[bad[0]]} is not a "
+                                   f"finite number")
 
 
 class Plant:
@@ -63,6 +71,8 @@ class Plant:
         Supply resolution (V); 0 passes voltages unchanged.
     dynamics : tuple (resonance_hz, damping) or None
         Second-order beam dynamics.
+    modes : sequence of (resonance_hz, damping, share) or None
+        Several modes instead (:func:`pihyst.sim._lti.modes_filter`; a stage's).
     seed : int
         Seed of the noise generator.
     summary : str
@@ -70,7 +80,7 @@ class Plant:
     """
 
     def __init__(self, name, hysteresis, *, creep_per_decade=0.0, noise_um=0.0, quantum_V=0.0,
-                 dynamics=None, seed=0, summary=""):
+                 dynamics=None, modes=None, seed=0, summary=""):
         self.name = name
         self.hysteresis = hysteresis
         self.u_min = 0.0
@@ -82,7 +92,8 @@ class Plant:
         self.seed = seed
         self.summary = summary
         self._creep = creep_filter(self.creep_per_decade) if self.creep_per_decade > 0 else None
-        self._beam = beam_filter(*dynamics) if dynamics else None
+        self._beam = (modes_filter(modes) if modes else
+                      beam_filter(*dynamics) if dynamics else None)
         self.reset()
 
     def reset(self):
@@ -117,11 +128,8 @@ class Plant:
         if u.ndim != 1 or t.shape != u.shape:
             raise InvalidArgumentError(f"u and t must be one-dimensional and of equal length, got "
                              f"shapes {u.shape} and {t.shape}")
-        for arr, what in ((u, "voltage"), (t, "time")):
-            bad = np.flatnonzero(~np.isfinite(arr))
-            if bad.size:
-                raise InvalidArgumentError(f"sample {bad[0]}: {what} {arr[bad[0]]} is not a "
-                                           f"finite number")
+        check_finite(u, "voltage")
+        check_finite(t, "time")
         if u.size == 0:
             return np.empty(0)
         back = np.flatnonzero(np.diff(t) < 0)
@@ -161,7 +169,8 @@ class Plant:
         parts.append(f"sensor noise sigma {self.noise_um:g} um" if self.noise_um
                      else "no sensor noise")
         parts.append(f"second-order beam dynamics ({self.dynamics[0]:g} Hz, damping "
-                     f"{self.dynamics[1]:g})" if self._beam else "no beam dynamics")
+                     f"{self.dynamics[1]:g})" if self.dynamics
+                     else "modes after the hysteresis" if self._beam else "no beam dynamics")
         return parts[0] + " " + "; ".join(parts[1:]) + (
             f". Starts at rest at 0 V after a full 0-{self.u_max:g}-0 V cycle; noise seed "
             f"{self.seed}.")

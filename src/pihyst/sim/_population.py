@@ -6,6 +6,14 @@ random asymmetric density and reversible part, or a Bouc-Wen model with exponent
 (none, or 0.3-3 % per decade), sensor noise, supply quantisation and a sample rate from
 200 Hz to 10 kHz (log-uniform). The same seed always gives the same actuator; the
 description says what was drawn.
+
+With ``dynamics=True`` the actuator is a scanning :class:`~pihyst.sim.Stage` (the same
+hysteresis, creep and noise, drawn first and identically): one or two lightly damped
+modes (the first 100 Hz - 5 kHz, damping 1 - 10 %, both log-uniform; a second one with
+probability 1/2 at 1.5 - 4 times the first, sharing 10 - 30 % of the static gain), a
+clock of 10 - 100 kHz (log-uniform, at least 10 times the first mode), a converter delay
+of 0 - 2 ticks and an amplifier slew limit of 50 - 500 kV/s (log-uniform), drawn from a
+stream of their own so that ``dynamics=False`` draws exactly what it always drew.
 """
 
 import numpy as np
@@ -13,10 +21,33 @@ import numpy as np
 from pihyst.sim._boucwen import BoucWen
 from pihyst.sim._plant import SUPPLY_STEP_V, U_MAX, Plant
 from pihyst.sim._preisach import Preisach
+from pihyst.sim._stage import Stage
 
 __all__ = ["random_plant"]
 
 RATE_RANGE_HZ = (200.0, 10_000.0)
+MODE_RANGE_HZ = (100.0, 5_000.0)
+DAMPING_RANGE = (0.01, 0.10)
+CLOCK_RANGE_HZ = (10_000.0, 100_000.0)
+SLEW_RANGE_V_PER_S = (5e4, 5e5)
+
+
+def _log_uniform(rng, lo, hi):
+    return float(10 ** rng.uniform(np.log10(lo), np.log10(hi)))
+
+
+def _stage_dynamics(seed):
+    """Modes, clock, converter delay and slew limit of a stage (module notes)."""
+    rng = np.random.default_rng([0x5EED, int(seed), 1])
+    f1 = _log_uniform(rng, *MODE_RANGE_HZ)
+    modes = [(f1, _log_uniform(rng, *DAMPING_RANGE), 1.0)]
+    if rng.random() < 0.5:
+        share = float(rng.uniform(0.1, 0.3))
+        modes = [(f1, modes[0][1], 1.0 - share),
+                 (f1 * float(rng.uniform(1.5, 4.0)), _log_uniform(rng, *DAMPING_RANGE), share)]
+    clock = _log_uniform(rng, max(CLOCK_RANGE_HZ[0], 10 * f1), CLOCK_RANGE_HZ[1])
+    return {"modes": modes, "rate_hz": clock, "delay_samples": int(rng.integers(0, 3)),
+            "slew_V_per_s": _log_uniform(rng, *SLEW_RANGE_V_PER_S)}
 
 
 def _preisach(rng):
@@ -75,13 +106,15 @@ def _bouc_wen(rng, strong):
     raise RuntimeError("no Bouc-Wen parameters with the requested remanence found")
 
 
-def random_plant(seed):
+def random_plant(seed, *, dynamics=False):
     """A random simulated actuator and a description of what was drawn.
 
     Returns ``(plant, description)``: a :class:`~pihyst.sim.Plant` at rest at 0 V after a
     full cycle, and a dict with ``kind`` (``"preisach"`` or ``"bouc-wen"``), the
     hysteresis parameters, ``creep_per_decade``, ``noise_um``, ``rate_hz`` (the sample
-    rate its records are made at) and ``remanence_pct``.
+    rate its records are made at) and ``remanence_pct``. ``dynamics=True``: a
+    :class:`~pihyst.sim.Stage` (module notes), whose description adds ``modes``,
+    ``delay_samples`` and ``slew_V_per_s`` and whose ``rate_hz`` is its clock.
 
     Examples
     --------
@@ -104,6 +137,10 @@ def random_plant(seed):
                  "range_um": rise, "seed": int(seed)})
     summary = (f"random {desc['kind']} actuator (seed {seed}): creep "
                f"{100 * creep:.2g} %/decade, noise {noise:.3g} um, {rate:.0f} Hz")
-    plant = Plant(f"random-{seed}", hyst, creep_per_decade=creep, noise_um=noise,
-                  quantum_V=SUPPLY_STEP_V, seed=int(seed), summary=summary)
-    return plant, desc
+    options = dict(creep_per_decade=creep, noise_um=noise, quantum_V=SUPPLY_STEP_V,
+                   seed=int(seed), summary=summary)
+    if not dynamics:
+        return Plant(f"random-{seed}", hyst, **options), desc
+    stage = _stage_dynamics(seed)
+    desc.update(stage)
+    return Stage(f"random-stage-{seed}", hyst, **stage, **options), desc

@@ -254,3 +254,30 @@ def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles
     envelope = np.minimum(t / (total - period_s / 2), 1.0)
     u = u_min + (u_max - u_min) * envelope * (1 - np.cos(2 * np.pi * t / period_s)) / 2
     return t, np.clip(u, u_min, u_max)
+
+
+def band_limited_triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S,
+                          max_hz=None, dt=DEFAULT_DT):
+    """One period of a triangle with only its harmonics below ``max_hz``: a scan line
+    without the corners a stage's modes would ring on.
+
+        x(t) = -sum_{odd k, k / T < max_hz} cos(2 pi k t / T) / k^2,
+
+    scaled so that its lowest value is ``u_min`` (at t = 0) and its highest ``u_max``;
+    ``max_hz`` None keeps every harmonic below the Nyquist frequency 1 / (2 dt).
+    """
+    _check_common(u_min, u_max, dt)
+    _positive(period_s, "period_s")
+    _check_period(period_s, dt)
+    _check_samples(period_s / dt, "band_limited_triangle")
+    n = int(round(period_s / dt))
+    limit = 0.5 / dt if max_hz is None else float(max_hz)
+    if not 1.0 / period_s < limit:
+        raise InvalidArgumentError(f"max_hz {limit:g} must be above the scan rate "
+                                   f"{1.0 / period_s:g} Hz")
+    t = _times(n, dt)
+    k = np.arange(1, int(np.ceil(limit * period_s)), 2)
+    k = k[(k / period_s < limit) & (k / period_s < 0.5 / dt)]
+    x = -np.cos(2 * np.pi * np.outer(t, k) / period_s) @ (1.0 / k ** 2)
+    x = (x - x.min()) / np.ptp(x)
+    return t, u_min + (u_max - u_min) * x

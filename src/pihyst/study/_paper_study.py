@@ -85,6 +85,7 @@ class Study:
     variants: list = field(default_factory=list)
     variant_loops: dict = field(default_factory=dict)
     rig: object = None              # pihyst.study._rig_study.RigStudy: the study through the rig
+    learning: object = None         # pihyst.study._learning.LearningRun: a learning run
 
 
 # ----------------------------------------------------------------------------- helpers

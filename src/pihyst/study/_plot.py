@@ -188,3 +188,25 @@ def loops_grid_plot(loops, *, title="The simulated beams", xlabel="voltage (V)",
     axes[0].set_ylabel(ylabel)
     fig.suptitle(title)
     return fig
+
+
+def learning_curve_plot(rms, accepted, probe, *, title="Learning curve"):
+    """RMS error per trial on a log scale: kept trials filled, undone ones open, probe
+    trials marked P."""
+    fig = _figure(7.0, 3.8)
+    ax = fig.subplots()
+    trials = list(range(len(rms)))
+    ax.semilogy(trials, rms, color="0.6", lw=1.0)
+    kept = [j for j in trials if accepted[j]]
+    undone = [j for j in trials if not accepted[j]]
+    ax.semilogy(kept, [rms[j] for j in kept], "o", color="#2ca02c", label="kept")
+    ax.semilogy(undone, [rms[j] for j in undone], "o", mfc="none", color="#d62728",
+                label="undone")
+    for j in trials:
+        if probe[j]:
+            ax.annotate("P", (j, rms[j]), textcoords="offset points", xytext=(4, 4),
+                        fontsize=8)
+    ax.set(title=title, xlabel="trial", ylabel="RMS tracking error (µm)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=9)
+    return fig

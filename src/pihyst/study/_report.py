@@ -150,6 +150,9 @@ def _make_figures(study, formats=(), paper=True):
                                      annotations=m["annotations"]), "Fig. 5")
     if study.mode == "demo":
         _demo_figures(study, figs, short)
+    if study.learning is not None:
+        from pihyst.study._learning import add_learning_figures
+        add_learning_figures(study.learning, figs, plot)
     return figs
 
 
@@ -462,6 +465,9 @@ def render_html(study, figs, files, command, paper=True):
     if study.rig is not None:
         from pihyst.study._rig_study import rig_html
         parts.append(rig_html(study.rig, figs.html("rig_tracking")))
+    if study.learning is not None:
+        from pihyst.study._learning import learning_html
+        parts.append(learning_html(study.learning, figs))
     parts += ["<h2>pihyst's automatic choice</h2>", _best_section(study),
               "<h2>Notes</h2>", _notes(study),
               "<h2>Files</h2>", _files_list(files), "</body></html>"]
