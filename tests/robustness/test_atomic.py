@@ -19,7 +19,7 @@ _KILLED_WRITER = """
 import os, sys, time
 from pihyst import _atomic
 if sys.argv[2] == "named":
-    _atomic._write_unnamed = lambda path, folder, data: False
+    _atomic._open_unnamed = lambda folder: None
 real_fsync = os.fsync
 def stall(fd):
     real_fsync(fd)
@@ -68,7 +68,7 @@ def test_without_o_tmpfile_a_killed_writers_temporary_is_cleaned_once_stale(tmp_
 @pytest.mark.parametrize("unnamed", [True, False])
 def test_write_replace_and_mode(tmp_path, monkeypatch, unnamed):
     if not unnamed:
-        monkeypatch.setattr(_atomic, "_write_unnamed", lambda path, folder, data: False)
+        monkeypatch.setattr(_atomic, "_open_unnamed", lambda folder: None)
     target = tmp_path / "a.csv"
     write_atomically(target, "first\n")
     write_atomically(target, b"second\n")

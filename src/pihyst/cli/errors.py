@@ -18,7 +18,9 @@ import argparse
 import math
 import os
 import re
+import signal
 import sys
+import threading
 import traceback
 import warnings
 
@@ -35,12 +37,43 @@ EXIT_OK = 0
 EXIT_USER_ERROR = 2
 EXIT_BUG = 70            # EX_SOFTWARE of sysexits.h
 EXIT_INTERRUPTED = 130   # 128 + SIGINT
+EXIT_TERMINATED = 143    # 128 + SIGTERM
 
 BUG_REPORTS = "the pihyst issue tracker (see 'Reporting bugs' in the README)"
 
 
 class UsageError(ValueError):
     """Bad input detected by a command; the message is shown as is."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP arrived: handled as Ctrl-C is (every writer gives its file up,
+    the rig zeroes the supply), then exit status 143."""
+
+
+def _terminate(signum, frame):
+    raise Terminated(signal.Signals(signum).name)
+
+
+class _TerminationHandled:
+    """SIGTERM and SIGHUP raise :class:`Terminated` while a command runs (main thread)."""
+
+    SIGNALS = tuple(getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+    def __enter__(self):
+        self._old = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                try:
+                    self._old[sig] = signal.signal(sig, _terminate)
+                except (OSError, ValueError):
+                    pass
+        return self
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        return False
 
 
 USER_ERRORS = (RecordError, InvalidModelError, InputRangeError, FitError, InvalidArgumentError,
@@ -139,13 +172,16 @@ def run_command(run, args, *, debug=False):
     """Run a command's ``run(args)`` and turn what it raises into the exit status and
     one stderr line of docs/errors.md."""
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _TerminationHandled():
             warnings.showwarning = _show_warning
             run(args)
             sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
     except BrokenPipeError:
         _detach_stdout()
         return EXIT_OK
+    except Terminated as err:
+        _say(f"pihyst: terminated ({err})")
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         _say("pihyst: interrupted")
         return EXIT_INTERRUPTED
