@@ -19,6 +19,7 @@ import math
 import os
 import re
 import signal
+import stat
 import sys
 import threading
 import traceback
@@ -174,6 +175,7 @@ def run_command(run, args, *, debug=False):
     try:
         with warnings.catch_warnings(), _TerminationHandled():
             warnings.showwarning = _show_warning
+            refuse_outputs_over_inputs(args)
             run(args)
             sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
     except BrokenPipeError:
@@ -212,6 +214,59 @@ def check_output(path):
     does not exist, it is a folder): the error names the path."""
     from pihyst._atomic import check_target
     check_target(path)
+
+
+#: the attributes of a command's arguments that name what it writes, and their option
+OUTPUTS = {"output": "-o", "out": "--out", "figure": "--figure"}
+
+
+def refuse_outputs_over_inputs(args):
+    """UsageError, before anything is read, if an output path of ``args`` (``-o``,
+    ``--out``, ``--figure``) is empty, or is one of the command's input files: the same
+    file by device and inode, so also through a symbolic or hard link (every other
+    argument that names an existing file is an input). A report's ``--out`` folder may
+    not hold its input either: the report's files would replace it. Terminals and other
+    character devices (``/dev/null``, ``/dev/stdout``) may be both."""
+    values = getattr(args, "__dict__", None) or {}
+    inputs = []
+    for key, value in values.items():
+        if key in OUTPUTS or key == "run":
+            continue
+        for item in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(item, str) and item:
+                st = _stat(item)
+                if st is not None and not stat.S_ISDIR(st.st_mode):
+                    inputs.append((item, st))
+    for key, option in OUTPUTS.items():
+        path = values.get(key)
+        if not isinstance(path, str):
+            continue
+        if path == "":
+            raise UsageError(f"argument {option}: an empty file name ('')")
+        st = _stat(path)
+        if st is None or stat.S_ISCHR(st.st_mode):
+            continue
+        for item, ist in inputs:
+            if stat.S_ISDIR(st.st_mode):
+                if key == "out" and _inside(item, path):
+                    raise UsageError(f"{option} {path}: holds the input {item}, which the "
+                                     "report's files could replace; choose another folder")
+            elif (ist.st_dev, ist.st_ino) == (st.st_dev, st.st_ino):
+                same = "is" if os.path.abspath(item) == os.path.abspath(path) else \
+                    "is the same file as"
+                raise UsageError(f"{option} {path}: {same} the input {item}; refusing to "
+                                 "overwrite an input (choose another output file)")
+
+
+def _stat(path):
+    try:
+        return os.stat(path)
+    except (OSError, ValueError):
+        return None
+
+
+def _inside(item, folder):
+    return os.path.dirname(os.path.realpath(item)) == os.path.realpath(folder)
 
 
 def os_error_message(err):
