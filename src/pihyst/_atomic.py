@@ -272,8 +272,9 @@ class AtomicFolder:
     """A folder of files that appears complete or not at all: the files are written into
     a hidden ``.pihyst-*.tmp`` folder beside ``path`` (:attr:`build`), renamed to
     ``path`` at the end of the ``with`` block; an exception (Ctrl-C and SIGTERM
-    included) removes it. Missing parent folders are created. When ``path`` already exists and is not empty, the new files
-    replace their namesakes in it one by one (each whole) and the rest stays. A folder
+    included) removes it. Missing parent folders are created. When ``path`` already
+    exists and is not empty, the new files replace their namesakes in it one by one
+    (each whole) and the rest stays. A folder
     left by a killed process is removed by the next write beside it once an hour old.
     Errors are ``OSError`` naming ``path``."""
 

@@ -91,7 +91,8 @@ class Device(ABC):
 
     def poll(self, t):
         """Time passes without a request (what a device does on its own, e.g. a supply's
-        watchdog switching the output off)."""
+        watchdog switching the output off); nothing by default."""
+        return None
 
     @abstractmethod
     def receive(self, data, t):
