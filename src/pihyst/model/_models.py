@@ -24,6 +24,7 @@ from types import MappingProxyType
 import numpy as np
 
 from pihyst import _core, paper
+from pihyst._arguments import real_array
 from pihyst._atomic import write_atomically
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
@@ -118,6 +119,7 @@ def simulated(model, u, state, hysteresis, *, t, creep_state, pending_input, t_p
 def checked_input(u, input_range):
     """``u`` as a contiguous float array, every sample finite and inside ``input_range``
     (InvalidArgumentError, InputRangeError naming the first sample that is not)."""
+    real_array(u, "input")
     try:
         u = np.ascontiguousarray(u, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
