@@ -16,7 +16,6 @@ from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, Record
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
 
-
 _QUANTITIES = {"input": "voltage", "output": "displacement"}
 
 
