@@ -71,6 +71,11 @@ class AtomicFile:
                                                  suffix=TEMP_SUFFIX)
             self._file = os.fdopen(fd, "wb")
         except OSError as err:
+            if err.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+                # said of the folder the caller named, never of our temporary's name
+                given = os.path.dirname(self.path) or "."
+                raise type(err)(err.errno, f"cannot write: folder {given} is not writable "
+                                f"({err.strerror or err})", self.path) from None
             raise _named(err, self.path) from None
 
     def write(self, data):

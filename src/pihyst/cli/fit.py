@@ -15,6 +15,7 @@ from pihyst.cli.record_options import add_record_options, options_text, read_fro
 from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, RecordError
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
+from pihyst.model._delay import MAX_DELAY_SAMPLES
 
 _QUANTITIES = {"input": "voltage", "output": "displacement"}
 
@@ -138,6 +139,9 @@ def _delay(text):
         d = -1
     if d < 0:
         raise UsageError(f"--delay: expected a number of samples >= 0 or 'auto', got {text!r}")
+    if d > MAX_DELAY_SAMPLES:
+        raise UsageError(f"--delay: must be at most {MAX_DELAY_SAMPLES:,} samples (the "
+                         f"longest input delay pihyst holds), got {text}")
     return d
 
 

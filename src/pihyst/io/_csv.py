@@ -73,7 +73,11 @@ class ColumnWriter:
         self.names = list(names)
         self._file = AtomicFile(self.path)
         head = "".join(f"# {c}\n" for c in comments) + ",".join(self.names) + "\n"
-        self._file.write(head.encode("utf-8"))
+        try:
+            self._file.write(head.encode("utf-8"))
+        except BaseException:
+            self._file.abort()        # no caller holds this writer yet to abort it
+            raise
         self.rows = 0
 
     def write(self, columns):
