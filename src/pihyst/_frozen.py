@@ -12,6 +12,8 @@ from types import MappingProxyType
 
 import numpy as np
 
+from pihyst.exceptions import InvalidArgumentError
+
 
 def frozen_array(values, dtype=None):
     """A read-only copy of ``values`` that cannot be made writable again."""
@@ -20,8 +22,9 @@ def frozen_array(values, dtype=None):
 
 
 def _refuse(self, *args, **kwargs):
-    raise TypeError("a model's metadata is read-only: make a new model with "
-                    "model.replace(metadata={...})")
+    # InvalidArgumentError is a TypeError too: what changing a dict or list of it raises
+    raise InvalidArgumentError("a model's metadata is read-only: make a new model with "
+                               "model.replace(metadata={...})")
 
 
 class FrozenDict(dict):

@@ -110,6 +110,7 @@ protocol = "keyence-lk-g5000"
 """
 
 
+@pytest.mark.slow       # about 3 s of wall clock: make test-slow and CI run it
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs pseudo-terminals")
 def test_rig_record_killed_with_sigkill_leaves_the_supply_at_0_V(tmp_path):
     watchdog_s = 0.6

@@ -244,8 +244,9 @@ def refuse_outputs_over_inputs(args):
         if path == "":
             raise UsageError(f"argument {option}: an empty file name ('')")
         st = _stat(path)
-        if st is None or stat.S_ISCHR(st.st_mode):
-            continue
+        if st is None or stat.S_ISCHR(st.st_mode) or (key == "out" and
+                                                       not stat.S_ISDIR(st.st_mode)):
+            continue          # (a folder option on a file: the command says so itself)
         for item, ist in inputs:
             if stat.S_ISDIR(st.st_mode):
                 if key == "out" and _inside(item, path):
