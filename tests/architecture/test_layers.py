@@ -6,12 +6,13 @@ import hides a cycle from Python, not from this test). Layers, lowest first
 
 0. ``_version``, ``_atomic``, ``_core``, ``_boucwen_core``, ``_reference``, ``exceptions``,
    ``paper``, ``metrics``
-1. ``model``
-2. ``io``, ``inverse``
-3. ``identify``, ``sim``, ``control``, ``dynamics``
-4. ``rig``, ``fleet``, ``learn``
-5. ``study`` (the paper's experiment runs through everything below, the rig included)
-6. ``cli``
+1. ``_arguments``, ``_frozen`` (shared checks and read-only values)
+2. ``model``
+3. ``io``, ``inverse``
+4. ``identify``, ``sim``, ``control``, ``dynamics``
+5. ``rig``, ``fleet``, ``learn``
+6. ``study`` (the paper's experiment runs through everything below, the rig included)
+7. ``cli``
 
 A module may import its own sub-package and lower layers, never a higher layer nor a
 sibling of its own layer; nothing imports the top-level ``pihyst`` facade.
@@ -29,6 +30,7 @@ PACKAGE = Path(pihyst.__file__).parent
 LAYERS = [
     {"_version", "_atomic", "_core", "_boucwen_core", "_reference", "exceptions", "paper",
      "metrics"},
+    {"_arguments", "_frozen"},
     {"model"},
     {"io", "inverse"},
     {"identify", "sim", "control", "dynamics"},

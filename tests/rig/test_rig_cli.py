@@ -145,8 +145,10 @@ def test_track_runs_a_models_creep_at_the_tick_period(tmp_path, capsys, cfg):
 
 
 @pytest.mark.parametrize("options, expected", [
-    (["--period", "0"], "--signal triangle --period 0 --cycles 1 at 20 Hz ({cfg} [rig] "
-                        "rate_hz): period_s must be a positive number"),
+    # checked as the option is parsed (it named the API's period_s before)
+    (["--period", "0"], "argument --period: must be a positive number, got '0'"),
+    (["--cycles", "0"], "argument --cycles: must be at least 1, got 0"),
+    (["--max", "nan"], "argument --max: must be a finite number, got 'nan'"),
     (["--signal", "decaying-triangles", "--period", "0.01"],
      "--signal decaying-triangles --period 0.01 at 20 Hz ({cfg} [rig] rate_hz): dt = 0.05 s "
      "is more than half the period"),

@@ -58,6 +58,26 @@ case(FIT + ["--initial-state", "hot"], 2, "--initial-state")
 case(FIT + ["--unknown-option"], 2, "--unknown-option")
 case(["fit", "{loop}"], 2, "-o")
 
+for v in NUMBERS_BAD + ("0", "-1"):
+    case(FIT + ["--max-latency", v], 2, "--max-latency")
+for v in ("0", "-1", "x", "1.5"):
+    case(FIT + ["--max-operators", v], 2, "--max-operators")
+
+# fit-many takes fit's size options with fit's limits, refused before any record is read
+FIT_MANY = ["fit-many", "{tmp}", "-o", "{tmp}/models"]
+for v in ("129", "1000000", "1", "0", "x", "99999999999999999999999"):
+    case(FIT_MANY + ["--candidates", v], 2, "argument --candidates: must be")
+for v in ("129", "200", "0", "x"):
+    case(FIT_MANY + ["--n-operators", v], 2, "argument --n-operators: must be")
+case(FIT_MANY + ["--thresholds", ",".join(str(i) for i in range(129))], 2,
+     "--thresholds: 129 thresholds, at most 128")
+
+# an empty output name names its option (never a folder, never a temporary)
+for base in (PREDICT, FIT, COMPENSATE, TRACK, SIMULATE):
+    o = base.index("{out}")
+    case(base[:o] + [""] + base[o + 1:], 2, "argument -o: an empty file name")
+case(REPORT[:3] + [""], 2, "argument --out: an empty file name")
+
 # compensate and track: voltage limits and slew rate
 for base in (COMPENSATE, TRACK):
     for opt in ("--u-min", "--u-max"):

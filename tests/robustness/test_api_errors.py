@@ -1,6 +1,8 @@
 """The Python API raises pihyst's own exceptions (docs/errors.md) for invalid arguments:
 never a bare TypeError, ZeroDivisionError, OverflowError or a NumPy error."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -195,3 +197,52 @@ def test_arguments_of_the_wrong_kind_raise_pihysts_own_exceptions(call, exceptio
         call()
     assert type(err.value).__module__ == "pihyst.exceptions"
     assert "\n" not in str(err.value)
+
+
+NOT_REAL = {
+    "complex": np.array([1 + 0j, 2 + 1j]),
+    "complex-list": [1.0, 2 + 1j],
+    "datetime64": np.array(["2020-01-01", "2020-01-02"], dtype="datetime64[D]"),
+    "timedelta64": np.array([1, 2], dtype="timedelta64[s]"),
+    "object": np.array([1.0, 2.0], dtype=object),
+}
+BOUC = pihyst.BoucWenModel(**BOUC_WEN)
+
+
+@pytest.mark.parametrize("kind", sorted(NOT_REAL))
+@pytest.mark.parametrize("call", [
+    lambda x: pihyst.ClassicalPI(**CLASSICAL).predict(x),
+    lambda x: pihyst.ClassicalPI(**CLASSICAL).simulate(x),
+    lambda x: BOUC.predict(x),
+    lambda x: pihyst.compensate(pihyst.ClassicalPI(**CLASSICAL), x),
+    lambda x: pihyst.Compensator(pihyst.ClassicalPI(**CLASSICAL)).run(x),
+    lambda x: pihyst.compensate(BOUC, x),
+    lambda x: pihyst.fit(x, LOOPS_Y[:2]),
+    lambda x: pihyst.fit(LOOPS[:2], x),
+], ids=["predict", "simulate", "bouc-wen", "compensate", "Compensator", "compensate-bw",
+        "fit-u", "fit-y"])
+def test_non_real_arrays_are_refused(call, kind):
+    """complex (NumPy would drop the imaginary part with a mere warning), dates and
+    durations (counts of an unstated unit), objects: an InvalidArgumentError."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")          # no ComplexWarning on the way either
+        with pytest.raises(InvalidArgumentError, match="must be real numbers, got "):
+            call(NOT_REAL[kind])
+
+
+@pytest.mark.parametrize("kwargs, says", [
+    ({"n_candidates": 10 ** 6}, "^n_candidates: must be at most 128, got 1000000$"),
+    ({"n_operators": 10 ** 6}, "^n_operators: must be at most 128"),
+    ({"thresholds": np.linspace(0, 100, 10 ** 6)}, "^thresholds: 1,000,000 values, at most"),
+    ({"candidates": np.linspace(0, 100, 10 ** 6)}, "^candidates: 1,000,000 values, at most"),
+])
+def test_fit_sizes_beyond_the_limit_are_refused_before_allocating(kwargs, says):
+    import tracemalloc
+    tracemalloc.start()
+    try:
+        with pytest.raises(ResourceLimitError, match=says):
+            pihyst.fit(LOOPS, LOOPS_Y, **kwargs)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 << 20          # nothing of the size asked for was allocated

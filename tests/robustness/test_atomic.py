@@ -19,7 +19,7 @@ _KILLED_WRITER = """
 import os, sys, time
 from pihyst import _atomic
 if sys.argv[2] == "named":
-    _atomic._write_unnamed = lambda path, folder, data: False
+    _atomic._open_unnamed = lambda folder: None
 real_fsync = os.fsync
 def stall(fd):
     real_fsync(fd)
@@ -68,7 +68,7 @@ def test_without_o_tmpfile_a_killed_writers_temporary_is_cleaned_once_stale(tmp_
 @pytest.mark.parametrize("unnamed", [True, False])
 def test_write_replace_and_mode(tmp_path, monkeypatch, unnamed):
     if not unnamed:
-        monkeypatch.setattr(_atomic, "_write_unnamed", lambda path, folder, data: False)
+        monkeypatch.setattr(_atomic, "_open_unnamed", lambda folder: None)
     target = tmp_path / "a.csv"
     write_atomically(target, "first\n")
     write_atomically(target, b"second\n")
@@ -116,3 +116,46 @@ def test_closed_pipe_on_stdout_is_quiet(tmp_path):
     os.close(write)
     assert proc.returncode == 0 and proc.stderr == ""
     assert out.read_text().count("\n") > 40
+
+
+def _read_only_folder(folder):
+    raise PermissionError(13, "Permission denied", os.path.join(folder, ".pihyst-x.tmp"))
+
+
+@pytest.mark.parametrize("command", [["predict", GOOD_MODEL, VOLTS], ["simulate"]])
+def test_a_read_only_folder_is_named_never_a_temporary(tmp_path, monkeypatch, command):
+    from harness import run
+    monkeypatch.setattr(_atomic, "_open_unnamed", _read_only_folder)
+    out = tmp_path / "out.csv"
+    outcome = run([*command, "-o", str(out)])
+    assert outcome.status == 2
+    assert outcome.err.strip() == (f"pihyst: error: {out}: cannot write: folder {tmp_path} "
+                                   "is not writable (Permission denied)")
+    assert ".pihyst-" not in outcome.err and os.listdir(tmp_path) == []
+
+
+_FDOPEN = os.fdopen
+
+
+class _FullDisk:
+    """A file whose writes fail as on a full disk (an OSError naming no file)."""
+
+    def __init__(self, fd):
+        self._real = _FDOPEN(fd, "wb")
+
+    def write(self, data):
+        raise OSError(28, "No space left on device")
+
+    def __getattr__(self, name):
+        return getattr(self._real, name)
+
+
+@pytest.mark.parametrize("command", [["predict", GOOD_MODEL, VOLTS], ["simulate"]])
+def test_a_full_disk_names_the_output(tmp_path, monkeypatch, command):
+    from harness import run
+    monkeypatch.setattr(_atomic.os, "fdopen", lambda fd, mode: _FullDisk(fd))
+    out = tmp_path / "out.csv"
+    outcome = run([*command, "-o", str(out)])
+    assert outcome.status == 2
+    assert outcome.err.strip() == f"pihyst: error: {out}: No space left on device"
+    assert os.listdir(tmp_path) == []

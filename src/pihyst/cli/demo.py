@@ -3,6 +3,7 @@
 import os
 import time
 
+from pihyst._atomic import AtomicFolder
 from pihyst.cli.errors import UsageError, seed
 from pihyst.cli.report import add_figure_format_option
 from pihyst.sim import PLANT_NAMES
@@ -58,8 +59,9 @@ def run(args):
     command = f"pihyst demo --out {args.out} --plant {args.plant} --seed {args.seed}" + \
         (" --no-variants" if args.no_variants else "") + (" --no-rig" if args.no_rig else "")
     try:
-        files = write_report(study, args.out, command=command, progress=say,
-                             figure_formats=args.figure_format)
+        with AtomicFolder(args.out) as build:     # complete or not at all
+            files = write_report(study, build, command=command, progress=say,
+                                 figure_formats=args.figure_format)
     except OSError as err:
         raise UsageError(f"--out {args.out}: cannot write the report: {err.strerror}") from None
     h = study.metrics["headline"]

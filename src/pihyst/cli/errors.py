@@ -18,7 +18,10 @@ import argparse
 import math
 import os
 import re
+import signal
+import stat
 import sys
+import threading
 import traceback
 import warnings
 
@@ -35,12 +38,43 @@ EXIT_OK = 0
 EXIT_USER_ERROR = 2
 EXIT_BUG = 70            # EX_SOFTWARE of sysexits.h
 EXIT_INTERRUPTED = 130   # 128 + SIGINT
+EXIT_TERMINATED = 143    # 128 + SIGTERM
 
 BUG_REPORTS = "the pihyst issue tracker (see 'Reporting bugs' in the README)"
 
 
 class UsageError(ValueError):
     """Bad input detected by a command; the message is shown as is."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP arrived: handled as Ctrl-C is (every writer gives its file up,
+    the rig zeroes the supply), then exit status 143."""
+
+
+def _terminate(signum, frame):
+    raise Terminated(signal.Signals(signum).name)
+
+
+class _TerminationHandled:
+    """SIGTERM and SIGHUP raise :class:`Terminated` while a command runs (main thread)."""
+
+    SIGNALS = tuple(getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+    def __enter__(self):
+        self._old = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                try:
+                    self._old[sig] = signal.signal(sig, _terminate)
+                except (OSError, ValueError):
+                    pass
+        return self
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        return False
 
 
 USER_ERRORS = (RecordError, InvalidModelError, InputRangeError, FitError, InvalidArgumentError,
@@ -139,13 +173,17 @@ def run_command(run, args, *, debug=False):
     """Run a command's ``run(args)`` and turn what it raises into the exit status and
     one stderr line of docs/errors.md."""
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _TerminationHandled():
             warnings.showwarning = _show_warning
+            refuse_outputs_over_inputs(args)
             run(args)
             sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
     except BrokenPipeError:
         _detach_stdout()
         return EXIT_OK
+    except Terminated as err:
+        _say(f"pihyst: terminated ({err})")
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         _say("pihyst: interrupted")
         return EXIT_INTERRUPTED
@@ -176,6 +214,60 @@ def check_output(path):
     does not exist, it is a folder): the error names the path."""
     from pihyst._atomic import check_target
     check_target(path)
+
+
+#: the attributes of a command's arguments that name what it writes, and their option
+OUTPUTS = {"output": "-o", "out": "--out", "figure": "--figure"}
+
+
+def refuse_outputs_over_inputs(args):
+    """UsageError, before anything is read, if an output path of ``args`` (``-o``,
+    ``--out``, ``--figure``) is empty, or is one of the command's input files: the same
+    file by device and inode, so also through a symbolic or hard link (every other
+    argument that names an existing file is an input). A report's ``--out`` folder may
+    not hold its input either: the report's files would replace it. Terminals and other
+    character devices (``/dev/null``, ``/dev/stdout``) may be both."""
+    values = getattr(args, "__dict__", None) or {}
+    inputs = []
+    for key, value in values.items():
+        if key in OUTPUTS or key == "run":
+            continue
+        for item in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(item, str) and item:
+                st = _stat(item)
+                if st is not None and not stat.S_ISDIR(st.st_mode):
+                    inputs.append((item, st))
+    for key, option in OUTPUTS.items():
+        path = values.get(key)
+        if not isinstance(path, str):
+            continue
+        if path == "":
+            raise UsageError(f"argument {option}: an empty file name ('')")
+        st = _stat(path)
+        if st is None or stat.S_ISCHR(st.st_mode) or (key == "out" and
+                                                       not stat.S_ISDIR(st.st_mode)):
+            continue          # (a folder option on a file: the command says so itself)
+        for item, ist in inputs:
+            if stat.S_ISDIR(st.st_mode):
+                if key == "out" and _inside(item, path):
+                    raise UsageError(f"{option} {path}: holds the input {item}, which the "
+                                     "report's files could replace; choose another folder")
+            elif (ist.st_dev, ist.st_ino) == (st.st_dev, st.st_ino):
+                same = "is" if os.path.abspath(item) == os.path.abspath(path) else \
+                    "is the same file as"
+                raise UsageError(f"{option} {path}: {same} the input {item}; refusing to "
+                                 "overwrite an input (choose another output file)")
+
+
+def _stat(path):
+    try:
+        return os.stat(path)
+    except (OSError, ValueError):
+        return None
+
+
+def _inside(item, folder):
+    return os.path.dirname(os.path.realpath(item)) == os.path.realpath(folder)
 
 
 def os_error_message(err):

@@ -4,6 +4,7 @@ import os
 
 from pihyst._atomic import write_atomically
 from pihyst.cli.errors import UsageError
+from pihyst.exceptions import InvalidModelError
 from pihyst.io import load_model
 from pihyst.io._export import CORE_HEADERS, c_header, c_identifier, core_prefix, flat_text
 
@@ -59,8 +60,11 @@ def run(args):
         raise UsageError(f"{where}: names starting with 'pihyst' are the C core's "
                          "(pihyst_model_init, pihyst_params, ...) and would not compile; "
                          "choose another" + ("" if args.name is not None else " (--name)"))
-    text = c_header(model, name, precision="float" if args.float else "double",
-                    source=os.path.basename(args.model))
+    try:
+        text = c_header(model, name, precision="float" if args.float else "double",
+                        source=os.path.basename(args.model))
+    except InvalidModelError as err:
+        raise UsageError(f"{args.model}: {err}") from None
     write_atomically(args.output, text)
     print(f"wrote {args.output}: {model.family} model, {_size(model)} as "
           f"{c_identifier(name)}_params ({'float' if args.float else 'double'}); init with "

@@ -8,14 +8,14 @@ import warnings
 
 import numpy as np
 
+from pihyst._arguments import MAX_CANDIDATES
 from pihyst._version import __version__
-from pihyst.cli.errors import UsageError, check_output, count, step_printer
+from pihyst.cli.errors import UsageError, check_output, count, positive_number, step_printer
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, RecordError
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
-
-MAX_CANDIDATES = 128   # the subset search's cost grows fast with the grid
+from pihyst.model._delay import MAX_DELAY_SAMPLES
 
 _QUANTITIES = {"input": "voltage", "output": "displacement"}
 
@@ -38,15 +38,7 @@ def register(sub):
     p.add_argument("--model", metavar="FAMILY", choices=FAMILY_NAMES,
                    help=f"fit only this family ({', '.join(FAMILY_NAMES)}); default: all, "
                         f"the most accurate on held-back cycles is saved")
-    p.add_argument("--thresholds", metavar="LIST",
-                   help="comma-separated thresholds to use as they are (input units, from "
-                        "the bottom of the input range), e.g. 0,10,30")
-    p.add_argument("--n-operators", metavar="N", type=count(1, MAX_CANDIDATES),
-                   help="number of operators to choose from the candidates (default: "
-                        "chosen from the data)")
-    p.add_argument("--candidates", metavar="N", type=count(2, MAX_CANDIDATES), default=16,
-                   help=f"size of the candidate threshold grid (default 16, as the paper; "
-                        f"at most {MAX_CANDIDATES})")
+    add_size_options(p)
     p.add_argument("--holdout", metavar="HOW", default="alternate",
                    help="held-back cycles: 'alternate' (default), a fraction such as 0.5 "
                         "(the last half of the record), or 'none'")
@@ -73,9 +65,9 @@ def register(sub):
                         "maps u[k] to y[k+N] and carries the delay), or 'auto' (default): "
                         "chosen on held-back cycles, adopted only when clearly better "
                         "(else 0); the report says which delay was used and why")
-    p.add_argument("--max-operators", metavar="N", type=int,
+    p.add_argument("--max-operators", metavar="N", type=count(1),
                    help="choose only among models with at most N operators")
-    p.add_argument("--max-latency", metavar="US", type=float,
+    p.add_argument("--max-latency", metavar="US", type=positive_number,
                    help="choose only among models whose compensator takes at most US "
                         "microseconds per sample in the worst case (measured)")
     p.add_argument("--no-creep", action="store_true",
@@ -86,6 +78,21 @@ def register(sub):
                         "(default: the span of the record); must contain that span")
     add_record_options(p, "DATA")
     p.set_defaults(run=run)
+
+
+def add_size_options(p):
+    """--thresholds, --n-operators and --candidates, with their limits (shared by fit
+    and fit-many: the same values are refused, with the same message, before anything
+    is read)."""
+    p.add_argument("--thresholds", metavar="LIST",
+                   help="comma-separated thresholds to use as they are (input units, from "
+                        "the bottom of the input range), e.g. 0,10,30")
+    p.add_argument("--n-operators", metavar="N", type=count(1, MAX_CANDIDATES),
+                   help="number of operators to choose from the candidates (default: "
+                        "chosen from the data)")
+    p.add_argument("--candidates", metavar="N", type=count(2, MAX_CANDIDATES), default=16,
+                   help=f"size of the candidate threshold grid (default 16, as the paper; "
+                        f"at most {MAX_CANDIDATES})")
 
 
 def _thresholds(text):
@@ -132,6 +139,9 @@ def _delay(text):
         d = -1
     if d < 0:
         raise UsageError(f"--delay: expected a number of samples >= 0 or 'auto', got {text!r}")
+    if d > MAX_DELAY_SAMPLES:
+        raise UsageError(f"--delay: must be at most {MAX_DELAY_SAMPLES:,} samples (the "
+                         f"longest input delay pihyst holds), got {text}")
     return d
 
 

@@ -11,7 +11,7 @@ import sys
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError
-from pihyst.cli.fit import _delay, _holdout, _thresholds
+from pihyst.cli.fit import _delay, _holdout, _thresholds, add_size_options
 from pihyst.fleet import fit_many, summary_csv, summary_json
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES
 from pihyst.io import save_model
@@ -51,12 +51,7 @@ def register(sub):
     p.add_argument("--model", metavar="FAMILY", choices=FAMILY_NAMES,
                    help=f"fit only this family ({', '.join(FAMILY_NAMES)}); default: all, "
                         f"the most accurate on held-back cycles is saved")
-    p.add_argument("--thresholds", metavar="LIST",
-                   help="comma-separated thresholds to use as they are, e.g. 0,10,30")
-    p.add_argument("--n-operators", metavar="N", type=int,
-                   help="number of operators to choose from the candidates")
-    p.add_argument("--candidates", metavar="N", type=int, default=16,
-                   help="size of the candidate threshold grid (default 16)")
+    add_size_options(p)                # as pihyst fit: the same limits, the same errors
     p.add_argument("--holdout", metavar="HOW", default="alternate",
                    help="held-back cycles: 'alternate' (default), a fraction, or 'none'")
     p.add_argument("--initial-state", choices=INITIAL_STATES, default="auto",
@@ -98,10 +93,6 @@ def _records(folder):
 def _options(args):
     thresholds = _thresholds(args.thresholds)
     holdout = _holdout(args.holdout)
-    if args.n_operators is not None and args.n_operators < 1:
-        raise UsageError(f"--n-operators must be at least 1, got {args.n_operators}")
-    if args.candidates < 2:
-        raise UsageError(f"--candidates must be at least 2, got {args.candidates}")
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be at least 1, got {args.workers}")
     if args.workers is not None and args.scheduler != "local":

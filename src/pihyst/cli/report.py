@@ -5,6 +5,7 @@ import time
 
 import numpy as np
 
+from pihyst._atomic import AtomicFolder
 from pihyst.cli.errors import UsageError
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 
@@ -77,11 +78,14 @@ def run(args):
     try:
         given = options_text(args)
         learning_option = f" --learning {args.learning}" if args.learning else ""
-        files = write_report(study, out, command=f"pihyst report {args.data} --out {out}"
-                                                 + learning_option
-                                                 + (f" {given}" if given else ""),
-                             figure_formats=args.figure_format, paper=args.paper,
-                             progress=say)
+        # built in a hidden folder beside OUT, renamed at the end: complete or not at all
+        with AtomicFolder(out) as build:
+            files = write_report(study, build,
+                                 command=f"pihyst report {args.data} --out {out}"
+                                         + learning_option
+                                         + (f" {given}" if given else ""),
+                                 figure_formats=args.figure_format, paper=args.paper,
+                                 progress=say)
     except OSError as err:
         raise UsageError(f"--out {out}: cannot write the report: {err.strerror}") from None
     fit = study.metrics["fit"]

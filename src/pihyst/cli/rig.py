@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from pihyst.cli.errors import UsageError, positive_number
+from pihyst.cli.errors import UsageError, count, number, positive_number
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
@@ -69,13 +69,14 @@ def register(sub):
     r.add_argument("--voltages", metavar="FILE.csv",
                    help="drive the voltage_V column of a CSV instead (resampled at the tick "
                         "rate if it has time_s, else one value per tick)")
-    r.add_argument("--min", type=float, default=None, metavar="V", dest="u_min",
+    r.add_argument("--min", type=number, default=None, metavar="V", dest="u_min",
                    help="lowest voltage (default: [rig] u_min)")
-    r.add_argument("--max", type=float, default=None, metavar="V", dest="u_max",
+    r.add_argument("--max", type=number, default=None, metavar="V", dest="u_max",
                    help="highest voltage (default: [rig] u_max)")
-    r.add_argument("--period", type=float, default=300.0, metavar="S",
+    r.add_argument("--period", type=positive_number, default=300.0, metavar="S",
                    help="period of triangle and sine (default 300 s)")
-    r.add_argument("--cycles", type=int, default=1, metavar="N", help="cycles (default 1)")
+    r.add_argument("--cycles", type=count(1, MAX_TICKS), default=1, metavar="N",
+                   help="cycles (default 1)")
     _common(r)
     r.set_defaults(run=run_record)
 

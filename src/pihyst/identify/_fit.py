@@ -29,6 +29,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from pihyst._arguments import check_fit_sizes, real_array
 from pihyst._version import __version__
 from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify import _delay
@@ -226,6 +227,10 @@ def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None
     >>> res.report.chosen, res.model.family
     ('modified-pi', 'pwl')
     """
+    # no new local names here: locals() below passes the arguments on
+    real_array(u, "u"), real_array(y, "y"), real_array(t, "t")
+    check_fit_sizes(n_candidates=n_candidates, n_operators=n_operators,
+                    thresholds=thresholds, candidates=candidates)
     if isinstance(creep, str) and creep != "auto":
         raise FitError(f"creep must be 'auto', True, False or time constants (s), got "
                        f"{creep!r}")

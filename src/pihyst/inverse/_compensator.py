@@ -35,6 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from pihyst import _core
+from pihyst._arguments import real_array
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.model import InvalidModelError, PIModel
 from pihyst.model._creep import sample_intervals
@@ -553,6 +554,7 @@ def _number(value, name, allow_inf=False, allow_nan=False):
 
 
 def _desired(y_desired):
+    real_array(y_desired, "y_desired")
     try:
         y = np.array(y_desired, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):

@@ -7,10 +7,10 @@ Errors are :class:`CSVError` with a one-line message ``FILE:LINE:COLUMN: what is
 
 import io as _io
 import os
-import tempfile
 
 import numpy as np
 
+from pihyst._atomic import AtomicFile
 from pihyst.exceptions import CSVError
 from pihyst.io._text_check import data_line_of
 from pihyst.io._text_source import TextSource
@@ -59,9 +59,10 @@ def _all_lines(blocks):
 
 
 class ColumnWriter:
-    """A CSV file written block by block that appears only once complete: rows go to a
-    temporary file in the target's folder, renamed over the target by :meth:`close`;
-    an exception inside ``with ColumnWriter(...)`` removes it.
+    """A CSV file written block by block that appears only once complete, through
+    :class:`pihyst._atomic.AtomicFile`: rows go to an unnamed file in the target's
+    folder (nothing is left if the process is killed), put in place by :meth:`close`;
+    :meth:`abort`, or an exception inside ``with ColumnWriter(...)``, gives it up.
 
     Values are written as the shortest decimal that reads back exactly (pyarrow's
     writer when installed, else Python's ``repr``)."""
@@ -70,11 +71,13 @@ class ColumnWriter:
         self.path = os.fspath(path)
         self.engine = engine
         self.names = list(names)
-        folder = os.path.dirname(os.path.abspath(self.path))
-        fd, self._tmp = tempfile.mkstemp(dir=folder, prefix=".pihyst-", suffix=".tmp")
-        self._file = os.fdopen(fd, "wb")
+        self._file = AtomicFile(self.path)
         head = "".join(f"# {c}\n" for c in comments) + ",".join(self.names) + "\n"
-        self._file.write(head.encode("utf-8"))
+        try:
+            self._file.write(head.encode("utf-8"))
+        except BaseException:
+            self._file.abort()        # no caller holds this writer yet to abort it
+            raise
         self.rows = 0
 
     def write(self, columns):
@@ -87,16 +90,10 @@ class ColumnWriter:
         self.rows += n
 
     def close(self):
-        self._file.close()
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(self._tmp, 0o666 & ~umask)
-        os.replace(self._tmp, self.path)
+        self._file.commit()
 
     def abort(self):
-        self._file.close()
-        if os.path.exists(self._tmp):
-            os.unlink(self._tmp)
+        self._file.abort()
 
     def __enter__(self):
         return self

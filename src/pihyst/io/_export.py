@@ -72,9 +72,20 @@ def checked_c_prefix(name):
     return ident
 
 
-def _literal(x, precision):
+FLOAT_MAX = float(np.finfo(np.float32).max)
+
+
+def _literal(x, precision, where=""):
+    """A C literal of ``x``; InvalidModelError naming the value when single precision
+    cannot hold it (it would be written as ``inf``, which does not compile)."""
     if precision == "float":
-        v = np.float32(x)
+        if abs(float(x)) > FLOAT_MAX:
+            raise InvalidModelError(
+                f"{where or 'a value'} = {float(x)!r} is beyond the range of float "
+                f"(largest {FLOAT_MAX:.8g}): --float cannot hold it; export in double "
+                "precision (without --float)")
+        with np.errstate(over="ignore"):
+            v = np.float32(x)
         text = np.format_float_positional(v, unique=True, trim="0") if abs(v) < 1e16 and \
             (v == 0 or abs(v) >= 1e-4) else np.format_float_scientific(v, unique=True)
         return (text if any(c in text for c in ".e") else text + ".0") + "f"
@@ -82,7 +93,7 @@ def _literal(x, precision):
 
 
 def _array(ctype, name, values, precision, per_line=4):
-    items = [_literal(v, precision) for v in values]
+    items = [_literal(v, precision, f"{name}[{i}]") for i, v in enumerate(values)]
     lines = [", ".join(items[i:i + per_line]) for i in range(0, len(items), per_line)]
     body = ",\n    ".join(lines)
     return f"static const {ctype} {name}[{len(items)}] = {{\n    {body}\n}};\n"
@@ -153,13 +164,13 @@ def c_header(model, name, *, precision="double", source=""):
                        precision)]
     out += [_array(real, f"{name}_weights", model.weights, precision),
             _array(real, f"{name}_initial_state", model.initial_state, precision), "\n"]
-    lit = lambda v: _literal(v, precision)  # noqa: E731
+    lit = lambda v, where="": _literal(v, precision, where)  # noqa: E731
     fields = [f"    .family = {_FAMILY_ENUM[model.family]},", f"    .n_ops = {k},"]
     if model.family != "pwl":
         fields.append(f"    .thresholds = {name}_thresholds,")
-    fields += [f"    .weights = {name}_weights,", f"    .offset = {lit(model.offset)},",
-               f"    .u_min = {lit(model.input_range[0])},",
-               f"    .u_max = {lit(model.input_range[1])},"]
+    fields += [f"    .weights = {name}_weights,", f"    .offset = {lit(model.offset, 'offset')},",
+               f"    .u_min = {lit(model.input_range[0], 'input_range[0]')},",
+               f"    .u_max = {lit(model.input_range[1], 'input_range[1]')},"]
     if model.family == "multislope":
         fields.append(f"    .shape = {{.U = {lit(model.U)}, .a = {lit(model.a)}, "
                       f".b = {lit(model.b)}, .h = {lit(model.h)}}},")

@@ -115,7 +115,10 @@ def head_lines(head, at_eof, limit=SAMPLE_LINES):
     up to the ``limit``-th meaningful one."""
     start = len(BOM) if head.startswith(BOM) else 0
     out, number, pos, meaningful = [], 1, start, 0
-    for m in _LINE.finditer(head, start):
+    # complete lines only: on a partial last line (a line longer than the head) the
+    # pattern would be tried at each of its bytes, to its end each time (quadratic)
+    complete = max(head.rfind(b"\n"), head.rfind(b"\r")) + 1
+    for m in _LINE.finditer(head, start, max(complete, start)):
         text = decode_line(m.group(1))
         out.append((number, m.end(), text))
         number += 1

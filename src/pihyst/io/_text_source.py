@@ -37,6 +37,11 @@ class TextSource:
             raise CSVError(self.path, 1, 0, "not a text file (it holds NUL bytes); "
                            "binary records: .npy, .npz, .mat, .h5, .parquet")
         self.dialect = sniff(head, at_eof, separator=sep, decimal=decimal)
+        if self.dialect is None and not at_eof:
+            # nothing but blank or comment lines, then a line longer than the head
+            line = head.count(b"\n") + 1
+            raise CSVError(self.path, line, 0, f"a line longer than {len(head):,} bytes "
+                           "before any data line: not a record")
         if self.dialect is None:
             raise CSVError(self.path, 1, 0, "empty file: no data lines")
         self.columns = self.dialect.header

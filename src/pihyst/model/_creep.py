@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from pihyst import _core
+from pihyst._frozen import frozen_array
 from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 
 __all__ = ["Creep", "creep_twin_run", "creep_twin_step", "creep_twin_target",
@@ -132,8 +133,7 @@ def _vector(values, name, length=None):
                                 f"got {a.size}")
     if not np.all(np.isfinite(a)):
         raise InvalidModelError(f"{name} must be finite numbers")
-    a.setflags(write=False)
-    return a
+    return frozen_array(a)       # read-only, and cannot be made writable again
 
 
 #: The slowest creep lag's time constant is at least this (s): holds of minutes

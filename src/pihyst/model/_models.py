@@ -24,7 +24,9 @@ from types import MappingProxyType
 import numpy as np
 
 from pihyst import _core, paper
+from pihyst._arguments import real_array
 from pihyst._atomic import write_atomically
+from pihyst._frozen import frozen, frozen_array
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
 from pihyst.model._classical_inverse import classical_inverse
 from pihyst.model._creep import Creep, first_interval, sample_intervals
@@ -91,8 +93,7 @@ def _finite_vector(values, name, length=None):
     bad = np.flatnonzero(~np.isfinite(a))
     if bad.size:
         raise InvalidModelError(f"{name}[{bad[0]}] is {a[bad[0]]}, not a finite number")
-    a.setflags(write=False)
-    return a
+    return frozen_array(a)       # read-only, and cannot be made writable again
 
 
 def simulated(model, u, state, hysteresis, *, t, creep_state, pending_input, t_previous):
@@ -118,6 +119,7 @@ def simulated(model, u, state, hysteresis, *, t, creep_state, pending_input, t_p
 def checked_input(u, input_range):
     """``u`` as a contiguous float array, every sample finite and inside ``input_range``
     (InvalidArgumentError, InputRangeError naming the first sample that is not)."""
+    real_array(u, "input")
     try:
         u = np.ascontiguousarray(u, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
@@ -155,10 +157,11 @@ def checked_units(units):
 
 
 def checked_metadata(metadata):
-    """Read-only metadata of a model; InvalidModelError if not a dict."""
+    """Deeply read-only metadata of a model (nested dicts and lists too: ``FrozenDict``,
+    ``FrozenList``); InvalidModelError if not a dict."""
     if metadata is not None and not isinstance(metadata, (dict, MappingProxyType)):
         raise InvalidModelError(f"metadata must be a dict, got {type(metadata).__name__}")
-    return MappingProxyType(dict(metadata or {}))
+    return frozen(metadata or {})
 
 
 def metadata_json(value, where="metadata"):
@@ -253,9 +256,8 @@ class PIModel(Immutable, ABC):
             raise InvalidModelError(f"input_range {[lo, hi]} is too wide: its span overflows")
         set_(self, "input_range", (lo, hi))
         set_(self, "initial_state",
-             np.zeros(self.weights.size) if initial_state is None else
+             frozen_array(np.zeros(self.weights.size)) if initial_state is None else
              _finite_vector(initial_state, "initial_state", self.weights.size))
-        self.initial_state.setflags(write=False)
         set_(self, "units", checked_units(units))
         set_(self, "metadata", checked_metadata(metadata))
         set_(self, "_bank", self._new_bank(self.initial_state))

@@ -91,6 +91,11 @@ class SupplyConfig:
     echo: bool = False                    # the device echoes each command
     prompt: str = ""                      # sent by the device when it is ready again
     reply_pattern: str = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
+    # the supply's communication watchdog: output off after watchdog_s without a request
+    watchdog_s: float = None              # armed at the start of a run when set
+    watchdog_register: int = None         # Modbus: holds the timeout (function 06) ...
+    watchdog_scale: float = 1000.0        # ... in these units per second (1000: ms)
+    watchdog_command: str = None          # ASCII: e.g. "WDOG {seconds:.1f}" (0 disarms)
 
 
 @dataclass(frozen=True)
@@ -179,14 +184,15 @@ def _convert(check, section, name, value, default):
     """Check one value against the type of its default."""
     kind = type(default)
     if name in ("slew_V_per_s", "ramp_V_per_s", "readback_tolerance_V", "scale", "scale_um",
-                "rate_hz", "timeout_s") or kind is float:
+                "rate_hz", "timeout_s", "watchdog_s", "watchdog_scale") or kind is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             check.fail(section, name, f"must be a number, got {value!r}")
         value = float(value)
         if not math.isfinite(value):
             check.fail(section, name, f"must be a finite number, got {value}")
         return value
-    if name in ("output_register", "readback_register", "address", "baudrate") or kind is int:
+    if name in ("output_register", "readback_register", "address", "baudrate",
+                "watchdog_register") or kind is int:
         if isinstance(value, bool) or not isinstance(value, int):
             check.fail(section, name, f"must be a whole number, got {value!r}")
         return value
@@ -270,7 +276,9 @@ def _validate(check, cfg):
         check.fail("rig", "u_max", f"{r.u_max:g} V is {r.u_max * s.scale:g} register units at "
                    f"[supply] scale {s.scale:g}: more than a {s.setpoint_format} setpoint "
                    f"holds ({largest:g})")
-    for name in ("setpoint_register", "output_register", "readback_register"):
+    _validate_watchdog(check, cfg)
+    for name in ("setpoint_register", "output_register", "readback_register",
+                 "watchdog_register"):
         v = getattr(s, name)
         if v is not None and not 0 <= v <= 0xFFFF:
             check.fail("supply", name, f"must be a register address 0..65535, got {v}")
@@ -297,6 +305,43 @@ def _validate(check, cfg):
     if not 0 <= e.sensor_decimals <= 6:
         check.fail("emulator", "sensor_decimals", f"must be 0..6, got {e.sensor_decimals}")
     _positive(check, "emulator", "sensor_range_um", e.sensor_range_um)
+
+
+def _validate_watchdog(check, cfg):
+    """[supply] watchdog_s and the register or command that arms it: both or neither;
+    a timeout that the loop's requests (one per tick at least) can keep from tripping,
+    and that the register can hold."""
+    s, r = cfg.supply, cfg.rig
+    where = "watchdog_register" if s.protocol == "modbus-rtu" else "watchdog_command"
+    how = getattr(s, where)
+    if s.watchdog_s is None:
+        if how is not None:
+            check.fail("supply", where, "names the supply's watchdog but watchdog_s (its "
+                       "timeout in seconds) is not set")
+        return
+    _positive(check, "supply", "watchdog_s", s.watchdog_s)
+    if how is None:
+        check.fail("supply", "watchdog_s", f"is set but {where} (how to arm the supply's "
+                   "watchdog) is not")
+    # a tick may take its period plus a sensor timeout and a supply timeout
+    gap = r.period_s + cfg.sensor.timeout_s + s.timeout_s
+    if s.watchdog_s < 2 * gap:
+        check.fail("supply", "watchdog_s", f"{s.watchdog_s:g} s would trip between two "
+                   f"ticks: at least {2 * gap:g} s (twice the period {r.period_s:g} s plus "
+                   "the sensor's and the supply's timeouts)")
+    if s.protocol == "modbus-rtu":
+        _positive(check, "supply", "watchdog_scale", s.watchdog_scale)
+        counts = round(s.watchdog_s * s.watchdog_scale)
+        if not 1 <= counts <= 0xFFFF:
+            check.fail("supply", "watchdog_s", f"{s.watchdog_s:g} s is {counts} register "
+                       f"units at watchdog_scale {s.watchdog_scale:g}: a uint16 register "
+                       "holds 1..65535")
+    else:
+        try:
+            s.watchdog_command.format(seconds=1.0)
+        except (KeyError, ValueError, IndexError, AttributeError) as err:
+            check.fail("supply", "watchdog_command", f"bad template ({err}); use "
+                       "{seconds} or {seconds:.1f} for the timeout")
 
 
 def parse_config(text, source="<string>"):

@@ -143,7 +143,7 @@ class Controller:
         try:
             reading = self.sensor.read()
         except OSError as err:
-            return NAN, f"error: {err}", f"sensor: {err}"
+            return NAN, f"error: {err}", _from("sensor", err)
         if not reading.valid:
             self._invalid += 1
             return NAN, reading.status, None
@@ -184,7 +184,7 @@ class Controller:
             self._send(u)
             sent = u
         except OSError as err:
-            error = error or f"supply: {err}"
+            error = error or _from("supply", err)
             supply_status = f"error: {err}"
         readback = NAN
         if (self.supply.has_readback and phase == "run" and supply_status == "ok"
@@ -201,6 +201,12 @@ class Controller:
         else:
             self._comm_errors += 1
             self._last_error = error
+        # the first trouble of the current streak: what a stop names first
+        trouble = error or (None if status == "ok" else f"sensor reading {status}")
+        if trouble is None:
+            self._first_cause = None
+        elif self._first_cause is None:
+            self._first_cause = (self.tick, trouble)
         end = self.clock.now()
         nxt, overrun = self._advance(deadline, end)
         record = TickRecord(self.tick, start - self.t0, phase, reference, command, sent,
@@ -214,24 +220,34 @@ class Controller:
         self._to_log("write", record)
         self.tick += 1
 
+    def _stop(self, message):
+        """StopRun with ``message``, naming first the trouble that began the streak of
+        bad ticks it ends (a silent sensor, before the readback that the supply's own
+        watchdog then zeroed)."""
+        cause = self._first_cause
+        if cause is not None and cause[1] not in message and not (
+                cause[1].startswith("sensor reading") and "invalid sensor readings" in message):
+            message = f"{cause[1]} (from tick {cause[0]}); then {message}"
+        raise StopRun(message)
+
     def _check(self, r):
         s = self.settings
         if self._log_error is not None:
             raise StopRun(f"the log could not be written ({self._log_error})")
         if self._comm_errors >= s.max_comm_errors:
-            raise StopRun(f"{self._comm_errors} consecutive communication errors (last: "
-                          f"{self._last_error})")
+            self._stop(f"{self._comm_errors} consecutive communication errors (last: "
+                       f"{self._last_error})")
         if self._invalid >= s.max_invalid_readings:
-            raise StopRun(f"{self._invalid} consecutive invalid sensor readings "
-                          f"({r.sensor_status})")
+            self._stop(f"{self._invalid} consecutive invalid sensor readings "
+                       f"({r.sensor_status})")
         if self._consecutive_overruns >= s.max_overruns:
-            raise StopRun(f"{self._consecutive_overruns} consecutive overruns: the ticks take "
-                          f"longer than the period {1000 * s.period_s:.1f} ms (last "
-                          f"{1000 * r.busy_s:.1f} ms)")
+            self._stop(f"{self._consecutive_overruns} consecutive overruns: the ticks take "
+                       f"longer than the period {1000 * s.period_s:.1f} ms (last "
+                       f"{1000 * r.busy_s:.1f} ms)")
         if not math.isnan(r.readback_V) and not math.isnan(r.voltage_V) and \
                 abs(r.readback_V - r.voltage_V) > s.readback_tolerance_V:
-            raise StopRun(f"readback {r.readback_V:.3f} V differs from the command "
-                          f"{r.voltage_V:.3f} V by more than {s.readback_tolerance_V:g} V")
+            self._stop(f"readback {r.readback_V:.3f} V differs from the command "
+                       f"{r.voltage_V:.3f} V by more than {s.readback_tolerance_V:g} V")
         if s.stuck_ticks and r.sensor_status == "ok":
             self._recent.append((r.displacement_um, r.voltage_V))
             del self._recent[:-s.stuck_ticks]
@@ -239,9 +255,9 @@ class Controller:
                 ys = {y for y, _ in self._recent}
                 us = [u for _, u in self._recent if not math.isnan(u)]
                 if len(ys) == 1 and us and max(us) - min(us) > s.stuck_volts:
-                    raise StopRun(f"sensor value stuck at {r.displacement_um:g} um for "
-                                  f"{s.stuck_ticks} ticks while the voltage moved "
-                                  f"{max(us) - min(us):.3g} V")
+                    self._stop(f"sensor value stuck at {r.displacement_um:g} um for "
+                               f"{s.stuck_ticks} ticks while the voltage moved "
+                               f"{max(us) - min(us):.3g} V")
 
     # ------------------------------------------------------------------ run
     def run(self, program):
@@ -253,6 +269,7 @@ class Controller:
         self.records, self.tick, self.overruns = [], 0, 0
         self._comm_errors = self._invalid = self._consecutive_overruns = 0
         self._last_error = ""
+        self._first_cause = None
         self._log_error = None
         self._recent = []
         self._watchdog = None
@@ -269,16 +286,24 @@ class Controller:
                 limit = s.watchdog_periods * s.period_s
                 self._watchdog = Watchdog(limit, self._zero_from_watchdog).start()
                 self._watchdog.busy()
+            watchdog = getattr(self.supply, "has_watchdog", False)
             for attempt in range(s.max_comm_errors):
                 try:
                     with self._supply_lock:
                         self.supply.set_voltage(0.0)
+                        if watchdog:
+                            # from now on the supply switches itself off when pihyst
+                            # goes silent (killed, hung): every request feeds it
+                            self.supply.arm_watchdog()
                         self.supply.output_on()
                     break
                 except OSError as err:
                     if attempt == s.max_comm_errors - 1:
                         raise StopRun(f"could not start: supply: {err}") from None
             self.t0 = deadline = self.clock.now()
+            if watchdog:
+                self._note(f"supply watchdog armed: output off after "
+                           f"{self.supply.cfg.watchdog_s:g} s without a request")
             self._note(f"start: 0 V, output on; {program.describe()}")
             if hasattr(program, "bind_tick"):
                 program.bind_tick(s.period_s)
@@ -372,6 +397,12 @@ class Controller:
                 except Exception as err:  # noqa: BLE001 - see the docstring
                     if attempt == 2:
                         problems.append(f"could not send {what}: {err}")
+        if not problems and getattr(self.supply, "has_watchdog", False):
+            try:
+                with self._supply_lock:
+                    self.supply.disarm_watchdog()      # the output is off already
+            except Exception as err:  # noqa: BLE001 - see the docstring
+                self._note(f"could not disarm the supply's watchdog: {err}")
         if not problems and self.supply.has_readback:
             left = self._residual_voltage()
             if left is not None:
@@ -401,6 +432,12 @@ class Controller:
             if value is None or abs(value) <= s.readback_tolerance_V:
                 return None
         return value
+
+def _from(device, err):
+    """``device: what went wrong`` (the drivers' messages often name the device already)."""
+    text = str(err)
+    return text if text.startswith(device) else f"{device}: {text}"
+
 
 def check_limits(supply, settings):
     """InvalidArgumentError unless ``supply`` may be sent every voltage within the rig's

@@ -89,6 +89,11 @@ class Device(ABC):
     def vanished(self, t):
         return self.faults.vanished(t - self.t0)
 
+    def poll(self, t):
+        """Time passes without a request (what a device does on its own, e.g. a supply's
+        watchdog switching the output off); nothing by default."""
+        return None
+
     @abstractmethod
     def receive(self, data, t):
         """Bytes ``data`` arrived complete at time ``t``: the replies, as a list of
@@ -157,6 +162,10 @@ class SupplyState:
         self.poll(t)
         self.last_request = t
 
+    def set_watchdog(self, seconds):
+        """The controller armed (``seconds`` > 0) or disarmed (0) the watchdog."""
+        self.watchdog_s = float(seconds)
+
     def set_voltage(self, volts, t):
         self.commands.append((t, volts))
         if self.stuck:
@@ -201,6 +210,8 @@ class ModbusSupply(Device):
             return words[self.readback_regs.index(address)]
         if address == cfg.output_register:
             return int(st.output_on)
+        if cfg.watchdog_register is not None and address == cfg.watchdog_register:
+            return min(0xFFFF, int(round(st.watchdog_s * cfg.watchdog_scale)))
         raise _ModbusException(2)
 
     def _write(self, start, words, t):
@@ -211,6 +222,9 @@ class ModbusSupply(Device):
                 raise _ModbusException(3)
             st.set_output(words[0] == 1, t)
             return
+        if cfg.watchdog_register is not None and regs == [cfg.watchdog_register]:
+            st.set_watchdog(words[0] / cfg.watchdog_scale)
+            return
         if regs != self.setpoint_regs:
             raise _ModbusException(2)
         volts = decode_registers(words, cfg.setpoint_format, cfg.word_order) / cfg.scale
@@ -218,6 +232,9 @@ class ModbusSupply(Device):
             raise _ModbusException(3)
         self._setpoint_words = list(words)
         st.set_voltage(volts, t)
+
+    def poll(self, t):
+        self.state.poll(t)
 
     def receive(self, data, t):
         char = self.char_bits / self.baudrate
@@ -283,10 +300,10 @@ def _max_value(cfg):
     return {"uint16": 0xFFFF, "uint32": 0xFFFFFFFF, "float32": 3.4e38}[cfg.setpoint_format]
 
 
-def template_regex(template):
+def template_regex(template, name="volts"):
     """A regular expression matching what a command template produces, with one group
-    for the voltage: 'VOLT {volts:.2f}' -> 'VOLT\\ ([-+]?[0-9.eE+-]+)'."""
-    parts = re.split(r"\{volts(?::[^}]*)?\}", template)
+    for the number ``name``: 'VOLT {volts:.2f}' -> 'VOLT\\ ([-+]?[0-9.eE+-]+)'."""
+    parts = re.split(r"\{" + name + r"(?::[^}]*)?\}", template)
     number = r"\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*"
     return re.compile(number.join(re.escape(p) for p in parts))
 
@@ -303,7 +320,12 @@ class AsciiSupply(Device):
         self.state = state
         self.reply_template = reply_template
         self._set = template_regex(cfg.set_command)
+        self._watchdog = (None if cfg.watchdog_command is None else
+                          template_regex(cfg.watchdog_command, "seconds"))
         self._buffer = b""
+
+    def poll(self, t):
+        self.state.poll(t)
 
     def receive(self, data, t):
         term = self.cfg.terminator.encode()
@@ -336,6 +358,8 @@ class AsciiSupply(Device):
                 out += "ERROR" + term
         elif cfg.query_command and line == cfg.query_command:
             out += cfg.prompt + self.reply_template.format(volts=st.output_V) + term
+        elif self._watchdog is not None and self._watchdog.fullmatch(line):
+            st.set_watchdog(float(self._watchdog.fullmatch(line).group(1)))
         elif cfg.output_on_command and line == cfg.output_on_command:
             st.set_output(True, t)
         elif cfg.output_off_command and line == cfg.output_off_command:

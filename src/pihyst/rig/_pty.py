@@ -38,6 +38,7 @@ class _PtyDevice:
         while not self._stop.is_set():
             if self.device.vanished(WallClock.now()):
                 break
+            self.device.poll(WallClock.now())   # its watchdog trips without a request
             try:
                 ready, _, _ = select.select([self.master], [], [], 0.02)
                 if not ready:

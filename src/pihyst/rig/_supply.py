@@ -131,6 +131,20 @@ class ModbusRtuSupply:
     def output_off(self):
         self._output(False)
 
+    @property
+    def has_watchdog(self):
+        """The configuration names the supply's communication watchdog."""
+        return self.cfg.watchdog_s is not None and self.cfg.watchdog_register is not None
+
+    def arm_watchdog(self):
+        """Output off after ``watchdog_s`` without a request (every request feeds it)."""
+        c = self.cfg
+        self.instrument.write_register(c.watchdog_register,
+                                       int(round(c.watchdog_s * c.watchdog_scale)), 0, 6)
+
+    def disarm_watchdog(self):
+        self.instrument.write_register(self.cfg.watchdog_register, 0, 0, 6)
+
     def close(self):
         close_port(self.port)
 
@@ -214,6 +228,18 @@ class AsciiSupply:
     def output_off(self):
         if self.cfg.output_off_command:
             self._command(self.cfg.output_off_command)
+
+    @property
+    def has_watchdog(self):
+        """The configuration names the supply's communication watchdog."""
+        return self.cfg.watchdog_s is not None and self.cfg.watchdog_command is not None
+
+    def arm_watchdog(self):
+        """Output off after ``watchdog_s`` without a command (every command feeds it)."""
+        self._command(self.cfg.watchdog_command.format(seconds=self.cfg.watchdog_s))
+
+    def disarm_watchdog(self):
+        self._command(self.cfg.watchdog_command.format(seconds=0.0))
 
     def close(self):
         close_port(self.port)
