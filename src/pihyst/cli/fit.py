@@ -25,7 +25,7 @@ def register(sub):
         "fit", help="fit hysteresis models to a measured loop",
         description="Fit PI-type models to the voltage_V and displacement_um columns of "
                     "DATA.csv, judge them on held-back cycles (and on another record with "
-                    "--validate), save the smallest, fastest of those within 2 %% of the "
+                    "--validate), save the smallest, fastest of those within 2 % of the "
                     "best as MODEL.json and print a report (errors per kind of held-back "
                     "data, compensator latency, why each threshold was chosen, what the "
                     "data could not determine).",

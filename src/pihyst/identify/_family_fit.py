@@ -443,7 +443,8 @@ class FamilyFitter:
             pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
             template = fam.template(pairs, rec.S)
             state0, parts, rows = on.grams(fam, template)
-            self.notes.append(f"{const.size} kernels dropped: the input never moves them")
+            self.notes.append(f"{const.size} kernel{'s' if const.size > 1 else ''} dropped: "
+                              f"the input never moves {'them' if const.size > 1 else 'it'}")
         names = [f"kernel {p}" for p in pairs]
         prob = on.problem(fam, parts, rows, len(pairs), names)
         n_ops = len(pairs)
