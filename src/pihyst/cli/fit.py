@@ -244,8 +244,10 @@ def run(args):
     print(result.report.to_json() if args.json else result.report)
     if not args.json:
         lag = f", input delay {model.delay} samples" if model.delay else ""
-        print(f"\nwrote {args.output}: {result.report.chosen} model, {model.n_operators} "
-              f"operators{lag} (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
+        size = ("state (u, z)" if model.family == "bouc-wen" else
+                f"{model.n_operators} operator{'s' if model.n_operators != 1 else ''}")
+        print(f"\nwrote {args.output}: {result.report.chosen} model, {size}{lag} "
+              f"(pihyst predict {args.output} INPUT.csv -o OUT.csv)")
 
 
 def _times_for_creep(args):

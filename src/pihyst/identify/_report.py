@@ -280,7 +280,7 @@ class FitReport:
             s = best["shape"]
             lines.append(f"shape: U = {s['U']:.6g} {uin}, a = {s['a']:.4g}, b = {s['b']:.4g}, "
                          f"h = {s['h']:.4g}")
-        if "thresholds" in best:
+        if best.get("thresholds"):
             lines.append(f"thresholds ({uin}, from the bottom of the range): "
                          + ", ".join(f"{t:.4g}" for t in best["thresholds"]))
         if "regularization" in best:
