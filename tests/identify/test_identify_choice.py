@@ -395,3 +395,23 @@ def test_a_delay_the_chosen_family_does_not_hold_back_better_with_is_refused():
     assert result.model.delay == 0 and delay["samples"] == 0 and delay["refused"] > 2
     assert result.report.chosen == "kp"
     assert "holds back" in delay["rule"] and "not a dead time" in str(result.report)
+
+
+def test_estimated_latency_is_deterministic_and_grows_with_the_structure():
+    """The cost model (identify/_latency.py) decides max_latency: the same model gives
+    the same figures, worst case never below typical, more operators cost more."""
+    from pihyst import ClassicalPI
+    from pihyst.identify._latency import estimate_latency
+    from pihyst.model import BoucWenModel, Creep
+
+    small = ClassicalPI([0, 10, 20, 30], [0.1] * 4)
+    large = ClassicalPI(np.arange(32) * 2.0, np.full(32, 0.05))
+    sharp = BoucWenModel(beta=60.0, gamma=30.0, hysteretic=-8.0, linear=40.0)
+    soft = BoucWenModel(beta=2.0, gamma=0.5, hysteretic=-8.0, linear=40.0)
+    for m in (small, large, sharp, soft, small.replace(creep=Creep([1.0], [0.01], 1e-3))):
+        a, b = estimate_latency(m), estimate_latency(m)
+        assert a == b and 0 < a.typical <= a.worst and a.how == "estimated"
+    assert estimate_latency(large).worst > estimate_latency(small).worst
+    assert estimate_latency(sharp).worst > estimate_latency(soft).worst
+    with_creep = small.replace(creep=Creep([1.0, 10.0], [0.01, 0.01], 1e-3))
+    assert estimate_latency(with_creep).typical > estimate_latency(small).typical
