@@ -1,14 +1,29 @@
 """A delimited text record read block by block: the fast engine on each block, the
 careful reader where the engine refuses one, and exact line numbers for any sample."""
 
+import dataclasses
 import os
+import re
 
 from pihyst.exceptions import CSVError, InvalidArgumentError
 from pihyst.io._text_check import check_block, data_line_of
 from pihyst.io._text_engines import engine_name, read_block
-from pihyst.io._text_format import AUTO, HEAD_BYTES, SEPARATOR_NAMES, sniff
+from pihyst.io._text_format import (
+    AUTO,
+    HEAD_BYTES,
+    SEPARATOR_NAMES,
+    FieldError,
+    head_lines,
+    is_skipped,
+    sniff,
+    split_fields,
+)
 
 BLOCK_BYTES = 1 << 23
+# a PI data recorder's GCSArray header: '# KEY = value' lines ending with '# END_HEADER'
+_GCS_LINE = re.compile(r"^\s*#\s*([A-Za-z_][A-Za-z_0-9]*)\s*=\s*(.*?)\s*$")
+_GCS_END = re.compile(r"^\s*#\s*END_HEADER\s*$", re.IGNORECASE)
+_GCS_SEPARATORS = {32: None, 9: "\t", 44: ",", 59: ";"}
 
 
 class TextSource:
@@ -36,18 +51,81 @@ class TextSource:
         if b"\0" in head:
             raise CSVError(self.path, 1, 0, "not a text file (it holds NUL bytes); "
                            "binary records: .npy, .npz, .mat, .h5, .parquet")
+        self.gcs = _gcs_header(head, at_eof)
+        if self.gcs is not None and sep == AUTO and "SEPARATOR" in self.gcs[0]:
+            sep = _GCS_SEPARATORS.get(_int(self.gcs[0]["SEPARATOR"]), AUTO)
         self.dialect = sniff(head, at_eof, separator=sep, decimal=decimal)
         if self.dialect is None:
             raise CSVError(self.path, 1, 0, "empty file: no data lines")
         self.columns = self.dialect.header
+        # what the file says about its columns: units (a units row, or a GCSArray header)
+        # and a sample period
+        self.units, self.found, self.notes = {}, {}, []
+        self.units_line = 0
+        if self.columns:
+            self._units_row(head, at_eof)
+        elif self.gcs is not None:
+            self._gcs_columns()
+
+    def _units_row(self, head, at_eof):
+        """A line of units under the header (``s, V, um``): its units are the columns',
+        and the data start below it."""
+        from pihyst.io._lab_formats import looks_unit
+        d = self.dialect
+        _, lines = head_lines(head, at_eof)
+        below = [(n, end, t) for n, end, t in lines if n > d.header_line and not is_skipped(t)]
+        if not below:
+            return
+        number, end, text = below[0]
+        try:
+            fields = split_fields(text, d.separator)
+        except FieldError:
+            return
+        if len(fields) != d.n_fields or not any(f.strip() for f in fields):
+            return
+        if not all(not f.strip() or looks_unit(f) for f in fields):
+            return
+        self.units = {i: f.strip().strip("[]()").strip() for i, f in enumerate(fields)
+                      if f.strip()}
+        self.units_line = number
+        self.dialect = dataclasses.replace(d, data_offset=end, data_line=number + 1)
+
+    def _gcs_columns(self):
+        """Column names from a GCSArray header's NAME0, NAME1, ...; the sample period
+        from its SAMPLE_TIME."""
+        keys, end_line = self.gcs
+        names = []
+        for k in range(self.dialect.n_fields):
+            name = keys.get(f"NAME{k}")
+            names.append(name.strip() if name and name.strip() else f"column {k + 1}")
+        if any(f"NAME{k}" in keys for k in range(self.dialect.n_fields)):
+            self.columns = tuple(names)
+            self.gcs_names = True
+        if "SAMPLE_TIME" in keys:
+            try:
+                period = float(keys["SAMPLE_TIME"])
+            except ValueError:
+                period = float("nan")
+            if not (period > 0 and period < float("inf")):
+                raise CSVError(self.path, end_line, 0, f"SAMPLE_TIME = {keys['SAMPLE_TIME']}"
+                               " in the GCSArray header is not a positive time")
+            self.found["rate"] = 1.0 / period
+            self.found["rate_why"] = f"SAMPLE_TIME = {keys['SAMPLE_TIME']} s in the header"
 
     # ---------------------------------------------------------------- describing
     def metadata(self):
         d = self.dialect
-        return {"format": "text", "layout": d.describe(), "engine": engine_name()}
+        layout = d.describe()
+        if self.gcs is not None:
+            layout = "PI GCSArray (data recorder) header, " + layout
+        if self.units_line:
+            layout += f", units on line {self.units_line}"
+        return {"format": "text", "layout": layout, "engine": engine_name()}
 
     def label(self, index):
         """How messages name the field ``index`` (0-based)."""
+        if self.columns and getattr(self, "gcs_names", False):
+            return f"{index + 1} {self.columns[index]!r}"
         if self.columns:
             return repr(self.columns[index])
         return f"{index + 1}"
@@ -105,6 +183,29 @@ class TextSource:
     def error(self, row, index, message):
         line, column = self.location(row, index)
         return CSVError(self.path, line, column, message)
+
+
+def _int(text):
+    try:
+        return int(float(text))
+    except ValueError:
+        return None
+
+
+def _gcs_header(head, at_eof):
+    """({KEY: value}, line of END_HEADER) of a GCSArray header at the top of the file,
+    else None."""
+    _, lines = head_lines(head, at_eof)
+    keys = {}
+    for number, _, text in lines:
+        if _GCS_END.match(text):
+            return (keys, number) if keys else None
+        m = _GCS_LINE.match(text)
+        if m:
+            keys[m.group(1).upper()] = m.group(2)
+        elif text.strip() and not text.lstrip().startswith(("#", "[GCS_ARRAY")):
+            return None
+    return None
 
 
 def _lf(data):
