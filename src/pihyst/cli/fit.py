@@ -188,11 +188,8 @@ def run(args):
                          f"{args.max_latency:g}")
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
-    record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json, optional=())
+    record, t, time_note = read_for_fit(args, args.data, say=not args.json)
     u, y = record.voltage, record.displacement
-    # an unusable time column is said after the fit: a fit that fails says one line
-    t, time_note = (None, None) if args.no_creep else _times_for_creep(args)
     other = validate = None
     if args.validate is not None:
         other = read_from_args(args, args.validate, need=("voltage", "displacement"),
@@ -215,7 +212,7 @@ def run(args):
             raise _error(err, record) from None
     model = result.model
     if model.delay:
-        model = model.replace(sample_period=_sample_period(args))
+        model = model.replace(sample_period=sample_period(args))
     if input_range is not None:
         model = _with_input_range(model, input_range, record)
     model = model.replace(metadata={
@@ -237,15 +234,29 @@ def run(args):
               f"operators{lag} (pihyst predict {args.output} INPUT.csv -o OUT.csv)")
 
 
-def _times_for_creep(args):
+def read_for_fit(args, path, say=True):
+    """(record, times, note): what ``pihyst fit`` (and ``fit-many``, for each file)
+    fits: the record read with the record options of ``args``, its times for creep
+    (None without a usable time column, or with --no-creep) and the warning to print
+    once the fit succeeds when the time column is unusable."""
+    record = read_from_args(args, path, need=("voltage", "displacement"), say=say,
+                            optional=())
+    # an unusable time column is said after the fit: a fit that fails says one line
+    t, note = (None, None) if getattr(args, "no_creep", False) else \
+        _times_for_creep(args, path, say)
+    return record, t, note
+
+
+def _times_for_creep(args, path=None, say=False):
     """(times, note): the record's sample times for creep="auto", or None: a record
     without a time column is fitted without creep, and so is one whose time column is
     unusable (the note, a warning to print once the fit succeeds, says where; the fit
     itself needs no time)."""
+    path = args.data if path is None else path
     try:
         # (the time is optional here: a record without one is fitted without creep)
-        times = read_from_args(args, args.data, need=("voltage", "displacement"), say=False,
-                               optional=("time",))
+        times = read_from_args(args, path, need=("voltage", "displacement"), say=False,
+                               optional=("time",), warn=say)
     except UsageError:
         return None, None
     except RecordError as err:
@@ -258,6 +269,13 @@ def _times_for_creep(args):
         k = int(bad[0])
         what = "is not finite" if not np.isfinite(t[k]) else "runs backwards"
         return None, _unused_time(times.error(k, "time", f"time {what} at sample {k}"))
+    if say:
+        meta = times.metadata
+        label = (meta["columns"]["time"] if "time" in meta["columns"] else
+                 f"k / {meta['rate_hz']:g} Hz" if "rate_hz" in meta else "?")
+        why = meta.get("columns_why", {}).get("time")
+        print(f"  the time for creep from {label}" + (f" ({why})" if why else ""),
+              flush=True)
     return t, None
 
 
@@ -266,14 +284,15 @@ def _unused_time(err):
             f"--no-creep)")
 
 
-def _sample_period(args):
+def sample_period(args, path=None):
     """The record's sample period (s), which a fitted delay holds at: the median step of
     its time, its time column's or the one --rate defines (read only now: a fit without
     a delay needs none); None when the record has no usable time."""
     if args.rate is not None:       # no time column (the reader refuses both): k / rate
         return 1.0 / args.rate
     try:
-        times = read_from_args(args, args.data, need=("time",), say=False, optional=())
+        times = read_from_args(args, args.data if path is None else path, need=("time",),
+                               say=False, optional=())
     except (RecordError, UsageError):
         return None
     steps = np.diff(times.time) if times.time is not None else np.empty(0)

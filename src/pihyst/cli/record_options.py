@@ -133,10 +133,12 @@ def record_kwargs(args):
                 sheet=getattr(args, "sheet", None), reader=args.reader)
 
 
-def read_from_args(args, path, need, say=True, optional=("time",)):
+def read_from_args(args, path, need, say=True, optional=("time",), warn=None):
     """All of a record (a :class:`pihyst.io.Record`) with the options of ``args``;
-    prints what was read (unless ``say`` is False)."""
-    with open_from_args(args, path, need, optional, say_warnings=say) as reader, \
+    prints what was read (unless ``say`` is False) and the reader's warnings (unless
+    ``warn``, by default ``say``, is False)."""
+    warn = say if warn is None else warn
+    with open_from_args(args, path, need, optional, say_warnings=warn) as reader, \
             progress_bar(f"reading {path}") as bar:
         record = reader.read(progress=bar)
         if say:
