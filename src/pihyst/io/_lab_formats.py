@@ -370,10 +370,11 @@ def open_tdms(path):
     ``wf_start_offset`` and ``wf_increment`` give the time."""
     need("nptdms", "tdms", path)
     from nptdms import TdmsFile
+    # whatever npTDMS raises while parsing is the file's fault (truncated, corrupt, a
+    # data type it does not read): one line, never its traceback
     try:
         tdms = TdmsFile.read(path)
-    except (OSError, ValueError, KeyError, IndexError, EOFError, TypeError,
-            UnicodeDecodeError, OverflowError, MemoryError, AttributeError) as err:
+    except Exception as err:  # noqa: BLE001
         raise RecordError(path, f"cannot read TDMS file: {_one_line(err)}") from None
     names, arrays, full, units = [], [], [], {}
     channel_names = {}
@@ -385,7 +386,7 @@ def open_tdms(path):
         for ch in group.channels():
             try:
                 data = ch[:]
-            except (ValueError, KeyError, IndexError, EOFError, TypeError) as err:
+            except Exception as err:  # noqa: BLE001 - the file's fault, as above
                 raise RecordError(path, f"{group.name}/{ch.name}: cannot read: "
                                   f"{_one_line(err)}") from None
             data = np.asarray(data)
@@ -439,20 +440,21 @@ def open_xlsx(path, sheet=None):
     names one or gives its 1-based number): a header row, an optional row of units under
     it, then numbers (or dates and times, read as seconds from the first)."""
     need("openpyxl", "xlsx", path)
-    import zipfile
-
     import openpyxl
     from openpyxl.utils import get_column_letter
+    # whatever openpyxl (or zipfile, zlib, its XML parser) raises while parsing is the
+    # file's fault: one line, never its traceback
     try:
         book = openpyxl.load_workbook(path, read_only=True, data_only=True)
-    except (zipfile.BadZipFile, OSError, KeyError, ValueError, TypeError, EOFError,
-            IndexError, AttributeError) as err:
+    except Exception as err:  # noqa: BLE001
         raise RecordError(path, f"cannot read Excel workbook: {_one_line(err)}") from None
     try:
         ws, title = _sheet(book, sheet, path)
         rows = [(k, row) for k, row in enumerate(ws.iter_rows(values_only=True), start=1)
                 if any(c is not None and str(c).strip() for c in row)]
-    except (zipfile.BadZipFile, OSError, KeyError, ValueError, TypeError, EOFError) as err:
+    except RecordError:
+        raise
+    except Exception as err:  # noqa: BLE001
         raise RecordError(path, f"cannot read Excel workbook: {_one_line(err)}") from None
     finally:
         book.close()

@@ -18,6 +18,7 @@ import numpy as np
 
 from pihyst.exceptions import CSVError, InvalidArgumentError, PihystWarning, RecordError
 from pihyst.io._array_sources import ArraySource, function_source, open_array_source
+from pihyst.io._inputs import kind_of
 from pihyst.io._lab_formats import GUESSES, TableSource, open_lab_source
 from pihyst.io._text_source import TextSource
 
@@ -607,6 +608,10 @@ def _text_column(src, quantity, spec, needed):
 def _open_source(path, reader, separator, decimal_comma, sheet=None):
     if reader is not None:
         return function_source(path, _call_reader(reader, path))
+    kind = kind_of(path)
+    if kind is not None:
+        raise RecordError(path, f"{kind}, not a regular file: a record is read in several "
+                          "passes, which a stream cannot give; write it to a file first")
     ext = os.path.splitext(path)[1].lower()
     kind = EXTENSIONS.get(ext)
     if sheet is not None and LAB_EXTENSIONS.get(ext) != "xlsx":

@@ -6,6 +6,7 @@ import os
 import re
 
 from pihyst.exceptions import CSVError, InvalidArgumentError
+from pihyst.io._numbers import is_number, parse_number
 from pihyst.io._text_check import check_block, data_line_of
 from pihyst.io._text_engines import engine_name, read_block
 from pihyst.io._text_format import (
@@ -23,6 +24,8 @@ BLOCK_BYTES = 1 << 23
 # a PI data recorder's GCSArray header: '# KEY = value' lines ending with '# END_HEADER'
 _GCS_LINE = re.compile(r"^\s*#\s*([A-Za-z_][A-Za-z_0-9]*)\s*=\s*(.*?)\s*$")
 _GCS_END = re.compile(r"^\s*#\s*END_HEADER\s*$", re.IGNORECASE)
+NUL_MESSAGE = ("not a text file (it holds NUL bytes) from this line on: the data end before "
+               "it (a file cut off, or padded with zeros?)")
 _GCS_SEPARATORS = {32: None, 9: "\t", 44: ",", 59: ";"}
 
 
@@ -48,9 +51,14 @@ class TextSource:
             self.size = os.path.getsize(self.path)
         except OSError as err:
             raise CSVError(self.path, 0, 0, f"cannot read file: {err.strerror}") from None
-        if b"\0" in head:
-            raise CSVError(self.path, 1, 0, "not a text file (it holds NUL bytes); "
-                           "binary records: .npy, .npz, .mat, .h5, .parquet")
+        nul = head.find(b"\0")
+        if nul >= 0:
+            line = head.count(b"\n", 0, nul) + 1
+            if line == 1 or not head[:nul].strip(b"\r\n\0"):
+                raise CSVError(self.path, 1, 0, "not a text file (it holds NUL bytes); "
+                               "binary records: .npy, .npz, .mat, .h5, .parquet, .tdms, "
+                               ".xlsx")
+            raise _nul_error(self.path, head, nul)
         self.gcs = _gcs_header(head, at_eof)
         if self.gcs is not None and sep == AUTO and "SEPARATOR" in self.gcs[0]:
             sep = _GCS_SEPARATORS.get(_int(self.gcs[0]["SEPARATOR"]), AUTO)
@@ -58,6 +66,8 @@ class TextSource:
         if self.dialect is None:
             raise CSVError(self.path, 1, 0, "empty file: no data lines")
         self.columns = self.dialect.header
+        self._check_first_row()
+        self._check_last_line()
         # what the file says about its columns: units (a units row, or a GCSArray header)
         # and a sample period
         self.units, self.found, self.notes = {}, {}, []
@@ -66,6 +76,52 @@ class TextSource:
             self._units_row(head, at_eof)
         elif self.gcs is not None:
             self._gcs_columns()
+
+    def _check_first_row(self):
+        """A first line of numbers with a value that is not a valid sample (NaN,
+        infinity, a hex number) is a data line at fault, not a header."""
+        d = self.dialect
+        if not d.header:
+            return
+        fields = [f for f in d.header if f.strip()]
+        if not fields or not all(_number_like(f, d.decimal) for f in fields):
+            return
+        for k, f in enumerate(d.header):
+            try:
+                parse_number(f, d.decimal)
+            except ValueError as err:
+                if str(err) == "missing value":
+                    continue
+                raise CSVError(self.path, d.header_line, k + 1, f"{err}: the first line holds "
+                               "numbers, so it is a sample, not a header") from None
+
+    def _check_last_line(self):
+        """A last line without its line end whose last number is cut short (``4.``,
+        ``1e``, ``-``) is an error at that line: the file was cut off."""
+        if self.size == 0:
+            return
+        with open(self.path, "rb") as f:
+            f.seek(max(0, self.size - 4096))
+            tail = f.read()
+        if tail.endswith((b"\n", b"\r")):
+            return
+        cut = max(tail.rfind(b"\n"), tail.rfind(b"\r"))
+        last = tail[cut + 1:].decode("utf-8", errors="replace")
+        if is_skipped(last):
+            return
+        try:
+            fields = split_fields(last, self.dialect.separator)
+        except FieldError:
+            return
+        end = fields[-1].strip() if fields else ""
+        if end and (end.endswith((".", "e", "E", "+", "-")) or end in (".", "-", "+")):
+            with open(self.path, "rb") as f:
+                data = f.read()
+            text = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+            line = text.count(b"\n") + 1
+            raise CSVError(self.path, line, len(fields), f"the last line ends without a line "
+                           f"end and its last number {end!r} is cut short: the file was cut "
+                           "off (truncated)?")
 
     def _units_row(self, head, at_eof):
         """A line of units under the header (``s, V, um``): its units are the columns',
@@ -160,6 +216,10 @@ class TextSource:
         labels = [self.label(i) for i in wanted]
         rows = 0
         for first_line, block, done in self._blocks():
+            nul = block.find(b"\0")
+            if nul >= 0:        # a tail of NULs (a file cut off, a sparse file): it ends here
+                k = block.count(b"\n", 0, nul)
+                raise CSVError(self.path, first_line + k, 0, NUL_MESSAGE)
             values = read_block(block, self.dialect, wanted)
             if values is None:
                 values = check_block(self.path, block, first_line, self.dialect, wanted,
@@ -183,6 +243,22 @@ class TextSource:
     def error(self, row, index, message):
         line, column = self.location(row, index)
         return CSVError(self.path, line, column, message)
+
+
+def _nul_error(path, head, nul):
+    line = head[:nul].replace(b"\r\n", b"\n").replace(b"\r", b"\n").count(b"\n") + 1
+    return CSVError(path, line, 0, NUL_MESSAGE)
+
+
+_NUMBER_LIKE = re.compile(r"[+-]?(nan|inf|infinity|0[xX][0-9a-fA-F]+|[0-9][0-9_]*(\.[0-9_]*)?"
+                          r"([eE][+-]?[0-9_]+)?)\Z", re.IGNORECASE)
+
+
+def _number_like(field, decimal):
+    """Whether a field is written as a number, valid or not (``nan``, ``inf``,
+    ``0x10``, ``1_5``)."""
+    f = field.strip()
+    return is_number(f, decimal) or bool(_NUMBER_LIKE.match(f))
 
 
 def _int(text):
