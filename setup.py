@@ -24,4 +24,7 @@ boucwen = Extension(
     depends=sorted(glob.glob("csrc/pihyst*.h")),
     extra_compile_args=["-std=c99", "-O3", "-ffp-contract=fast"],
 )
-setup(ext_modules=cythonize([core, boucwen], language_level=3))
+# the default install's fast reader and writer of numeric text (no pyarrow needed)
+fastcsv = Extension("pihyst.io._fastcsv", sources=["src/pihyst/io/_fastcsv.pyx"],
+                    extra_compile_args=["-O3"])
+setup(ext_modules=cythonize([core, boucwen, fastcsv], language_level=3))

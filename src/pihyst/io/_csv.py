@@ -109,8 +109,9 @@ class ColumnWriter:
 
 
 def format_rows(columns, engine=None):
-    """CSV bytes of equal-length float columns, no header: with pyarrow's writer when
-    installed (or ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
+    """CSV bytes of equal-length float columns, no header, each value the shortest
+    decimal that reads back exactly: with pyarrow's writer when installed (or
+    ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
     try:
         if engine == "numpy":
             raise ImportError
