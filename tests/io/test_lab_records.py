@@ -323,3 +323,31 @@ def test_each_format_fits_with_one_command(tmp_path, capsys):
                      "none", "--no-creep", "-o", str(model)]) == 0
         out = capsys.readouterr().out
         assert f"read {path}: {N} samples" in out and model.exists()
+
+
+# ------------------------------------------------------------------ plain files out
+def test_what_pihyst_writes_opens_in_numpy_and_pandas_defaults(tmp_path, capsys):
+    model, out = "examples/paper_table1_classical.json", tmp_path / "out.csv"
+    volts = tmp_path / "v.csv"
+    volts.write_text("time_s,voltage_V\n" + "".join(
+        f"{a!r},{b!r}\n" for a, b in zip(T.tolist(), U.tolist())))
+    assert main(["predict", model, str(volts), "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "#" not in text
+    named = np.genfromtxt(out, names=True, delimiter=",")
+    assert named.dtype.names == ("time_s", "voltage_V", "displacement_um")
+    np.testing.assert_array_equal(named["voltage_V"], U)
+    plain = np.loadtxt(out, skiprows=1, delimiter=",")
+    np.testing.assert_array_equal(plain[:, 1], U)
+    pandas = pytest.importorskip("pandas")
+    frame = pandas.read_csv(out)
+    assert list(frame.columns) == ["time_s", "voltage_V", "displacement_um"]
+    np.testing.assert_array_equal(frame["displacement_um"].to_numpy(), plain[:, 2])
+    # the metadata: beside it, and read back with the record
+    import json
+    side = json.loads((tmp_path / "out.csv.json").read_text())
+    assert side["file"] == "out.csv" and side["rows"] == N and side["comments"]
+    with open_record(out, need=("voltage", "displacement")) as reader:
+        rec = reader.read()
+        assert "metadata from out.csv.json" in reader.describe()
+    assert rec.metadata["sidecar"]["comments"] == side["comments"]

@@ -337,8 +337,8 @@ def run(args):
     summary_json(result, json_path, model_files=written, pihyst_version=__version__,
                  command=command, folder=args.folder, options=options,
                  record_options=options_text(args), skipped=skipped)
-    summary_csv(result, csv_path, model_files=written,
-                comments=[f"{command} {args.folder}", f"scheduler: {result.scheduler}"])
+    # (plain CSV: what wrote it, and everything else, is in summary.json)
+    summary_csv(result, csv_path, model_files=written)
     n, bad = len(result), len(result.failed)
     line = (f"fitted {n - bad} of {n} records in {result.seconds:.1f} s "
             + (f"({len(skipped)} other files skipped) " if skipped else "") +

@@ -420,6 +420,8 @@ class RecordReader:
     def metadata(self):
         meta = {"file": self.path, **{k: v for k, v in self.source.metadata().items()
                                       if not k.startswith("_")}}
+        if isinstance(self.source, TextSource) and self._sidecar() is not None:
+            meta["sidecar"] = self._sidecar()
         meta["columns"] = dict(self.labels)
         if self.why:
             meta["columns_why"] = dict(self.why)
@@ -442,6 +444,14 @@ class RecordReader:
             meta["samples"] = self.n_samples
         return meta
 
+    def _sidecar(self):
+        if not hasattr(self, "_sidecar_data"):
+            from pihyst.io._csv import read_sidecar, sidecar_path
+            data = read_sidecar(self.path)
+            self._sidecar_data = data
+            self._sidecar_name = sidecar_path(self.path)
+        return self._sidecar_data
+
     def describe(self):
         """One line for the user: what was read from where."""
         parts = [f"{q} {self.labels[q]}" + (f" ({self.why[q]})" if q in self.why else "")
@@ -459,6 +469,8 @@ class RecordReader:
             notes.append(f"{self.rate:g} Hz" + ("" if self.rate_why == "--rate"
                                                  else f" ({self.rate_why})"))
         notes.extend(self.notes)
+        if isinstance(self.source, TextSource) and self._sidecar() is not None:
+            notes.append(f"metadata from {os.path.basename(self._sidecar_name)}")
         if self.lag:
             notes.append(f"displacement {self.lag} sample(s) later")
         if self.skip_until is not None:
