@@ -442,6 +442,8 @@ class RecordReader:
             meta["skipped_samples"] = self.skipped
         if self.n_samples is not None:
             meta["samples"] = self.n_samples
+        if getattr(self.source, "skipped_ticks", None):
+            meta["skipped_ticks"] = self.source.skipped_ticks
         return meta
 
     def _sidecar(self):
@@ -469,6 +471,9 @@ class RecordReader:
             notes.append(f"{self.rate:g} Hz" + ("" if self.rate_why == "--rate"
                                                  else f" ({self.rate_why})"))
         notes.extend(self.notes)
+        if getattr(self.source, "skipped_ticks", None):
+            notes.append(f"{self.source.skipped_ticks} ticks without a valid reading "
+                         "skipped (see sensor_status, supply_status)")
         if isinstance(self.source, TextSource) and self._sidecar() is not None:
             notes.append(f"metadata from {os.path.basename(self._sidecar_name)}")
         if self.lag:

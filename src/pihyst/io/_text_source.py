@@ -2,6 +2,7 @@
 careful reader where the engine refuses one, and exact line numbers for any sample."""
 
 import dataclasses
+import math
 import os
 import re
 
@@ -72,6 +73,9 @@ class TextSource:
         # and a sample period
         self.units, self.found, self.notes = {}, {}, []
         self.units_line = 0
+        # a pihyst rig run log: its ticks without a valid reading are skipped, and counted
+        self.rig_log = self.columns == RIG_LOG_COLUMNS
+        self.skipped_ticks = None
         if self.columns:
             self._units_row(head, at_eof)
         elif self.gcs is not None:
@@ -189,7 +193,14 @@ class TextSource:
     # ---------------------------------------------------------------- reading
     def _blocks(self):
         """(first line, block, bytes read so far) of the data part: whole lines with LF
-        line ends."""
+        line ends (in a rig log, the ticks without a valid reading made comments)."""
+        for first, block, done in self._raw_blocks():
+            if self.rig_log:
+                block, n = _without_invalid_ticks(block)
+                self._dropped += n
+            yield first, block, done
+
+    def _raw_blocks(self):
         d = self.dialect
         line, carry = d.data_line, b""
         with open(self.path, "rb") as f:
@@ -215,6 +226,7 @@ class TextSource:
         """Arrays (n, len(wanted)) of the fields ``wanted`` (0-based), block by block."""
         labels = [self.label(i) for i in wanted]
         rows = 0
+        self._dropped = 0
         for first_line, block, done in self._blocks():
             nul = block.find(b"\0")
             if nul >= 0:        # a tail of NULs (a file cut off, a sparse file): it ends here
@@ -225,6 +237,8 @@ class TextSource:
                 values = check_block(self.path, block, first_line, self.dialect, wanted,
                                      labels)
             rows += len(values)
+            if self.rig_log:
+                self.skipped_ticks = self._dropped
             if progress is not None:
                 progress(done, self.size)
             if len(values):
@@ -236,6 +250,7 @@ class TextSource:
 
     def location(self, row, index):
         """(line, column) of field ``index`` of data row ``row`` (both 0-based)."""
+        self._dropped = 0
         line = data_line_of(((first, block) for first, block, _ in self._blocks()),
                             self.dialect, row)
         return (line or 0), index + 1
@@ -243,6 +258,34 @@ class TextSource:
     def error(self, row, index, message):
         line, column = self.location(row, index)
         return CSVError(self.path, line, column, message)
+
+
+# the header of a pihyst rig run log (pihyst.rig._log.COLUMNS)
+RIG_LOG_COLUMNS = ("tick", "time_s", "phase", "reference", "command_V", "voltage_V",
+                   "readback_V", "displacement_um", "sensor_status", "supply_status",
+                   "overrun", "late_s", "busy_s")
+_VOLTAGE_FIELD, _DISPLACEMENT_FIELD = 5, 7
+
+
+def _without_invalid_ticks(block):
+    """The block with each tick that has no valid reading (no finite voltage sent or
+    displacement read) turned into a comment line (so that line numbers stay), and how
+    many."""
+    lines = block.split(b"\n")
+    dropped = 0
+    for k, line in enumerate(lines):
+        if not line or line.lstrip().startswith(b"#"):
+            continue
+        fields = line.split(b",", _DISPLACEMENT_FIELD + 1)
+        try:
+            ok = all(math.isfinite(float(fields[j]))
+                     for j in (_VOLTAGE_FIELD, _DISPLACEMENT_FIELD))
+        except (ValueError, IndexError):
+            ok = True           # not a number: the careful reader names it
+        if not ok:
+            lines[k] = b"#" + line
+            dropped += 1
+    return b"\n".join(lines), dropped
 
 
 def _nul_error(path, head, nul):
