@@ -1,5 +1,5 @@
 """pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N]
-[--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency US] [--json]
+[--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency SECONDS] [--json]
 -o MODEL.json"""
 
 import math
@@ -75,9 +75,10 @@ def register(sub):
                         "(else 0); the report says which delay was used and why")
     p.add_argument("--max-operators", metavar="N", type=int,
                    help="choose only among models with at most N operators")
-    p.add_argument("--max-latency", metavar="US", type=float,
-                   help="choose only among models whose compensator takes at most US "
-                        "microseconds per sample in the worst case (measured)")
+    p.add_argument("--max-latency", metavar="SECONDS", type=float,
+                   help="choose only among models whose compensator takes at most SECONDS "
+                        "per sample in the worst case (measured), e.g. 5e-7 for 0.5 us "
+                        "(seconds, as pihyst.fit's max_latency)")
     p.add_argument("--no-creep", action="store_true",
                    help="do not fit creep (default: with a time column, or --rate, creep is "
                         "fitted and kept when the held-back cycles say it helps)")
@@ -184,7 +185,7 @@ def run(args):
     if args.max_operators is not None and args.max_operators < 1:
         raise UsageError(f"--max-operators must be at least 1, got {args.max_operators}")
     if args.max_latency is not None and not args.max_latency > 0:
-        raise UsageError(f"--max-latency must be a positive number of microseconds, got "
+        raise UsageError(f"--max-latency must be a positive number of seconds, got "
                          f"{args.max_latency:g}")
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
@@ -204,8 +205,7 @@ def run(args):
                          through="top" if args.through_top else None,
                          offset=not args.no_offset, validate=validate, delay=delay,
                          max_operators=args.max_operators,
-                         max_latency=(None if args.max_latency is None
-                                      else 1e-6 * args.max_latency), t=t)
+                         max_latency=args.max_latency, t=t)
         except FitError as err:
             if other is not None and str(err).startswith("validate:"):
                 raise _error(err, other) from None
