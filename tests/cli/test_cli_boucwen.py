@@ -93,7 +93,7 @@ def test_rig_track_with_a_bouc_wen_model(tmp_path, capsys):
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "-o", str(run)]) == 0
     assert "tracking error open loop" in capsys.readouterr().out
-    assert "through the inverse of a bouc-wen model" in run.read_text()
+    assert "through the inverse of a bouc-wen model" in (tmp_path / "run.csv.json").read_text()
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "--feedback", "0.3,2", "-o", str(tmp_path / "fb.csv")]) == 0
     assert "tracking error with feedback" in capsys.readouterr().out
