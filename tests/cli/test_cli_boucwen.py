@@ -48,7 +48,8 @@ def test_compensate_limits_slew_and_initial_states(tmp_path, capsys):
     for mode in ("model", "zero", "bottom", "top"):
         out = tmp_path / f"out-{mode}.csv"
         assert main(["compensate", str(model), str(src), "-o", str(out), "--u-min", "5",
-                     "--u-max", "120", "--slew-rate", "40", "--initial-state", mode]) == 0
+                     "--u-max", "120", "--slew-rate", "40", "--initial-state", mode,
+                     "--saturate"]) == 0
         cols, _ = read_columns(out, ["voltage_V", "saturated", "slew_limited"])
         u = cols["voltage_V"]
         assert np.all((u >= 5) & (u <= 120))

@@ -142,7 +142,7 @@ def test_compensate_prints_reach_and_strict_refuses(tmp_path, capsys):
     src = tmp_path / "d.csv"
     src.write_text("time_s,displacement_um\n0,1\n1,10\n2,60\n3,5\n")
     out = tmp_path / "out.csv"
-    assert run("compensate", MULTISLOPE, src, "-o", out) == 0
+    assert run("compensate", MULTISLOPE, src, "-o", out, "--saturate") == 0
     text = capsys.readouterr().out
     assert "reachable displacement: [0, 41.38] um with the voltage in [0, 150] V" in text
     assert "1 samples lie outside the reachable range" in text

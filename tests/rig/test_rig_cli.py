@@ -99,9 +99,17 @@ def test_track_says_which_ticks_the_model_cannot_reach(tmp_path, capsys):
     desired = tmp_path / "desired.csv"
     out = tmp_path / "run.csv"
     desired.write_text("time_s,displacement_um\n0,0\n2,40\n4,0\n")
+    # 31 % of the ticks out of reach: refused before the supply is touched ...
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
-                 "-o", str(out)]) == 0
+                 "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "25 of 81 samples (30.9 %) of the desired displacement are out of the model's " \
+           "reach, more than 10 %" in err and "--saturate" in err and not out.exists()
+    # ... unless --saturate says that is intended
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "-o", str(out), "--saturate"]) == 0
     text = capsys.readouterr().out
+    assert "frame: absolute" in text
     # the first 0 um is reached (from the initial state), the last two are not (2 um is
     # left at 0 V after the way up), nor the 23 above 28 um
     assert "note: 25 of 81 ticks of the desired displacement (span [0, 40] um) are out of " \
