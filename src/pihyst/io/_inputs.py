@@ -8,6 +8,8 @@ import select
 import stat
 import time
 
+from pihyst.exceptions import RecordError
+
 MODEL_LIMIT_BYTES = 64 << 20
 STREAM_TIMEOUT_S = 10.0
 
@@ -37,16 +39,16 @@ def kind_of(path):
 def read_small(path, limit=MODEL_LIMIT_BYTES, timeout=STREAM_TIMEOUT_S):
     """The bytes of ``path``: a regular file read whole; a stream read up to ``limit``
     bytes and for at most ``timeout`` seconds. Raises OSError (a regular file that
-    cannot be read) or ValueError (the stream's fault, one line)."""
+    cannot be read) or RecordError (the stream's fault, one line)."""
     kind = kind_of(path)
     if kind is None:
         with open(path, "rb") as f:
             data = f.read(limit + 1)
         if len(data) > limit:
-            raise ValueError(f"larger than {limit >> 20} MB: not a file of this kind")
+            raise RecordError(path, f"larger than {limit >> 20} MB: not a file of this kind")
         return data
     if kind == "a folder":
-        raise ValueError("is a folder, not a file")
+        raise RecordError(path, "is a folder, not a file")
     fifo = kind.startswith("a FIFO")
     fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     try:
@@ -54,7 +56,7 @@ def read_small(path, limit=MODEL_LIMIT_BYTES, timeout=STREAM_TIMEOUT_S):
         while True:
             left = deadline - time.monotonic()
             if left <= 0:
-                raise ValueError(f"{kind}: nothing complete within {timeout:g} s (read "
+                raise RecordError(path, f"{kind}: nothing complete within {timeout:g} s (read "
                                  f"{size} bytes); write it to a file first")
             ready, _, _ = select.select([fd], [], [], min(left, 0.1))
             if not ready:
@@ -71,7 +73,7 @@ def read_small(path, limit=MODEL_LIMIT_BYTES, timeout=STREAM_TIMEOUT_S):
             chunks.append(chunk)
             size += len(chunk)
             if size > limit:
-                raise ValueError(f"{kind} that gives more than {limit >> 20} MB: not a "
+                raise RecordError(path, f"{kind} that gives more than {limit >> 20} MB: not a "
                                  "file of this kind")
     finally:
         os.close(fd)

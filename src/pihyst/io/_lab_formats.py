@@ -14,7 +14,7 @@ import re
 
 import numpy as np
 
-from pihyst.exceptions import CSVError, RecordError
+from pihyst.exceptions import CSVError, InvalidArgumentError, RecordError
 from pihyst.io._array_sources import ArraySource
 from pihyst.io._numbers import parse_number
 
@@ -494,10 +494,10 @@ def open_xlsx(path, sheet=None):
                     values[i] = s - first_time
                     continue
                 if isinstance(c, bool) or c is None:
-                    raise ValueError("missing value" if c is None else f"{c!r} is not a number")
+                    raise _CellError("missing value" if c is None else f"{c!r} is not a number")
                 if isinstance(c, (int, float)):
                     if not np.isfinite(c):
-                        raise ValueError(f"{c!r} is not a finite number")
+                        raise _CellError(f"{c!r} is not a finite number")
                     values[i] = float(c)
                 else:
                     values[i] = parse_number(str(c))
@@ -527,6 +527,10 @@ def open_xlsx(path, sheet=None):
                          units=units, notes=notes)
     source.unreadable = bad_columns
     return source
+
+
+class _CellError(ValueError):
+    """A cell that is not a number (turned into a CSVError at its row and column)."""
 
 
 def _sheet(book, sheet, path):
@@ -582,4 +586,4 @@ def open_lab_source(path, kind, sheet=None):
         return open_tdms(path)
     if kind == "xlsx":
         return open_xlsx(path, sheet)
-    raise ValueError(f"unknown lab format {kind!r}")
+    raise InvalidArgumentError(f"unknown lab format {kind!r}")

@@ -9,6 +9,7 @@ with another number of fields, a quote, ...): the careful reader
 refuse what is valid; it never accepts what the careful reader refuses.
 """
 
+import importlib
 import io
 import re
 
@@ -33,9 +34,8 @@ _FAST = []
 def _fast():
     """pihyst's C parser and writer (None if the package was built without it)."""
     if not _FAST:
-        try:
-            from pihyst.io import _fastcsv
-            _FAST.append(_fastcsv)
+        try:     # (by name: the compiled module, imported only when first needed)
+            _FAST.append(importlib.import_module("pihyst.io._fastcsv"))
         except ImportError:
             _FAST.append(None)
     return _FAST[0]
