@@ -429,6 +429,13 @@ def readers():
         flipped[k] ^= 0xFF
     record("flipped.npz", bytes(flipped), "cannot read", expect=every,
            note="bit flips in an .npz (a bad CRC, BadZipFile)")
+    found = os.path.join(ROOT, "csv", "scipy-segv.mat")     # kept as the fuzz found it
+    if os.path.exists(found):
+        with open(found, "rb") as f:
+            record("scipy-segv.mat", f.read(), "SciPy's reader crashed on it (SIGSEGV)",
+                   expect=every, note="bit flips in a MATLAB v5 file on which SciPy's "
+                   "loadmat crashes with SIGSEGV (found by the fuzz test): read in a forked "
+                   "child, a one-line error")
 
 
 def inputs():

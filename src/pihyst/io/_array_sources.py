@@ -198,6 +198,14 @@ def _open_mat(path):
         head = f.read(520)
     if head[512:520] == MAT_V73_SIGNATURE:
         return _open_hdf5(path, transpose=True, kind="mat (v7.3)")
+    data = _loadmat_guarded(path)
+    variables = {k: v for k, v in data.items() if not k.startswith("__")
+                 and isinstance(v, np.ndarray) and v.ndim in (1, 2)
+                 and v.dtype.kind in "fiub"}
+    return ArraySource(path, "mat (v5)", {k: _vector(v) for k, v in variables.items()})
+
+
+def _loadmat(path):
     from scipy.io import loadmat
     try:
         data = loadmat(path)
@@ -207,10 +215,47 @@ def _open_mat(path):
     # zlib.error, struct.error, even UnboundLocalError): one line, never its traceback
     except Exception as err:  # noqa: BLE001
         raise RecordError(path, f"cannot read MATLAB file: {_one_line(err)}") from None
-    variables = {k: v for k, v in data.items() if not k.startswith("__")
-                 and isinstance(v, np.ndarray) and v.ndim in (1, 2)
-                 and v.dtype.kind in "fiub"}
-    return ArraySource(path, "mat (v5)", {k: _vector(v) for k, v in variables.items()})
+    return {k: v for k, v in data.items() if not k.startswith("__")
+            and isinstance(v, np.ndarray) and v.ndim in (1, 2) and v.dtype.kind in "fiub"}
+
+
+def _loadmat_guarded(path):
+    """SciPy's loadmat in a forked child: its C reader can crash (SIGSEGV) on a corrupt
+    file (the fuzz test found bit flips that do), which must be a one-line error, not
+    the end of pihyst. Without fork (Windows), called directly."""
+    if not hasattr(os, "fork"):
+        return _loadmat(path)
+    import pickle
+    import signal
+    import warnings
+    r, w = os.pipe()
+    with warnings.catch_warnings():      # (Python 3.12 warns of fork with threads: the
+        warnings.simplefilter("ignore")  # child only reads the file and exits)
+        pid = os.fork()
+    if pid == 0:                         # the child: read, send back, exit at once
+        os.close(r)
+        try:
+            try:
+                out = ("ok", _loadmat(path))
+            except RecordError as err:
+                out = ("error", err.message)
+            with os.fdopen(w, "wb") as f:
+                f.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
+        finally:
+            os._exit(0)
+    os.close(w)
+    with os.fdopen(r, "rb") as f:
+        payload = f.read()
+    _, status = os.waitpid(pid, 0)
+    if os.WIFSIGNALED(status) or not payload:
+        sig = os.WTERMSIG(status) if os.WIFSIGNALED(status) else 0
+        name = signal.Signals(sig).name if sig else "no result"
+        raise RecordError(path, f"cannot read MATLAB file: SciPy's reader crashed on it "
+                          f"({name}): the file is corrupt")
+    kind, value = pickle.loads(payload)
+    if kind == "error":
+        raise RecordError(path, value)
+    return value
 
 
 def _vector(a):
