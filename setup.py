@@ -48,8 +48,11 @@ boucwen = Extension(
     include_dirs=["csrc"],
     depends=sorted(glob.glob("csrc/pihyst*.h")),
 )
+# the default install's fast reader and writer of numeric text (no pyarrow needed)
+fastcsv = Extension("pihyst.io._fastcsv", sources=["src/pihyst/io/_fastcsv.pyx"])
+
 if __name__ == "__main__":  # setuptools runs it so; tests/test_setup.py only reads it
     from Cython.Build import cythonize  # a build requirement (pyproject.toml), not a runtime one
 
-    setup(ext_modules=cythonize([core, boucwen], language_level=3),
+    setup(ext_modules=cythonize([core, boucwen, fastcsv], language_level=3),
           cmdclass={"build_ext": BuildExt})

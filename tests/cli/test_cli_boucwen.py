@@ -48,7 +48,8 @@ def test_compensate_limits_slew_and_initial_states(tmp_path, capsys):
     for mode in ("model", "zero", "bottom", "top"):
         out = tmp_path / f"out-{mode}.csv"
         assert main(["compensate", str(model), str(src), "-o", str(out), "--u-min", "5",
-                     "--u-max", "120", "--slew-rate", "40", "--initial-state", mode]) == 0
+                     "--u-max", "120", "--slew-rate", "40", "--initial-state", mode,
+                     "--saturate"]) == 0
         cols, _ = read_columns(out, ["voltage_V", "saturated", "slew_limited"])
         u = cols["voltage_V"]
         assert np.all((u >= 5) & (u <= 120))
@@ -93,7 +94,7 @@ def test_rig_track_with_a_bouc_wen_model(tmp_path, capsys):
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "-o", str(run)]) == 0
     assert "tracking error open loop" in capsys.readouterr().out
-    assert "through the inverse of a bouc-wen model" in run.read_text()
+    assert "through the inverse of a bouc-wen model" in (tmp_path / "run.csv.json").read_text()
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "--feedback", "0.3,2", "-o", str(tmp_path / "fb.csv")]) == 0
     assert "tracking error with feedback" in capsys.readouterr().out

@@ -35,7 +35,7 @@ def test_out_of_reach_is_counted(tmp_path, capsys):
     src.write_text("# desired\ntime_s,displacement_um,note\n0,0,a\n1,10,b\n2,50,c\n3,20,d\n"
                    "4,-1,e\n")
     out = tmp_path / "out.csv"
-    assert run("compensate", MULTISLOPE, str(src), "-o", str(out)) == 0
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--saturate") == 0
     cols, _ = read_columns(out, ["voltage_V", "displacement_um", "saturated"])
     np.testing.assert_array_equal(cols["saturated"], [0, 0, 1, 0, 1])
     assert cols["voltage_V"][2] == 150.0 and cols["voltage_V"][4] == 0.0
@@ -49,7 +49,7 @@ def test_limits_and_slew_rate_in_volts_per_second(tmp_path, capsys):
     y = 20 + 15 * np.sin(t)
     src.write_text("time_s,displacement_um\n" + "".join(f"{a},{b}\n" for a, b in zip(t, y)))
     out = tmp_path / "out.csv"
-    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--u-min", "5",
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--saturate", "--u-min", "5",
                "--u-max", "120", "--slew-rate", "40") == 0
     cols, _ = read_columns(out, ["voltage_V", "saturated", "slew_limited"])
     u = cols["voltage_V"]
@@ -120,7 +120,8 @@ def test_strict_refuses_out_of_reach_whatever_the_slew_rate(tmp_path, capsys, fa
     assert err.startswith(f"pihyst: error: {src}:3:2: displacement_um = {float(far):g} is out "
                           f"of reach: the model reaches [0, 41.38] um")
     assert err.count("\n") == 1 and not out.exists()
-    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--slew-rate", "2") == 0
+    assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--saturate",
+               "--slew-rate", "2") == 0
     cols, _ = read_columns(out, ["saturated", "slew_limited"])
     np.testing.assert_array_equal(cols["saturated"], [0, 1, 1, 1])
     text = capsys.readouterr().out
@@ -155,3 +156,56 @@ def test_initial_state_top_starts_at_rest_at_the_top(tmp_path):
     assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--initial-state", "top",
                "--slew-rate", "5", "--u-max", "120") == 0
     np.testing.assert_array_equal(read_columns(out, ["voltage_V"])[0]["voltage_V"], [115, 110])
+
+
+def _absolute_model(tmp_path):
+    """A model whose output lives in a sensor's absolute frame (about -119 .. -80 um), as
+    the P-885 model's does."""
+    import json
+    with open(CLASSICAL_PATH) as f:
+        d = json.load(f)
+    d["offset"] = -119.0
+    path = tmp_path / "abs.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+CLASSICAL_PATH = "examples/paper_table1_classical.json"
+
+
+def _triangle_desired(path, top=30.0, n=200):
+    y = np.r_[np.linspace(0, top, n // 2), np.linspace(top, 0, n // 2)]
+    path.write_text("time_s,displacement_um\n" + "".join(
+        f"{k * 0.01!r},{v!r}\n" for k, v in enumerate(y.tolist())))
+    return y
+
+
+def test_targets_in_the_users_frame_with_relative(tmp_path, capsys):
+    model = _absolute_model(tmp_path)
+    src, out = tmp_path / "d.csv", tmp_path / "out.csv"
+    y = _triangle_desired(src)
+    # in the model's frame (the default) a 0-30 um triangle is out of reach: exit 2
+    assert run("compensate", str(model), str(src), "-o", str(out)) == 2
+    err = capsys.readouterr().err
+    assert "out of the model's reach, more than 10 %" in err and "--relative" in err
+    assert err.count("\n") == 1 and not out.exists()
+    # --saturate says that is intended
+    assert run("compensate", str(model), str(src), "-o", str(out), "--saturate") == 0
+    assert "frame: absolute" in capsys.readouterr().out
+    # --relative: from the model's rest point at its lowest voltage; it tracks
+    assert run("compensate", str(model), str(src), "-o", str(out), "--relative") == 0
+    text = capsys.readouterr().out
+    assert "frame: relative, desired displacement from the model's rest point at 0 V" in text
+    assert "saturated: 0 of 200 samples" in text
+    cols, _ = read_columns(out, ["displacement_um", "saturated"])
+    np.testing.assert_allclose(cols["displacement_um"], y, atol=1e-9)   # in the user's frame
+
+
+def test_track_takes_the_frame_too(tmp_path, capsys):
+    model = _absolute_model(tmp_path)
+    src, out = tmp_path / "d.csv", tmp_path / "out.csv"
+    _triangle_desired(src)
+    assert run("track", str(model), str(src), "-o", str(out)) == 2
+    assert "out of the model's reach" in capsys.readouterr().err
+    assert run("track", str(model), str(src), "-o", str(out), "--relative") == 0
+    assert "frame: relative" in capsys.readouterr().out

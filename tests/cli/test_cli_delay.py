@@ -176,7 +176,7 @@ def test_compensate_says_a_delayed_models_reach_as_the_undelayed_ones(tmp_path, 
         model_path = tmp_path / f"m{d}.json"
         TRUE.replace(delay=d).save(model_path)
         assert main(["compensate", str(model_path), str(desired), "-o",
-                     str(tmp_path / "c.csv")]) == 0
+                     str(tmp_path / "c.csv"), "--saturate"]) == 0
         lines[d] = [line for line in capsys.readouterr().out.splitlines()
                     if "reach" in line]
     assert lines[D] == lines[0]

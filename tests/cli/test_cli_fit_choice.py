@@ -71,6 +71,10 @@ def test_bad_options_and_validation_files(tmp_path, data, capsys):
                                                 "-o", str(out)], out)
     assert "--max-latency" in _fails(capsys, ["fit", str(data), "--max-latency", "-3",
                                               "-o", str(out)], out)
+    # --max-latency in seconds, as pihyst.fit's max_latency (the report shows us)
+    err = _fails(capsys, ["fit", str(data), "--model", "classical", "--max-latency",
+                          "1e-12", "-o", str(out)], out)
+    assert "more than max_latency = 1e-06 us" in err
     err = _fails(capsys, ["fit", str(data), "--model", "kp", "--max-operators", "3", "-o",
                           str(out)], out)
     assert "no fitted family meets the bounds" in err

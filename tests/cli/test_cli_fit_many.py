@@ -4,6 +4,7 @@ with exit status 2 and nothing written."""
 
 import csv
 import json
+import os
 import subprocess
 import sys
 
@@ -14,7 +15,7 @@ import pihyst
 from pihyst.cli import main
 from pihyst.io import read_columns
 
-from fleets import local_client, make_fleet_dir
+from fleets import actuator_record, local_client, make_fleet_dir, write_record
 
 
 @pytest.fixture(scope="module")
@@ -23,8 +24,10 @@ def dask_client():
 
 
 def _alone(path, **options):
-    cols, _ = read_columns(path, ["voltage_V", "displacement_um"])
-    return pihyst.fit(cols["voltage_V"], cols["displacement_um"], **options)
+    """The fit of one record as pihyst fit does it (its time column gives the creep's t)."""
+    cols, _ = read_columns(path, ["voltage_V", "displacement_um"], optional=["time_s"])
+    return pihyst.fit(cols["voltage_V"], cols["displacement_um"], t=cols.get("time_s"),
+                      **options)
 
 
 def _summary(folder):
@@ -154,3 +157,70 @@ def test_scheduler_local_from_the_command_line(tmp_path):
         model = pihyst.load_model(out / f"act{k}.json")
         assert model == alone.model
         np.testing.assert_array_equal(model.weights, alone.model.weights)
+
+
+def _fit_alone(tmp_path, path, *options):
+    model = tmp_path / "alone" / (path.stem + ".json")
+    model.parent.mkdir(exist_ok=True)
+    assert main(["fit", str(path), *options, "-o", str(model)]) == 0
+    return pihyst.load_model(model)
+
+
+def _raw(path, u, y, rate=None):
+    """A record as an instrument writes it: tab columns, no header, a sensor 1 sample
+    late (column 3), and an unrelated column."""
+    rows = zip(np.arange(u.size) * 0.25, u, np.r_[y[:1], y[:-1]])
+    path.write_text("".join(f"{k!r}\t{a!r}\t{c!r}\t7\n" for k, a, c in
+                            ((float(k), float(a), float(c)) for k, a, c in rows)))
+    return path
+
+
+def test_record_options_apply_to_every_file_as_pihyst_fit(tmp_path, capsys):
+    folder = tmp_path / "raw"
+    folder.mkdir()
+    for k in range(2):
+        _raw(folder / f"act{k}.dat", *actuator_record(k))
+    options = ["--voltage", "2", "--displacement", "3", "--time", "1", "--lag", "1",
+               "--model", "classical"]
+    out = tmp_path / "models"
+    assert main(["fit-many", str(folder), "-o", str(out), *options]) == 0
+    text = capsys.readouterr().out
+    assert "fitted 2 of 2 records" in text and "displacement 1 sample(s) later" in text
+    for k in range(2):
+        alone = _fit_alone(tmp_path, folder / f"act{k}.dat", *options)
+        many = pihyst.load_model(out / f"act{k}.json")
+        assert many == alone and "creep" in many.metadata["fit"]
+        assert (out / f"act{k}.json").read_text().count("\n") > 0
+
+
+def test_manifest_gives_options_per_file(tmp_path, capsys):
+    folder = tmp_path / "raw"
+    folder.mkdir()
+    u, y = actuator_record(0)
+    _raw(folder / "a.dat", u, y)
+    write_record(folder / "b.csv", *actuator_record(1))
+    (folder / "notes.md").write_text("not a record")
+    os.symlink(folder / "loop", folder / "loop")
+    manifest = tmp_path / "m.json"
+    manifest.write_text(json.dumps({"a.dat": {"voltage": 2, "displacement": 3, "time": "1",
+                                              "lag": 1}}))
+    out = tmp_path / "models"
+    assert main(["fit-many", str(folder), "-o", str(out), "--model", "classical",
+                 "--manifest", str(manifest)]) == 0
+    text = capsys.readouterr().out
+    assert "skipped loop: a symlink loop" in text and "skipped notes.md: not a record" in text
+    assert "fitted 2 of 2 records" in text and "(2 other files skipped)" in text
+    assert pihyst.load_model(out / "a.json") == _fit_alone(
+        tmp_path, folder / "a.dat", "--voltage", "2", "--displacement", "3", "--time", "1",
+        "--lag", "1", "--model", "classical")
+    assert pihyst.load_model(out / "b.json") == _fit_alone(tmp_path, folder / "b.csv",
+                                                           "--model", "classical")
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["skipped"] == {"loop": "a symlink loop",
+                                  "notes.md": "not a record format (give --pattern to fit it)"}
+    manifest.write_text(json.dumps({"a.dat": {"lag": -1}}))
+    assert main(["fit-many", str(folder), "-o", str(tmp_path / "m2"), "--manifest",
+                 str(manifest)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pihyst: error: --manifest {manifest}: a.dat: argument --lag")
+    assert err.count("\n") == 1

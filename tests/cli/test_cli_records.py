@@ -46,7 +46,9 @@ def test_p885_raw_file_fits_with_one_command(tmp_path, capsys):
     assert run("validate", model, DATA / datasets.P885_DIR / "Test_Vi_Do_Di.dat", "--voltage",
                1, "--displacement", 5, "--lag", 1, "--rate", 200, "--json") == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["errors"]["samples"] == 14154
+    # judged from the state the record's first full sweep settles (stated), without it
+    assert result["start_state"]["mode"] == "settle"
+    assert result["errors"]["samples"] == 14154 - result["start_state"]["settling_samples"]
     assert result["offset_refitted"]["rms_um"] < 2.0
 
 
@@ -71,14 +73,20 @@ def test_validate_a_model_on_its_own_prediction_and_a_shifted_record(tmp_path, c
     assert run("validate", CLASSICAL, pred, "--json") == 0
     exact = json.loads(capsys.readouterr().out)
     assert exact["errors"]["max_abs_um"] == 0.0 and len(exact["cycles"]) == 1
+    # judged from a start state it states: by default the one the record settles
+    assert exact["start_state"]["mode"] == "settle" and not exact["start_state"]["given"]
+    assert exact["start_state"]["settling_samples"] == 199
+    assert exact["errors"]["samples"] == 401 - 199
     cols, _ = read_columns(pred, ["time_s", "voltage_V", "displacement_um"])
     shifted = tmp_path / "shifted.csv"
     pihyst.io.write_columns(shifted, {"t": cols["time_s"], "v": cols["voltage_V"],
                                       "d_nm": (cols["displacement_um"] + 2.0) * 1000})
     figure = tmp_path / "check.svg"
     assert run("validate", CLASSICAL, shifted, "--voltage", "v", "--displacement", "d_nm",
-               "--time", "t", "--figure", figure) == 0
+               "--time", "t", "--figure", figure, "--initial-state", "model") == 0
     out = capsys.readouterr().out
+    assert "start state: the model file's (--initial-state model); all 401 samples judged" \
+        in out
     assert "displacement in nm (column name 'd_nm') -> um" in out
     assert "as the model is                    2         2         2     5.16 %" in out
     assert "mostly an offset of +2 um" in out
@@ -134,7 +142,7 @@ def test_compensate_prints_reach_and_strict_refuses(tmp_path, capsys):
     src = tmp_path / "d.csv"
     src.write_text("time_s,displacement_um\n0,1\n1,10\n2,60\n3,5\n")
     out = tmp_path / "out.csv"
-    assert run("compensate", MULTISLOPE, src, "-o", out) == 0
+    assert run("compensate", MULTISLOPE, src, "-o", out, "--saturate") == 0
     text = capsys.readouterr().out
     assert "reachable displacement: [0, 41.38] um with the voltage in [0, 150] V" in text
     assert "1 samples lie outside the reachable range" in text

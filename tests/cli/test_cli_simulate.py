@@ -1,5 +1,7 @@
 """pihyst simulate"""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -24,8 +26,10 @@ def test_default_records_the_papers_loop_on_the_paper_beam(tmp_path, capsys):
     np.testing.assert_allclose(cols["voltage_V"], u, atol=1e-12)
     expected = make_plant("paper-beam", seed=0).run(u, t)
     np.testing.assert_allclose(cols["displacement_um"], expected, rtol=0, atol=1e-12)
-    text = out.read_text()
-    assert text.startswith("# pihyst") and "paper-beam" in text.splitlines()[1]
+    text = out.read_text()      # plain CSV; what wrote it is in the sidecar
+    assert text.startswith("time_s,voltage_V,displacement_um\n")
+    side = json.loads((tmp_path / (out.name + ".json")).read_text())
+    assert side["comments"][0].startswith("pihyst") and "paper-beam" in side["comments"][1]
     assert "wrote 3001 samples" in capsys.readouterr().out
 
 

@@ -99,15 +99,23 @@ def test_track_says_which_ticks_the_model_cannot_reach(tmp_path, capsys):
     desired = tmp_path / "desired.csv"
     out = tmp_path / "run.csv"
     desired.write_text("time_s,displacement_um\n0,0\n2,40\n4,0\n")
+    # 31 % of the ticks out of reach: refused before the supply is touched ...
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
-                 "-o", str(out)]) == 0
+                 "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "25 of 81 samples (30.9 %) of the desired displacement are out of the model's " \
+           "reach, more than 10 %" in err and "--saturate" in err and not out.exists()
+    # ... unless --saturate says that is intended
+    assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
+                 "-o", str(out), "--saturate"]) == 0
     text = capsys.readouterr().out
+    assert "frame: absolute" in text
     # the first 0 um is reached (from the initial state), the last two are not (2 um is
     # left at 0 V after the way up), nor the 23 above 28 um
     assert "note: 25 of 81 ticks of the desired displacement (span [0, 40] um) are out of " \
            "the model's reach with the voltage in [0, 100] V (at most [2, 28] um): their " \
            "voltage saturates" in text, text
-    assert "# note: 25 of 81 ticks" in out.read_text()
+    assert "note: 25 of 81 ticks" in _log_notes(out)
     desired.write_text("time_s,displacement_um\n0,5\n2,20\n4,5\n")
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "-o", str(out)]) == 0
@@ -199,7 +207,7 @@ def test_a_fault_stops_the_run_with_status_1(tmp_path, capsys, cfg):
     assert info.value.code == 1
     assert "the run stopped early: 5 consecutive invalid sensor readings" in \
         error_line(capsys)
-    assert "# stopped: 5 consecutive invalid sensor readings" in out.read_text()
+    assert "stopped: 5 consecutive invalid sensor readings" in _log_notes(out)
 
 
 def test_a_supply_left_charged_after_the_program_is_status_1(tmp_path, capsys, cfg):
@@ -212,7 +220,7 @@ def test_a_supply_left_charged_after_the_program_is_status_1(tmp_path, capsys, c
               "--fault", "supply:no-reply:2.2", "-o", str(out)])
     assert info.value.code == 1
     assert "the supply could not be zeroed at the end" in error_line(capsys)
-    assert "WARNING: could not send 0 V" in out.read_text()
+    assert "WARNING: could not send 0 V" in _log_notes(out)
 
 
 def test_a_full_disk_stops_the_run_with_status_1(tmp_path, capsys, cfg, monkeypatch):
@@ -269,3 +277,38 @@ def test_track_refuses_a_delay_that_is_no_whole_number_of_ticks(tmp_path, capsys
     assert "delay of 3 samples at 0.0123 s" in line and "not a whole number" in line
     assert line.startswith(f"pihyst: error: {cfg}: the model's delay")   # names the rate's file
     assert not out.exists()
+
+
+def _log_notes(log):
+    """The lines about a run (its metadata, why it stopped), in the sidecar LOG.json."""
+    import json
+    with open(f"{log}.json", encoding="utf-8") as f:
+        side = json.load(f)
+    return "\n".join(side["comments"] + side["notes"])
+
+
+def test_the_log_has_every_tick_and_fit_skips_the_invalid_ones(tmp_path, capsys):
+    """Every tick is a row (a default reader sees the failed ones too, with their
+    status); pihyst's reader skips those without a valid reading and says how many."""
+    import numpy as np
+
+    from pihyst.io import read_record
+    from pihyst.rig import CsvRunLog, TickRecord
+    path = tmp_path / "run.csv"
+    log = CsvRunLog(path, metadata=["pihyst test"])
+    for k in range(6):
+        bad = k in (2, 3)
+        log.write(TickRecord(k, 0.1 * k, "run", 1.0, float(k), float(k), float(k),
+                             float("nan") if bad else 0.5 * k,
+                             "over-range+" if bad else "ok", "ok", 0, 0.0, 0.001))
+    log.note("stopped: end of the program")
+    log.close()
+    lines = path.read_text().splitlines()
+    assert len(lines) == 7 and not any(line.startswith("#") for line in lines)
+    assert ",nan,over-range+," in lines[3]
+    rec = read_record(path)
+    np.testing.assert_array_equal(rec.voltage, [0, 1, 4, 5])
+    assert rec.metadata["skipped_ticks"] == 2
+    pandas = pytest.importorskip("pandas")
+    assert len(pandas.read_csv(path)) == 6
+    assert _log_notes(path).endswith("stopped: end of the program")

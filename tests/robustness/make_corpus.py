@@ -377,6 +377,67 @@ def records():
            note="the input changes in its 11th digit: nothing left to fit")
 
 
+def readers():
+    """Issue 24's readers: a headerless first row that is not a valid sample, a last
+    number cut short, a tail of NULs, and binary records truncated, bit-flipped or
+    empty (each library's exception, one line naming the file)."""
+    import io as _io
+
+    import scipy.io
+    t, u, y = _triangle()
+    every = {c: 2 for c in CSV_COMMANDS}
+    body = _csv(t, u, y).split("\n", 1)[1]
+    for name, first in (("nan", "nan"), ("inf", "inf"), ("hex", "0x10")):
+        record(f"first-row-{name}.csv", f"0,{first},0\n" + body,
+               f"first-row-{name}.csv:1:2: '{first}' is not a", expect=every,
+               note="a headerless first row with a value that is not a sample: an error, "
+                    "not a header")
+    text = _csv(t, u, y) + "99,5,0."
+    lines = text.count("\n") + 1
+    record("cut-last-number.csv", text,
+           f"cut-last-number.csv:{lines}:3: the last line ends without a line end",
+           expect=every, note="the file cut off in its last number")
+    record("nul-tail.csv", (_csv(t, u, y) + "\0" * 70000).encode(),
+           f"nul-tail.csv:{lines}: not a text file (it holds NUL bytes) from this line on",
+           expect=every,
+           note="a tail of NULs (a file cut off, a sparse file): the data end there")
+    buffers = {}
+    b = _io.BytesIO()
+    np.savez(b, time_s=t, voltage_V=u, displacement_um=y)
+    buffers["npz"] = b.getvalue()
+    b = _io.BytesIO()
+    np.save(b, np.c_[t, u, y])
+    buffers["npy"] = b.getvalue()
+    for name, compress in (("mat", False), ("zmat", True)):
+        b = _io.BytesIO()
+        scipy.io.savemat(b, {"time_s": t, "voltage_V": u, "displacement_um": y},
+                         do_compression=compress)
+        buffers[name] = b.getvalue()
+    for kind, data in buffers.items():
+        ext = "mat" if kind == "zmat" else kind
+        record(f"cut-{kind}.{ext}", data[:len(data) // 2], "cannot read", expect=every,
+               note=f"a .{ext} file cut in half")
+        record(f"empty-{kind}.{ext}", b"", "cannot read", expect=every,
+               note=f"an empty .{ext} file")
+    flipped = bytearray(buffers["zmat"])
+    for k in range(len(flipped) // 2, len(flipped) // 2 + 16):
+        flipped[k] ^= 0xFF
+    record("flipped-zmat.mat", bytes(flipped), "cannot read MATLAB file", expect=every,
+           note="bit flips in a compressed MATLAB file (a zlib error)")
+    flipped = bytearray(buffers["npz"])
+    for k in range(len(flipped) // 3, len(flipped) // 3 + 16):
+        flipped[k] ^= 0xFF
+    record("flipped.npz", bytes(flipped), "cannot read", expect=every,
+           note="bit flips in an .npz (a bad CRC, BadZipFile)")
+    found = os.path.join(ROOT, "csv", "scipy-segv.mat")     # kept as the fuzz found it
+    if os.path.exists(found):
+        with open(found, "rb") as f:
+            record("scipy-segv.mat", f.read(), "SciPy's reader crashed on it (SIGSEGV)",
+                   expect=every, note="bit flips in a MATLAB v5 file on which SciPy's "
+                   "loadmat crashes with SIGSEGV (found by the fuzz test): read in a forked "
+                   "child, a one-line error")
+
+
 def inputs():
     """The other input of each command: voltages inside every corpus model's range, a
     desired displacement (with times) within their reach."""
@@ -390,6 +451,7 @@ def main():
     inputs()
     models()
     records()
+    readers()
     with open(os.path.join(ROOT, "manifest.json"), "w") as f:
         json.dump(MANIFEST, f, indent=1, sort_keys=True)
         f.write("\n")

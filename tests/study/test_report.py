@@ -27,6 +27,10 @@ def test_every_promised_file_is_written(demo):
                 "fig4_multislope_operators.png", "fig5_validation.png", "fig6_voltages.png",
                 "fig7_tracking.png", "fig8_tracking_reversals.png", "fig9_variants.png",
                 "fig10_beams.png"}
+    # each CSV's description in its sidecar (the CSV itself is plain)
+    expected |= {f"{n}.json" for n in expected if n.endswith(".csv")
+                 and f"{n}.json" in names}
+    assert {"loop.csv.json", "tracking_triangle.csv.json"} <= names
     assert names == expected
     assert not [n for n in names if n.startswith(".pihyst-")]
     assert lines == ["drawing the figures ...", "writing data, models and metrics ..."]

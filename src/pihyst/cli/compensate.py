@@ -8,6 +8,7 @@ import numpy as np
 
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, number, positive_number
+from pihyst.cli.frames import add_frame_options, check_reach, frame
 from pihyst.cli.model_inputs import (
     add_initial_state_option,
     creep_times,
@@ -47,6 +48,7 @@ def register(sub):
                    help="a desired displacement out of reach is an error (exit status 2, no "
                         "output file) instead of a saturated sample")
     add_initial_state_option(p, modes=("model", "bottom", "top", "zero"))
+    add_frame_options(p)
     add_record_options(p, "DESIRED", unused=NO_VOLTAGE)
     p.set_defaults(run=run)
 
@@ -159,7 +161,10 @@ def run(args):
         except ValueError as err:
             raise UsageError(f"{args.model}: {err}") from None
         lo, hi = compensator.limits
+        offset, frame_line = frame(args, model)
         y_lo, y_hi = reachable(model, state, lo, hi)
+        # in the user's frame: what is printed and written
+        y_lo, y_hi = y_lo - offset, y_hi - offset
         unit = model.units.get("output", "um")
         stats = _Stats(compensator.delay)
         writer = None
@@ -170,7 +175,7 @@ def run(args):
         t_last = None             # with creep: the previous chunk's last sample time
         try:
             for rec in reader.chunks(progress=bar):
-                y_d = rec.displacement
+                y_d = rec.displacement + offset if offset else rec.displacement
                 at = creep_times(model, rec, t_last)    # a model with creep: its times
                 if at and len(rec):
                     t_last = rec.time[-1]
@@ -187,24 +192,32 @@ def run(args):
                 if args.strict and ahead.n_saturated:
                     i = skip + int(np.flatnonzero(ahead.saturated)[0])
                     raise rec.error(i, "displacement",
-                                    f"displacement_um = {y_d[i]:g} is out of reach: the "
+                                    f"displacement_um = {y_d[i] - offset:g} is out of reach: "
+                                    f"the "
                                     f"model reaches [{y_lo:.4g}, {y_hi:.4g}] {unit} with the "
                                     f"voltage in [{lo:g}, {hi:g}] V; "
                                     + reach_hint(model, y_lo, y_hi))
                 if writer is None:
-                    writer = _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit)
-                _write(writer, t, result, max_step)
-                stats.add(result, result.desired)
+                    writer = _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit,
+                                          frame_line)
+                _write(writer, t, result, max_step, offset)
+                stats.add(result, result.desired, offset)
             if preview is not None and writer is not None:
                 result = preview.feed([], last=True)
-                _write(writer, times, result, max_step)
-                stats.add(result, result.desired)
+                _write(writer, times, result, max_step, offset)
+                stats.add(result, result.desired, offset)
+            check_reach(args, stats.saturated, stats.n, args.desired,
+                        f"the model reaches [{y_lo:.4g}, {y_hi:.4g}] {unit}, the desired "
+                        f"displacement spans [{stats.d_lo:.4g}, {stats.d_hi:.4g}] {unit}"
+                        + ("" if getattr(args, "relative", False) else
+                           "; a trajectory from the actuator's rest point: --relative"))
         except BaseException:
             if writer is not None:
                 writer.abort()
             raise
         writer.close()
         print(reader.describe())
+    print(frame_line)
     n = stats.n
     print(f"wrote {n} samples to {args.output} (voltage {stats.u_lo:.4g} .. {stats.u_hi:.4g} V)")
     print(f"reachable displacement: [{y_lo:.4g}, {y_hi:.4g}] {unit} with the voltage in "
@@ -236,15 +249,16 @@ def _rest_voltage(args, model):
     return min(max(model.input_range[ends[args.initial_state]], lo), hi)
 
 
-def _write(writer, t, result, max_step):
-    out = {"time_s": t, "voltage_V": result.voltage, "displacement_um": result.displacement,
+def _write(writer, t, result, max_step, offset=0.0):
+    out = {"time_s": t, "voltage_V": result.voltage,
+           "displacement_um": result.displacement - offset if offset else result.displacement,
            "saturated": result.saturated.astype(float)}
     if max_step is not None:
         out["slew_limited"] = result.slew_limited.astype(float)
     writer.write(out)
 
 
-def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit):
+def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit, frame_line):
     names = ["time_s", "voltage_V", "displacement_um", "saturated"]
     if max_step is not None:
         names.append("slew_limited")
@@ -254,7 +268,7 @@ def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit):
         f"pihyst {__version__} compensate {args.model} {args.desired}",
         f"voltage limits [{lo:g}, {hi:g}] V"
         + ("" if max_step is None else f", slew limit {max_step:g} V per sample"),
-        f"reachable displacement [{y_lo:.6g}, {y_hi:.6g}] {unit}", *note])
+        f"reachable displacement [{y_lo:.6g}, {y_hi:.6g}] {unit}", frame_line, *note])
 
 
 class _Stats:
@@ -267,9 +281,10 @@ class _Stats:
         self.err_max = None
         self.delay = delay
 
-    def add(self, result, y_d):
+    def add(self, result, y_d, offset=0.0):
         if not len(y_d):
             return
+        y_d = y_d - offset if offset else y_d
         first = self.n             # samples before d of a delayed model: not reachable
         self.n += len(y_d)
         self.saturated += result.n_saturated
@@ -283,5 +298,5 @@ class _Stats:
         self.d_hi = max(self.d_hi, float(y_d.max()))
         reached = result.reached & (np.arange(first, self.n) >= self.delay)
         if reached.any():
-            e = float(np.abs(result.displacement - y_d)[reached].max())
+            e = float(np.abs(result.displacement - offset - y_d)[reached].max())
             self.err_max = e if self.err_max is None else max(self.err_max, e)

@@ -1,5 +1,5 @@
 """pihyst fit DATA.csv [--model FAMILY] [--thresholds LIST] [--n-operators N]
-[--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency US] [--json]
+[--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency SECONDS] [--json]
 -o MODEL.json"""
 
 import math
@@ -67,9 +67,11 @@ def register(sub):
                         "(else 0); the report says which delay was used and why")
     p.add_argument("--max-operators", metavar="N", type=count(1),
                    help="choose only among models with at most N operators")
-    p.add_argument("--max-latency", metavar="US", type=positive_number,
-                   help="choose only among models whose compensator takes at most US "
-                        "microseconds per sample in the worst case (measured)")
+    p.add_argument("--max-latency", metavar="SECONDS", type=positive_number,
+                   help="choose only among models whose compensator takes at most SECONDS "
+                        "per sample in the worst case (estimated from the model's "
+                        "structure), e.g. 5e-7 for 0.5 us (seconds, as pihyst.fit's "
+                        "max_latency)")
     p.add_argument("--no-creep", action="store_true",
                    help="do not fit creep (default: with a time column, or --rate, creep is "
                         "fitted and kept when the held-back cycles say it helps)")
@@ -194,15 +196,12 @@ def run(args):
     if args.max_operators is not None and args.max_operators < 1:
         raise UsageError(f"--max-operators must be at least 1, got {args.max_operators}")
     if args.max_latency is not None and not args.max_latency > 0:
-        raise UsageError(f"--max-latency must be a positive number of microseconds, got "
+        raise UsageError(f"--max-latency must be a positive number of seconds, got "
                          f"{args.max_latency:g}")
     delay = _delay(args.delay)
     input_range = _input_range(args.input_range)
-    record = read_from_args(args, args.data, need=("voltage", "displacement"),
-                            say=not args.json, optional=())
+    record, t, time_note = read_for_fit(args, args.data, say=not args.json)
     u, y = record.voltage, record.displacement
-    # an unusable time column is said after the fit: a fit that fails says one line
-    t, time_note = (None, None) if args.no_creep else _times_for_creep(args)
     other = validate = None
     if args.validate is not None:
         other = read_from_args(args, args.validate, need=("voltage", "displacement"),
@@ -217,8 +216,7 @@ def run(args):
                          through="top" if args.through_top else None,
                          offset=not args.no_offset, validate=validate, delay=delay,
                          max_operators=args.max_operators,
-                         max_latency=(None if args.max_latency is None
-                                      else 1e-6 * args.max_latency), t=t,
+                         max_latency=args.max_latency, t=t,
                          progress=step_printer("pihyst fit"))
         except FitError as err:
             if other is not None and str(err).startswith("validate:"):
@@ -226,7 +224,7 @@ def run(args):
             raise _error(err, record) from None
     model = result.model
     if model.delay:
-        model = model.replace(sample_period=_sample_period(args))
+        model = model.replace(sample_period=sample_period(args))
     if input_range is not None:
         model = _with_input_range(model, input_range, record)
     model = model.replace(metadata={
@@ -250,15 +248,29 @@ def run(args):
               f"(pihyst predict {args.output} INPUT.csv -o OUT.csv)")
 
 
-def _times_for_creep(args):
+def read_for_fit(args, path, say=True):
+    """(record, times, note): what ``pihyst fit`` (and ``fit-many``, for each file)
+    fits: the record read with the record options of ``args``, its times for creep
+    (None without a usable time column, or with --no-creep) and the warning to print
+    once the fit succeeds when the time column is unusable."""
+    record = read_from_args(args, path, need=("voltage", "displacement"), say=say,
+                            optional=())
+    # an unusable time column is said after the fit: a fit that fails says one line
+    t, note = (None, None) if getattr(args, "no_creep", False) else \
+        _times_for_creep(args, path, say)
+    return record, t, note
+
+
+def _times_for_creep(args, path=None, say=False):
     """(times, note): the record's sample times for creep="auto", or None: a record
     without a time column is fitted without creep, and so is one whose time column is
     unusable (the note, a warning to print once the fit succeeds, says where; the fit
     itself needs no time)."""
+    path = args.data if path is None else path
     try:
         # (the time is optional here: a record without one is fitted without creep)
-        times = read_from_args(args, args.data, need=("voltage", "displacement"), say=False,
-                               optional=("time",))
+        times = read_from_args(args, path, need=("voltage", "displacement"), say=False,
+                               optional=("time",), warn=say)
     except UsageError:
         return None, None
     except RecordError as err:
@@ -271,6 +283,13 @@ def _times_for_creep(args):
         k = int(bad[0])
         what = "is not finite" if not np.isfinite(t[k]) else "runs backwards"
         return None, _unused_time(times.error(k, "time", f"time {what} at sample {k}"))
+    if say:
+        meta = times.metadata
+        label = (meta["columns"]["time"] if "time" in meta["columns"] else
+                 f"k / {meta['rate_hz']:g} Hz" if "rate_hz" in meta else "?")
+        why = meta.get("columns_why", {}).get("time")
+        print(f"  the time for creep from {label}" + (f" ({why})" if why else ""),
+              flush=True)
     return t, None
 
 
@@ -279,14 +298,15 @@ def _unused_time(err):
             f"--no-creep)")
 
 
-def _sample_period(args):
+def sample_period(args, path=None):
     """The record's sample period (s), which a fitted delay holds at: the median step of
     its time, its time column's or the one --rate defines (read only now: a fit without
     a delay needs none); None when the record has no usable time."""
     if args.rate is not None:       # no time column (the reader refuses both): k / rate
         return 1.0 / args.rate
     try:
-        times = read_from_args(args, args.data, need=("time",), say=False, optional=())
+        times = read_from_args(args, args.data if path is None else path, need=("time",),
+                               say=False, optional=())
     except (RecordError, UsageError):
         return None
     steps = np.diff(times.time) if times.time is not None else np.empty(0)

@@ -83,10 +83,10 @@ def fitted_span(model):
     return tuple(span) if span is not None and len(span) == 2 else None
 
 
-def add_initial_state_option(p, modes=INITIAL_STATES):
-    p.add_argument("--initial-state", choices=modes, default="model",
-                   help="operator state at the first sample: 'model' (the model file's, "
-                        "default), 'bottom' / 'top' (at rest at the bottom / top of the "
+def add_initial_state_option(p, modes=INITIAL_STATES, default="model"):
+    p.add_argument("--initial-state", choices=modes, default=default,
+                   help=f"operator state at the first sample (default {default}): 'model' "
+                        "(the model file's), 'bottom' / 'top' (at rest at the bottom / top of the "
                         "input range after a full cycle), 'zero' (every operator at 0)"
                         + (", 'settle' (the first full sweep of the record settles the "
                            "operators; its samples are marked and left out of the errors)"

@@ -3,9 +3,10 @@ validate, report, track): which columns, which units, the sensor lag, where to s
 and the progress bar for long reads. docs/records.md."""
 
 import sys
+import warnings
 
 from pihyst.cli.errors import UsageError, count
-from pihyst.exceptions import InvalidArgumentError
+from pihyst.exceptions import InvalidArgumentError, PihystWarning
 from pihyst.io import open_record
 
 UNITS = ("m", "mm", "um", "nm")
@@ -16,8 +17,9 @@ def add_record_options(p, what="the record", unused=None):
     help that the command refuses them (run() calls :func:`refuse_unused`)."""
     g = p.add_argument_group(
         f"reading {what}",
-        "Delimited text (comma, semicolon, tab or whitespace; header or not; '#' comments; "
-        "decimal comma), .npy, .npz, .mat, .h5, .parquet. Columns by name or 1-based "
+        "Delimited text (comma, semicolon, tab or whitespace; header or not; a units row; "
+        "'#' comments; decimal comma; PI GCSArray data-recorder files), LabVIEW .lvm, "
+        ".tdms, .xlsx, .npy, .npz, .mat, .h5, .parquet. Columns by name or 1-based "
         "number (in array files: a variable, NAME:K or K).")
     unused = unused or {}
 
@@ -52,6 +54,9 @@ def add_record_options(p, what="the record", unused=None):
                         "(default: found from the file)")
     add("--decimal-comma", action="store_true", default=None,
                    help="numbers are written 1,5 (default: found from the file)")
+    add("--sheet", metavar="NAME|N",
+                   help="the sheet of an Excel workbook, by name or 1-based number "
+                        "(default: the first)")
     add("--reader", metavar="MODULE:FUNCTION",
                    help="read the file with your Python function (MODULE:FUNCTION or "
                         "FILE.py:FUNCTION), called with the file's path and returning a "
@@ -62,7 +67,7 @@ OPTIONS = (("voltage", "--voltage"), ("displacement", "--displacement"), ("time"
            ("rate", "--rate"), ("displacement_unit", "--displacement-unit"),
            ("voltage_gain", "--voltage-gain"), ("lag", "--lag"),
            ("skip_until", "--skip-until"), ("separator", "--separator"),
-           ("reader", "--reader"))
+           ("sheet", "--sheet"), ("reader", "--reader"))
 
 
 def options_text(args):
@@ -103,25 +108,37 @@ def refuse_unused(args, command, what, unused):
                              + why.format(what=what))
 
 
-def open_from_args(args, path, need, optional=("time",)):
+def open_from_args(args, path, need, optional=("time",), say_warnings=True):
     """A :class:`pihyst.io.RecordReader` for ``path`` with the options of ``args``;
     ``optional`` quantities are read when the record has them."""
     try:
-        return open_record(path, voltage=args.voltage, displacement=args.displacement,
-                           time=args.time, rate=args.rate,
-                           displacement_unit=args.displacement_unit,
-                           voltage_gain=args.voltage_gain, lag=args.lag,
-                           skip_until=args.skip_until, separator=args.separator,
-                           decimal_comma=args.decimal_comma, reader=args.reader, need=need,
-                           optional=optional)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PihystWarning)
+            reader = open_record(path, **record_kwargs(args), need=need, optional=optional)
     except InvalidArgumentError as err:      # an option that does not fit this record
         raise UsageError(f"{path}: {err}") from None
+    if say_warnings:
+        for w in caught:
+            print(f"pihyst: warning: {w.message}", file=sys.stderr, flush=True)
+    return reader
 
 
-def read_from_args(args, path, need, say=True, optional=("time",)):
+def record_kwargs(args):
+    """The keyword arguments of :func:`pihyst.io.read_record` the record options of
+    ``args`` give (the one translation of the options, for every command)."""
+    return dict(voltage=args.voltage, displacement=args.displacement, time=args.time,
+                rate=args.rate, displacement_unit=args.displacement_unit,
+                voltage_gain=args.voltage_gain, lag=args.lag, skip_until=args.skip_until,
+                separator=args.separator, decimal_comma=args.decimal_comma,
+                sheet=getattr(args, "sheet", None), reader=args.reader)
+
+
+def read_from_args(args, path, need, say=True, optional=("time",), warn=None):
     """All of a record (a :class:`pihyst.io.Record`) with the options of ``args``;
-    prints what was read (unless ``say`` is False)."""
-    with open_from_args(args, path, need, optional) as reader, \
+    prints what was read (unless ``say`` is False) and the reader's warnings (unless
+    ``warn``, by default ``say``, is False)."""
+    warn = say if warn is None else warn
+    with open_from_args(args, path, need, optional, say_warnings=warn) as reader, \
             progress_bar(f"reading {path}") as bar:
         record = reader.read(progress=bar)
         if say:

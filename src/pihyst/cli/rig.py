@@ -12,6 +12,7 @@ import sys
 import numpy as np
 
 from pihyst.cli.errors import UsageError, count, number, positive_number
+from pihyst.cli.frames import add_frame_options, check_reach, frame
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.exceptions import CSVError
 from pihyst.io import column_number, load_model, read_columns
@@ -91,6 +92,7 @@ def register(sub):
     t.add_argument("--feedback", metavar="KP,KI[,KD]", default=None,
                    help="PID gains on the error in um (KP in V/um, KI in V/(um s), KD in V s/um), "
                         "e.g. 1,10")
+    add_frame_options(t)
     _common(t)
     t.set_defaults(run=run_track)
 
@@ -346,6 +348,11 @@ def run_track(args):
     model = delay_for_run(model, args.config, period=1.0 / r.rate_hz)
     gains = _gains(args.feedback) if args.feedback is not None else None
     desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
+    # in the model's frame (the sensor's, which the model was fitted on): --relative
+    # targets are from the model's rest point at its lowest voltage
+    offset, frame_line = frame(args, model)
+    print(frame_line, flush=True)
+    desired = desired + offset
     max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz
     try:
         if gains is None:
@@ -357,11 +364,15 @@ def run_track(args):
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
-    reach = _reach_note(model, desired, *program.limits)
+    reach, n_out = _reach_note(model, desired, *program.limits)
+    # refused before the supply is touched
+    check_reach(args, n_out, desired.size, args.desired,
+                "a trajectory from the actuator's rest point: --relative"
+                if not args.relative else "narrow the trajectory")
     if reach is not None:
         print(reach, flush=True)
     with _open(args, config) as rig:
-        result = _run(rig, args, program, notes=[f"model: {args.model}: {model!r}"]
+        result = _run(rig, args, program, notes=[f"model: {args.model}: {model!r}", frame_line]
                       + ([] if reach is None else [reach]), fsync=args.fsync)
     y = result.column("displacement_um", phase="run")
     ref = result.column("reference", phase="run")
@@ -386,14 +397,15 @@ def _reach_note(model, desired, lo, hi):
     from pihyst.inverse import compensate
     run = compensate(model, desired, u_min=lo, u_max=hi)
     if not run.n_saturated:
-        return None
+        return None, 0
     y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
     unit = model.units.get("output", "um")
-    return (f"note: {run.n_saturated} of {desired.size} ticks of the desired displacement "
+    return ((f"note: {run.n_saturated} of {desired.size} ticks of the desired displacement "
             f"(span [{desired.min():.4g}, {desired.max():.4g}] {unit}) are out of the "
             f"model's reach with the voltage in [{lo:g}, {hi:g}] V (at most [{y_lo:.4g}, "
             f"{y_hi:.4g}] {unit}): their voltage saturates; "
-            + reach_hint(model, y_lo, y_hi, float(desired.min()), float(desired.max())))
+            + reach_hint(model, y_lo, y_hi, float(desired.min()), float(desired.max()))),
+            run.n_saturated)
 
 
 def run_emulate(args):

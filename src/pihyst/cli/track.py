@@ -14,6 +14,7 @@ from pihyst.cli.compensate import (
     smallest_step,
 )
 from pihyst.cli.errors import UsageError, check_output
+from pihyst.cli.frames import add_frame_options, check_reach, frame
 from pihyst.cli.model_inputs import creep_times, delay_for_run
 from pihyst.cli.plant_options import add_plant_options, plant_from_options
 from pihyst.cli.record_options import (
@@ -46,6 +47,7 @@ def register(sub):
     p.add_argument("-o", "--output", metavar="OUT.csv", required=True, help="output CSV")
     add_limit_options(p, default_range="the model's and the beam's range")
     add_plant_options(p, seed_help="seed of the beam's sensor noise (default 0)")
+    add_frame_options(p)
     add_record_options(p, "DESIRED", unused=NO_VOLTAGE)
     p.set_defaults(run=run)
 
@@ -67,6 +69,7 @@ def run(args):
     model = load_model(args.model)
     check_limits(args.u_min, args.u_max, model, args.model)
     rec = read_from_args(args, args.desired, need=("time", "displacement"))
+    offset, frame_line = frame(args, model)
     t, y_d = rec.time, rec.displacement
     if y_d.size > MAX_SAMPLES:  # the beam's state per sample would not fit in memory
         raise UsageError(f"{args.desired}: {y_d.size:,} samples, more than the "
@@ -92,16 +95,23 @@ def run(args):
     # a delayed model: with preview, as pihyst.compensate
     # (a model with creep: at the record's sample times, as the beam runs)
     at = creep_times(model, rec, None)
-    result = (PreviewRun(compensator, compensator.delay).feed(y_d, at.get("t"), last=True)
-              if compensator.delay else compensator.run(y_d, **at))
-    measured = plant.run(result.voltage, t)
+    target = y_d + offset          # in the model's frame
+    result = (PreviewRun(compensator, compensator.delay).feed(target, at.get("t"), last=True)
+              if compensator.delay else compensator.run(target, **at))
+    check_reach(args, result.n_saturated, y_d.size, args.desired,
+                f"the desired displacement spans [{y_d.min():.4g}, {y_d.max():.4g}] um"
+                + ("" if args.relative else " in the model's frame; a trajectory from the "
+                   "actuator's rest point: --relative"))
+    # (the beam's and the model's output in the user's frame)
+    measured = plant.run(result.voltage, t) - offset
     error = measured - y_d
     write_columns(args.output, {
         "time_s": t, "desired_um": y_d, "voltage_V": result.voltage,
-        "displacement_um": measured, "predicted_um": result.displacement, "error_um": error,
-        "saturated": result.saturated.astype(float)},
+        "displacement_um": measured, "predicted_um": result.displacement - offset,
+        "error_um": error, "saturated": result.saturated.astype(float)},
         comments=[f"pihyst {__version__} track {args.model} {args.desired} --plant "
-                  f"{args.plant} --seed {args.seed}", plant.describe()])
+                  f"{args.plant} --seed {args.seed}", plant.describe(), frame_line])
+    print(frame_line)
     span = float(y_d.max() - y_d.min())
     mae = float(np.mean(np.abs(error)))
     rms = float(np.sqrt(np.mean(error ** 2)))

@@ -37,7 +37,9 @@ def register(sub):
                    help="also draw the loop and the error over time (.png, .svg or .pdf; "
                         "needs matplotlib)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
-    add_initial_state_option(p)
+    # judged from a state it states: by default the one the record's first full sweep
+    # settles (those samples are not judged), else the one given
+    add_initial_state_option(p, default=None)
     add_record_options(p, "DATA")
     p.set_defaults(run=run)
 
@@ -50,23 +52,45 @@ def run(args):
     rec = read_from_args(args, args.data, need=("voltage", "displacement"), say=not args.json)
     limits = InputRange(model)
     u = limits.check(rec.voltage, rec)
-    first = settle_end(u) if args.initial_state == "settle" else 0
+    mode = args.initial_state or "settle"
+    first = settle_end(u) if mode == "settle" else 0
     if first >= len(u):
-        raise UsageError(f"{args.data}: no samples left after the first sweep "
-                         "(--initial-state settle)")
+        if args.initial_state is not None:
+            raise UsageError(f"{args.data}: no samples left after the first sweep "
+                             "(--initial-state settle)")
+        mode, first = "model", 0        # (said in the start line)
+    start = _start_text(mode, args.initial_state is None, first, len(u))
     # a delayed model: its delay at the record's sample period, converted or refused
     run_model = delay_for_run(limits.run_model, args.data, t=rec.time)
     result = validate_model(run_model, u, rec.displacement,
-                            initial_state=initial_state(model, args.initial_state), first=first,
+                            initial_state=initial_state(model, mode), first=first,
                             t=creep_times(run_model, rec, None).get("t"))
     if args.figure:
         _figure(args, rec, result)
     if args.json:
         print(json.dumps({"model": args.model, "data": args.data,
                           "record": {k: str(v) for k, v in rec.metadata.items()},
-                          "input_range_note": limits.note(), **result.to_dict()}, indent=2))
+                          "input_range_note": limits.note(),
+                          "start_state": {"mode": mode, "given": args.initial_state is not None,
+                                          "settling_samples": first, "text": start},
+                          **result.to_dict()}, indent=2))
         return
-    _print(args, model, rec, result, limits)
+    _print(args, model, rec, result, limits, start)
+
+
+def _start_text(mode, default, first, n):
+    """The start state validate judges from, in words."""
+    if mode == "settle":
+        return (f"start state: settled by the record (its first full sweep, samples 0 to "
+                f"{first - 1}, sets the operators and is not judged; "
+                + ("the default" if default else "--initial-state settle") + ")")
+    if default:
+        return ("start state: the model file's (the record has no sample after its first "
+                "full sweep to settle the operators with; give --initial-state to choose)")
+    what = {"model": "the model file's", "bottom": "at rest at the bottom of the input "
+            "range", "top": "at rest at the top of the input range", "zero": "every "
+            "operator at 0"}[mode]
+    return f"start state: {what} (--initial-state {mode}); all {n} samples judged"
 
 
 def _line(name, e):
@@ -74,7 +98,7 @@ def _line(name, e):
     return f"  {name:<26}{e.mean_abs:>10.4g}{e.rms:>10.4g}{e.max_abs:>10.4g}{pct}"
 
 
-def _print(args, model, rec, result, limits):
+def _print(args, model, rec, result, limits, start):
     e = result.errors
     unit = model.units.get("output", "um")
     print(f"pihyst validate: {args.model} on {args.data}: {len(rec)} samples, voltage "
@@ -82,6 +106,7 @@ def _print(args, model, rec, result, limits):
           f"{e.span:.4g} {unit}"
           + (f"; the first {result.first} samples settle the operators (not judged)"
              if result.first else ""))
+    print(start)
     if limits.note():
         print(f"note: {limits.note()}")
     print(f"\nerrors (measured - predicted) in {unit}, and in % of the measured range:")

@@ -22,7 +22,7 @@ import numpy as np
 
 from pihyst.exceptions import CSVError, FitError, InvalidArgumentError
 from pihyst.identify import FitReport, FitResult, fit
-from pihyst.io import column_number, read_columns
+from pihyst.io import Record, column_number, read_columns
 from pihyst.model import PIModel
 
 __all__ = ["FleetResult", "RecordOutcome", "fit_many", "INPUT_COLUMN", "OUTPUT_COLUMN"]
@@ -162,7 +162,10 @@ def fit_many(records, client=None, *, progress=None, **options):
         their position ``"0"``, ``"1"``, ...). A record is a pair ``(u, y)`` of arrays
         (voltage, displacement) or the path of a CSV file with ``voltage_V`` and
         ``displacement_um`` columns (read here, in the client, so the workers need no
-        access to the files).
+        access to the files), a ``ValueError`` (a record the caller could not read:
+        a failed outcome with its message), or a :class:`pihyst.io.Record` (``read_record``'s: its
+        voltage and displacement are fitted, its time, when it has one, is the fit's
+        ``t``; errors name its file's line and column).
     client : dask.distributed.Client, optional
         Where to fit: None (default) fits one record after the other in this process
         (no Dask needed); a client sends one task per record to its cluster.
@@ -219,12 +222,15 @@ def fit_many(records, client=None, *, progress=None, **options):
                                            seconds=time.perf_counter() - t0)
             _report(progress, outcomes[name])
             continue
-        jobs.append((name, u, y, source, lines, period, time.perf_counter() - t0))
+        own = options
+        if isinstance(record, Record) and record.time is not None and "t" not in options:
+            own = {**options, "t": record.time}
+        jobs.append((name, u, y, source, lines, period, time.perf_counter() - t0, own))
 
     if client is None:
         scheduler = "serial"
-        for name, u, y, source, lines, period, read_time in jobs:
-            outcomes[name] = _outcome(_fit_one(u, y, options), name, source, lines,
+        for name, u, y, source, lines, period, read_time, own in jobs:
+            outcomes[name] = _outcome(_fit_one(u, y, own), name, source, lines,
                                       read_time, period)
             _report(progress, outcomes[name])
     else:
@@ -238,8 +244,8 @@ def _run_on(client, jobs, options, outcomes, progress):
     from distributed import as_completed
 
     futures = {}
-    for name, u, y, source, lines, period, read_time in jobs:
-        fut = client.submit(_fit_one, u, y, options, pure=False, key=_key(name))
+    for name, u, y, source, lines, period, read_time, own in jobs:
+        fut = client.submit(_fit_one, u, y, own, pure=False, key=_key(name))
         futures[fut] = (name, source, lines, read_time, period)
     for fut in as_completed(list(futures)):
         name, source, lines, read_time, period = futures[fut]
@@ -303,6 +309,11 @@ def _at_period(model, period):
 
 def _located(message, index, column, path, lines):
     """A fit error of a file record as ``FILE:LINE:COLUMN: message`` (as ``pihyst fit``)."""
+    if isinstance(lines, Record):       # the record locates its own samples
+        quantity = {"input": "voltage", "output": "displacement"}.get(column)
+        if index is not None and 0 <= index < len(lines):
+            return str(lines.error(index, quantity or "voltage", message))
+        return str(lines.error(0, quantity, message)) if quantity else f"{path}: {message}"
     col = column_number(path, _COLUMN_OF[column]) if column in _COLUMN_OF else 0
     if index is not None and 0 <= index < len(lines):
         return str(CSVError(path, int(lines[index]), col, message))
@@ -319,6 +330,14 @@ def _load(record):
     """(u, y, source, lines, sample period) of one record: a CSV path (read here; the
     period is the median step of its time_s column, None without one) or a (u, y) pair
     (period None)."""
+    if isinstance(record, ValueError):      # the client could not read it: why
+        raise record
+    if isinstance(record, Record):
+        if record.voltage is None or record.displacement is None:
+            raise InvalidArgumentError(f"{record.source}: a record to fit needs its voltage "
+                                       "and its displacement")
+        period = record.metadata.get("sample_period_s")
+        return record.voltage, record.displacement, record.source or None, record, period
     if _is_path(record):
         path = os.fspath(record)
         columns, lines = read_columns(path, [INPUT_COLUMN, OUTPUT_COLUMN],

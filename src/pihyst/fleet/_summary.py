@@ -5,6 +5,7 @@ import io
 import json
 
 from pihyst._atomic import write_atomically
+from pihyst.io._csv import write_sidecar
 
 __all__ = ["SUMMARY_COLUMNS", "summary_csv", "summary_json"]
 
@@ -33,17 +34,16 @@ def summary_json(result, path, *, model_files=None, **extra):
 
 
 def summary_csv(result, path, *, model_files=None, comments=()):
-    """Write the fleet's summary as CSV (:data:`SUMMARY_COLUMNS`), after ``#`` comment
-    lines; numbers with 17 significant digits, empty fields where a value does not
-    apply."""
+    """Write the fleet's summary as plain CSV (:data:`SUMMARY_COLUMNS`; ``comments`` in
+    its sidecar ``PATH.json``); numbers with 17 significant digits, empty fields where a
+    value does not apply."""
     out = io.StringIO()
-    for c in comments:
-        out.write(f"# {c}\n")
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(SUMMARY_COLUMNS)
     for row in _rows(result, model_files or {}):
         writer.writerow([_field(row[c]) for c in SUMMARY_COLUMNS])
     write_atomically(path, out.getvalue())
+    write_sidecar(path, SUMMARY_COLUMNS, len(result), list(comments))
 
 
 def _field(value):

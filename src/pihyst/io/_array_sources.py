@@ -8,6 +8,10 @@ A quantity is one variable (a vector), ``NAME:K`` (column K, 1-based, of a matri
 """
 
 import os
+import struct
+import tokenize
+import zipfile
+import zlib
 
 import numpy as np
 
@@ -53,6 +57,12 @@ class ArraySource:
                               f"({self.inventory()})")
         shape = self.variables[name].shape
         if col:
+            if len(shape) == 2 and shape[0] == 1 and shape[1] > 1:
+                raise RecordError(self.path, f"--{quantity} {text}: {name!r} has shape "
+                                  f"{shape}, one row: one sample of {shape[1]} columns, or "
+                                  f"{shape[1]} samples of one quantity? Save samples along "
+                                  f"the first axis (shape (n, k)), or each quantity as a "
+                                  f"vector")
             if not col.isdigit() or len(shape) != 2 or not 1 <= int(col) <= shape[1]:
                 columns = shape[1] if len(shape) == 2 else 0
                 raise RecordError(self.path, f"--{quantity} {text}: {name!r} has shape "
@@ -97,8 +107,8 @@ class ArraySource:
         else:
             out = a[start:stop, col]
         out = np.asarray(out)
-        if not (np.issubdtype(out.dtype, np.floating) or np.issubdtype(out.dtype, np.integer)
-                or out.dtype == bool):
+        # (by kind: NumPy counts timedelta64 among the integers)
+        if out.dtype.kind not in "fiub":
             raise RecordError(self.path, f"{self.label(ref)} holds {out.dtype} values, not "
                               "numbers")
         return out.astype(np.float64)
@@ -139,19 +149,48 @@ def open_array_source(path, kind):
             a = np.load(path, mmap_mode="r", allow_pickle=False)
             return ArraySource(path, kind, {"array": a})
         if kind == "npz":
-            with np.load(path, allow_pickle=False) as z:
-                return ArraySource(path, kind, {k: z[k] for k in z.files})
+            # (the file opened here, so that it is closed when the zip is refused)
+            with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+                variables = {}
+                for k in z.files:
+                    try:
+                        variables[k] = z[k]
+                    except (ValueError, EOFError, zipfile.BadZipFile, zlib.error,
+                            OSError) as err:
+                        raise RecordError(path, f"{k!r}: cannot read it: "
+                                          f"{_one_line(err)}") from None
+                return ArraySource(path, kind, variables)
         if kind == "mat":
             return _open_mat(path)
         if kind == "hdf5":
             return _open_hdf5(path, transpose=False)
         if kind == "parquet":
             return _open_parquet(path)
+    except RecordError:
+        raise
     except OSError as err:
         raise RecordError(path, f"cannot read file: {err.strerror or err}") from None
-    except ValueError as err:
-        raise RecordError(path, f"cannot read {kind} file: {err}") from None
+    # what the libraries raise on a truncated, corrupt or mistyped file: the user's file
+    except (ValueError, EOFError, zipfile.BadZipFile, zlib.error, KeyError, IndexError,
+            TypeError, NotImplementedError, OverflowError, MemoryError, struct.error,
+            UnicodeDecodeError, AttributeError, SyntaxError, tokenize.TokenError,
+            RecursionError) as err:
+        # (a .npy header is a Python literal: a corrupt one is a SyntaxError or TokenError)
+        raise RecordError(path, f"cannot read {kind} file: {_one_line(err)}") from None
+    except Exception as err:
+        if type(err).__name__ == "MatReadError":     # scipy.io.matlab's (a ValueError
+            raise RecordError(path, f"cannot read {kind} file: {_one_line(err)}") from None
+        raise                                       # in recent SciPy; not in all)
     raise ValueError(f"unknown record kind {kind!r}")
+
+
+def _one_line(err):
+    text = " ".join(str(err).split())
+    if isinstance(err, (EOFError, zipfile.BadZipFile, zlib.error, SyntaxError,
+                        tokenize.TokenError)) or not text:
+        text = f"{type(err).__name__}: {text}" if text else type(err).__name__
+        return text + " (the file is truncated or corrupt)"
+    return text
 
 
 def _open_mat(path):
@@ -159,17 +198,64 @@ def _open_mat(path):
         head = f.read(520)
     if head[512:520] == MAT_V73_SIGNATURE:
         return _open_hdf5(path, transpose=True, kind="mat (v7.3)")
+    data = _loadmat_guarded(path)
+    variables = {k: v for k, v in data.items() if not k.startswith("__")
+                 and isinstance(v, np.ndarray) and v.ndim in (1, 2)
+                 and v.dtype.kind in "fiub"}
+    return ArraySource(path, "mat (v5)", {k: _vector(v) for k, v in variables.items()})
+
+
+def _loadmat(path):
     from scipy.io import loadmat
     try:
         data = loadmat(path)
     # loadmat raises NotImplementedError for MATLAB formats it cannot read (v4 variants,
     # some v7 compressed types): the user's file, not a gap in pihyst
-    except (ValueError, TypeError, NotImplementedError) as err:
-        raise RecordError(path, f"cannot read MATLAB file: {err}") from None
-    variables = {k: v for k, v in data.items() if not k.startswith("__")
-                 and isinstance(v, np.ndarray) and v.ndim in (1, 2)
-                 and v.dtype.kind in "fiub"}
-    return ArraySource(path, "mat (v5)", {k: _vector(v) for k, v in variables.items()})
+    # whatever SciPy raises on a corrupt file is the file's fault (seen: MatReadError,
+    # zlib.error, struct.error, even UnboundLocalError): one line, never its traceback
+    except Exception as err:  # noqa: BLE001
+        raise RecordError(path, f"cannot read MATLAB file: {_one_line(err)}") from None
+    return {k: v for k, v in data.items() if not k.startswith("__")
+            and isinstance(v, np.ndarray) and v.ndim in (1, 2) and v.dtype.kind in "fiub"}
+
+
+def _loadmat_guarded(path):
+    """SciPy's loadmat in a forked child: its C reader can crash (SIGSEGV) on a corrupt
+    file (the fuzz test found bit flips that do), which must be a one-line error, not
+    the end of pihyst. Without fork (Windows), called directly."""
+    if not hasattr(os, "fork"):
+        return _loadmat(path)
+    import pickle
+    import signal
+    import warnings
+    r, w = os.pipe()
+    with warnings.catch_warnings():      # (Python 3.12 warns of fork with threads: the
+        warnings.simplefilter("ignore")  # child only reads the file and exits)
+        pid = os.fork()
+    if pid == 0:                         # the child: read, send back, exit at once
+        os.close(r)
+        try:
+            try:
+                out = ("ok", _loadmat(path))
+            except RecordError as err:
+                out = ("error", err.message)
+            with os.fdopen(w, "wb") as f:
+                f.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
+        finally:
+            os._exit(0)
+    os.close(w)
+    with os.fdopen(r, "rb") as f:
+        payload = f.read()
+    _, status = os.waitpid(pid, 0)
+    if os.WIFSIGNALED(status) or not payload:
+        sig = os.WTERMSIG(status) if os.WIFSIGNALED(status) else 0
+        name = signal.Signals(sig).name if sig else "no result"
+        raise RecordError(path, f"cannot read MATLAB file: SciPy's reader crashed on it "
+                          f"({name}): the file is corrupt")
+    kind, value = pickle.loads(payload)
+    if kind == "error":
+        raise RecordError(path, value)
+    return value
 
 
 def _vector(a):

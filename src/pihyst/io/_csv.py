@@ -6,7 +6,9 @@ Errors are :class:`CSVError` with a one-line message ``FILE:LINE:COLUMN: what is
 """
 
 import io as _io
+import json
 import os
+import stat
 
 import numpy as np
 
@@ -65,14 +67,23 @@ class ColumnWriter:
     :meth:`abort`, or an exception inside ``with ColumnWriter(...)``, gives it up.
 
     Values are written as the shortest decimal that reads back exactly (pyarrow's
-    writer when installed, else Python's ``repr``)."""
+    writer when installed, else Python's ``repr``).
 
-    def __init__(self, path, names, comments=(), engine=None):
+    The file is plain CSV: one header line, then numbers, so that NumPy's and pandas'
+    default readers open it (``np.genfromtxt(names=True, delimiter=",")``,
+    ``np.loadtxt(skiprows=1, delimiter=",")``, ``pandas.read_csv``). What used to be
+    ``#`` comment lines (``comments``: what wrote it, with which options) goes to a
+    sidecar, ``PATH.json`` beside it (:func:`sidecar_path`), written once the CSV is
+    complete; pihyst's reader reads it back into the record's metadata."""
+
+    def __init__(self, path, names, comments=(), engine=None, metadata=None):
         self.path = os.fspath(path)
         self.engine = engine
         self.names = list(names)
+        self.comments = [str(c) for c in comments]
+        self.metadata = dict(metadata or {})
         self._file = AtomicFile(self.path)
-        head = "".join(f"# {c}\n" for c in comments) + ",".join(self.names) + "\n"
+        head = ",".join(self.names) + "\n"
         try:
             self._file.write(head.encode("utf-8"))
         except BaseException:
@@ -91,6 +102,7 @@ class ColumnWriter:
 
     def close(self):
         self._file.commit()
+        write_sidecar(self.path, self.names, self.rows, self.comments, self.metadata)
 
     def abort(self):
         self._file.abort()
@@ -106,8 +118,9 @@ class ColumnWriter:
 
 
 def format_rows(columns, engine=None):
-    """CSV bytes of equal-length float columns, no header: with pyarrow's writer when
-    installed (or ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
+    """CSV bytes of equal-length float columns, no header, each value the shortest
+    decimal that reads back exactly: with pyarrow's writer when installed (or
+    ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
     try:
         if engine == "numpy":
             raise ImportError
@@ -123,10 +136,54 @@ def format_rows(columns, engine=None):
     return out.getvalue()
 
 
-def write_columns(path, columns, comments=()):
-    """Write named columns (dict name -> array) to ``path``, complete or not at all."""
-    with ColumnWriter(path, list(columns), comments) as w:
+def write_columns(path, columns, comments=(), metadata=None):
+    """Write named columns (dict name -> array) to ``path``, complete or not at all
+    (``comments`` and ``metadata`` in its sidecar ``PATH.json``)."""
+    with ColumnWriter(path, list(columns), comments, metadata=metadata) as w:
         w.write(columns)
+
+
+SIDECAR_FORMAT = "pihyst CSV metadata"
+
+
+def sidecar_path(path):
+    """The sidecar of a CSV file pihyst writes: ``out.csv`` -> ``out.csv.json``."""
+    return os.fspath(path) + ".json"
+
+
+def write_sidecar(path, names, rows, comments=(), metadata=None):
+    """The metadata of the CSV file ``path`` (its columns, rows, what wrote it) as JSON
+    beside it; nothing for a device or FIFO (a stream has no place beside it) or when
+    there is nothing to say."""
+    if not (comments or metadata):
+        return
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return
+    except OSError:
+        return
+    from pihyst._atomic import write_atomically
+    from pihyst._version import __version__
+    data = {"format": SIDECAR_FORMAT, "pihyst_version": __version__,
+            "file": os.path.basename(path), "columns": list(names), "rows": int(rows),
+            "comments": list(comments), **(metadata or {})}
+    write_atomically(sidecar_path(path), json.dumps(data, indent=1, default=str) + "\n")
+
+
+def read_sidecar(path):
+    """The sidecar of ``path`` as a dict when there is one that pihyst wrote for this
+    very file, else None (a sidecar that is not JSON, or for another file, is ignored:
+    it is metadata, not data)."""
+    side = sidecar_path(path)
+    try:
+        with open(side, encoding="utf-8") as f:
+            data = json.load(f)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("format") != SIDECAR_FORMAT \
+            or data.get("file") != os.path.basename(os.fspath(path)):
+        return None
+    return data
 
 
 def column_number(path, name):

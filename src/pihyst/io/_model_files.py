@@ -27,7 +27,8 @@ and column.
 import json
 import os
 
-from pihyst.exceptions import InvalidArgumentError, InvalidModelError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError, RecordError
+from pihyst.io._inputs import read_small
 from pihyst.model import PIModel
 
 
@@ -49,10 +50,11 @@ def load_model(path_or_dict):
         raise InvalidArgumentError(f"load_model needs a file path or a dict, got "
                                    f"{type(path_or_dict).__name__}") from None
     try:
-        with open(path, "rb") as f:
-            raw = f.read()
+        raw = read_small(path)
     except OSError as err:
         raise InvalidModelError(f"{path}: cannot read model: {err.strerror}") from None
+    except RecordError as err:      # a stream too large or too slow, a folder
+        raise InvalidModelError(f"{path}: cannot read model: {err.message}") from None
     return PIModel.from_dict(_parse_json(raw, path), source=path)
 
 

@@ -11,12 +11,15 @@ import importlib.util
 import os
 import re
 import sys
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from pihyst.exceptions import CSVError, InvalidArgumentError, RecordError
+from pihyst.exceptions import CSVError, InvalidArgumentError, PihystWarning, RecordError
 from pihyst.io._array_sources import ArraySource, function_source, open_array_source
+from pihyst.io._inputs import kind_of
+from pihyst.io._lab_formats import GUESSES, TableSource, open_lab_source
 from pihyst.io._text_source import TextSource
 
 QUANTITIES = ("voltage", "displacement", "time")
@@ -24,12 +27,19 @@ DEFAULT_NAMES = {"voltage": "voltage_V", "displacement": "displacement_um", "tim
 UNIT_FACTORS = {"m": 1e6, "mm": 1e3, "um": 1.0, "µm": 1.0, "nm": 1e-3}
 _UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(m|mm|um|µm|nm)[\])]?\s*$")
 # a time or voltage column named in another unit (time_ms, 'U [kV]') is converted too
-TIME_FACTORS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
+TIME_FACTORS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9, "min": 60.0,
+                "sec": 1.0}
 VOLTAGE_FACTORS = {"v": 1.0, "mv": 1e-3, "kv": 1e3}
-_TIME_UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(s|ms|us|µs|ns)[\])]?\s*$", re.IGNORECASE)
+_TIME_UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(s|ms|us|µs|ns|min|sec)[\])]?\s*$",
+                                re.IGNORECASE)
+# a column whose name says it holds time (a time column not used is named in a warning)
+_TIME_LIKE = re.compile(r"^(time|zeit|t|timestamp|x_value|elapsed)(?:\b|[_ \[(])",
+                        re.IGNORECASE)
 _VOLTAGE_UNIT_IN_NAME = re.compile(r"(?:[_ \[(]|^)(v|mv|kv)[\])]?\s*$", re.IGNORECASE)
 EXTENSIONS = {".npy": "npy", ".npz": "npz", ".mat": "mat", ".h5": "hdf5", ".hdf5": "hdf5",
               ".he5": "hdf5", ".parquet": "parquet", ".pq": "parquet"}
+# lab software's formats, read whole (pihyst.io._lab_formats)
+LAB_EXTENSIONS = {".lvm": "lvm", ".tdms": "tdms", ".xlsx": "xlsx", ".xlsm": "xlsx"}
 BLOCK_ROWS = 1 << 20
 
 
@@ -69,7 +79,7 @@ class RecordReader:
 
     def __init__(self, path, *, voltage=None, displacement=None, time=None, rate=None,
                  displacement_unit=None, voltage_gain=None, lag=0, skip_until=None,
-                 separator=None, decimal_comma=None, reader=None,
+                 separator=None, decimal_comma=None, reader=None, sheet=None,
                  need=("voltage", "displacement"), optional=("time",)):
         self.path = os.fspath(path)
         # one quantity may be named alone (need="time"), not spelt out letter by letter
@@ -79,13 +89,28 @@ class RecordReader:
         unknown = set(self.need) - set(QUANTITIES)
         if unknown:
             raise InvalidArgumentError(f"unknown quantities {sorted(unknown)}")
-        self.source = _open_source(self.path, reader, separator, decimal_comma)
-        found = self.source.extra.get("found", {}) if isinstance(self.source, ArraySource) \
-            else {}
+        self.source = _open_source(self.path, reader, separator, decimal_comma, sheet)
+        found = dict(self.source.extra.get("found", {}) if isinstance(self.source, ArraySource)
+                     else getattr(self.source, "found", {}))
+        self.rate_why = "--rate" if rate is not None else found.pop(
+            "rate_why", "the reader's metadata 'rate'")
         self.rate = (_positive(rate, "--rate") if rate is not None else
                      _positive(found.get("rate"), "the reader's metadata 'rate'"))
+        self.why = {}                 # quantity -> why its column was taken
+        self.warnings = []            # what the user should know: said, never silent
+        self.notes = list(getattr(self.source, "notes", ()))
         specs = {"voltage": voltage, "displacement": displacement, "time": time}
-        self.refs = self._resolve(specs)
+        # --time none: the user said the time column is not to be used
+        self.time_none = time is not None and str(time).strip().lower() == "none"
+        if rate is None and self.rate is not None and time is None:
+            # the file's sample period gives the time only if it has no time column
+            self.refs = self._resolve(specs)
+            if "time" in self.refs:
+                self.notes.append(f"time from {self.labels_of('time')}, not from "
+                                  f"{self.rate_why}")
+                self.rate = None
+        else:
+            self.refs = self._resolve(specs)
         if not self.refs:
             # the time a rate defines needs a column to count the samples of
             optional = sorted(set(self.optional) - set(self.need))
@@ -97,6 +122,7 @@ class RecordReader:
                    if self.rate is not None else "")
                 + ": name the quantities to read in need (voltage, displacement, time)")
         self.labels = {q: self._label(r) for q, r in self.refs.items()}
+        self._unused_time_columns()
         self.voltage_gain = (
             _finite(voltage_gain, "--voltage-gain") if voltage_gain is not None else
             _finite(found.get("voltage_gain", 1.0), "the reader's metadata 'voltage_gain'"))
@@ -121,8 +147,39 @@ class RecordReader:
                                        f"ignore it)")
         self.skipped = 0
         self.n_samples = None
+        for message in self.warnings:
+            warnings.warn(message, PihystWarning, stacklevel=3)
 
     # ---------------------------------------------------------------- columns
+    def labels_of(self, quantity):
+        return self._label(self.refs[quantity])
+
+    def _names(self):
+        """The names of the columns (or variables) of the record, with their refs."""
+        src = self.source
+        if isinstance(src, TextSource):
+            return [(n, i) for i, n in enumerate(src.columns)]
+        if isinstance(src, ArraySource):
+            return [(n, (n, None)) for n, a in src.variables.items() if len(a.shape) == 1]
+        return []
+
+    def _unused_time_columns(self):
+        """A warning for each column named like a time that the record is read without,
+        when the command reads the time."""
+        if "time" not in self.need and "time" not in self.optional or self.time_none:
+            return
+        used = self.refs.get("time")
+        for name, ref in self._names():
+            if ref == used or ref in self.refs.values():
+                continue
+            if _TIME_LIKE.search(name):
+                now = (f"the time is {self.labels['time']}" if used is not None else
+                       f"the time is k / {self.rate:g} Hz ({self.rate_why})"
+                       if self.rate is not None else "the record is read without time")
+                self.warnings.append(f"{self.path}: column {name!r} looks like a time but "
+                                     f"is not used ({now}); name it with --time "
+                                     f"{name!r} to use it")
+
     def _resolve(self, specs):
         refs = {}
         for q in QUANTITIES:
@@ -136,6 +193,8 @@ class RecordReader:
                 continue
             if q not in self.need and spec is None and q not in self.optional:
                 continue
+            if spec is not None:
+                self.why[q] = f"--{q}"
             ref = self._ref(q, spec, needed)
             if ref is not None:
                 refs[q] = ref
@@ -153,6 +212,10 @@ class RecordReader:
             if spec is not None:
                 return src.resolve(spec, quantity)
             ref = src.default([DEFAULT_NAMES[quantity], quantity])
+            if ref is None and isinstance(src, TableSource):
+                guessed = self._unit_guess(quantity) or src.guess(quantity)
+                if guessed is not None:
+                    ref, self.why[quantity] = guessed
             if ref is None and needed:
                 raise RecordError(self.path, f"no {DEFAULT_NAMES[quantity]!r} for the "
                                   f"{quantity}: name it with --{quantity} NAME, NAME:K or K"
@@ -160,7 +223,43 @@ class RecordReader:
                                      if quantity == "time" else "")
                                   + f" ({src.inventory()})")
             return ref
+        if spec is None and src.columns and DEFAULT_NAMES[quantity] not in src.columns:
+            guessed = self._text_guess(quantity)
+            if guessed is not None:
+                return guessed
         return _text_column(src, quantity, spec, needed)
+
+    def _text_guess(self, quantity):
+        """The column of a text record without the default name that its header names
+        as ``quantity``: a time column in another unit (``time_ms``, ``t [us]``); for
+        the columns a PI data recorder names, the voltage and displacement too."""
+        names = self.source.columns
+        by_unit = self._unit_guess(quantity)
+        if by_unit is not None:
+            ref, self.why[quantity] = by_unit
+            return ref
+        if quantity == "time":
+            hits = [i for i, n in enumerate(names) if _TIME_LIKE.search(n)]
+            why = "its name"
+        elif getattr(self.source, "gcs_names", False):
+            hits = [i for i, n in enumerate(names) if GUESSES[quantity].search(n)
+                    and not _TIME_LIKE.search(n)
+                    and not (quantity == "displacement" and GUESSES["voltage"].search(n))]
+            if len(hits) > 1:
+                from pihyst.io._lab_formats import PREFERRED
+                preferred = [i for i in hits if PREFERRED.search(names[i])]
+                if len(preferred) != 1:
+                    raise RecordError(self.path, f"several columns may hold the "
+                                   f"{quantity} ({', '.join(repr(names[i]) for i in hits)}):"
+                                   f" name one with --{quantity} NAME or NUMBER")
+                hits = preferred
+            why = "guessed from its NAME in the header"
+        else:
+            return None
+        if len(hits) == 1:
+            self.why[quantity] = why
+            return hits[0]
+        return None
 
     def _label(self, ref):
         if isinstance(self.source, ArraySource):
@@ -175,16 +274,54 @@ class RecordReader:
         return names[ref] if isinstance(ref, int) and names else (
             ref[0] if isinstance(ref, tuple) else None)
 
+    def _unit_guess(self, quantity):
+        """(ref, why) of the one column whose unit in the file (a units row, a channel's
+        unit) is a unit of ``quantity``, else None."""
+        units = getattr(self.source, "units", None) or {}
+        factors = {"time": TIME_FACTORS, "voltage": VOLTAGE_FACTORS,
+                   "displacement": UNIT_FACTORS}[quantity]
+        hits = [(key, unit) for key, unit in units.items()
+                if unit.replace("μ", "µ").lower().replace("µ", "u") in
+                {k.replace("µ", "u").lower() for k in factors}]
+        if len(hits) != 1:
+            return None
+        key, unit = hits[0]
+        ref = key if isinstance(self.source, TextSource) else (key, None)
+        return ref, f"its unit {unit!r} in the file"
+
+    def _file_unit(self, quantity):
+        """The unit the file gives the column of ``quantity`` (a units row, a channel's
+        unit label), else None."""
+        ref = self.refs.get(quantity)
+        units = getattr(self.source, "units", None)
+        if ref is None or not units:
+            return None
+        key = ref if isinstance(self.source, TextSource) else ref[0]
+        return units.get(key)
+
     def _unit_in_name(self, quantity, pattern, factors):
-        """(unit, factor to s or V, column name) of a time or voltage column whose name
-        gives a unit other than s or V (``time_ms``, ``U [kV]``), else None."""
+        """(unit, factor to s or V, where) of a time or voltage column whose name or the
+        file's unit for it gives a unit other than s or V (``time_ms``, ``U [kV]``, a
+        units row), else None."""
         name = self._column_name(quantity)
         m = pattern.search(name or "")
+        where = f"column name {name!r}"
         if m is None:
-            return None
+            unit = self._file_unit(quantity)
+            if unit is None:
+                return None
+            key = unit.lower().replace("µ", "u").replace("μ", "u")
+            if key not in factors:
+                if quantity in self.refs:
+                    raise RecordError(self.path, f"{self.labels_of(quantity)}: unit {unit!r} "
+                                      f"(from the file) is not a {quantity} unit "
+                                      f"({', '.join(sorted(factors))})")
+                return None
+            factor = factors[key]
+            return None if factor == 1.0 else (unit, factor, f"the file's unit {unit!r}")
         unit = m.group(1)
         factor = factors[unit.lower().replace("µ", "u")]
-        return None if factor == 1.0 else (unit, factor, name)
+        return None if factor == 1.0 else (unit, factor, where)
 
     def _unit(self, given, found):
         if given is not None:
@@ -197,6 +334,14 @@ class RecordReader:
             m = _UNIT_IN_NAME.search(name or "")
             if m:
                 unit, where = m.group(1), f"column name {name!r}"
+            elif self._file_unit("displacement") is not None:
+                given = self._file_unit("displacement")
+                unit = given.strip().replace("μ", "µ").lower()
+                where = f"the file's unit {given!r}"
+                if unit not in UNIT_FACTORS:
+                    raise RecordError(self.path, f"{self.labels_of('displacement')}: unit "
+                                      f"{given!r} (from the file) is not a length unit "
+                                      "(m, mm, um, nm); give --displacement-unit")
         unit = "um" if unit == "µm" else unit
         if unit not in UNIT_FACTORS:
             option = ("the reader's metadata 'displacement_unit'" if where == "reader"
@@ -275,7 +420,13 @@ class RecordReader:
     def metadata(self):
         meta = {"file": self.path, **{k: v for k, v in self.source.metadata().items()
                                       if not k.startswith("_")}}
+        if isinstance(self.source, TextSource) and self._sidecar() is not None:
+            meta["sidecar"] = self._sidecar()
         meta["columns"] = dict(self.labels)
+        if self.why:
+            meta["columns_why"] = dict(self.why)
+        if self.warnings:
+            meta["warnings"] = list(self.warnings)
         meta["displacement_unit"] = self.unit
         for q in ("voltage", "time"):
             if self.named_units.get(q) is not None:
@@ -291,22 +442,40 @@ class RecordReader:
             meta["skipped_samples"] = self.skipped
         if self.n_samples is not None:
             meta["samples"] = self.n_samples
+        if getattr(self.source, "skipped_ticks", None):
+            meta["skipped_ticks"] = self.source.skipped_ticks
         return meta
+
+    def _sidecar(self):
+        if not hasattr(self, "_sidecar_data"):
+            from pihyst.io._csv import read_sidecar, sidecar_path
+            data = read_sidecar(self.path)
+            self._sidecar_data = data
+            self._sidecar_name = sidecar_path(self.path)
+        return self._sidecar_data
 
     def describe(self):
         """One line for the user: what was read from where."""
-        parts = [f"{q} {self.labels[q]}" for q in QUANTITIES if q in self.labels]
+        parts = [f"{q} {self.labels[q]}" + (f" ({self.why[q]})" if q in self.why else "")
+                 for q in QUANTITIES if q in self.labels]
         notes = []
         if "displacement" in self.refs and self.unit != "um":
             notes.append(f"displacement in {self.unit} ({self.unit_from}) -> um")
         for q, base in (("voltage", "V"), ("time", "s")):
             named = self.named_units.get(q)
             if named is not None:
-                notes.append(f"{q} in {named[0]} (column name {named[2]!r}) -> {base}")
+                notes.append(f"{q} in {named[0]} ({named[2]}) -> {base}")
         if self.voltage_gain != 1.0 and "voltage" in self.refs:
             notes.append(f"voltage x {self.voltage_gain:g}")
         if self.rate is not None:
-            notes.append(f"{self.rate:g} Hz")
+            notes.append(f"{self.rate:g} Hz" + ("" if self.rate_why == "--rate"
+                                                 else f" ({self.rate_why})"))
+        notes.extend(self.notes)
+        if getattr(self.source, "skipped_ticks", None):
+            notes.append(f"{self.source.skipped_ticks} ticks without a valid reading "
+                         "skipped (see sensor_status, supply_status)")
+        if isinstance(self.source, TextSource) and self._sidecar() is not None:
+            notes.append(f"metadata from {os.path.basename(self._sidecar_name)}")
         if self.lag:
             notes.append(f"displacement {self.lag} sample(s) later")
         if self.skip_until is not None:
@@ -453,10 +622,22 @@ def _text_column(src, quantity, spec, needed):
     return hits[0]
 
 
-def _open_source(path, reader, separator, decimal_comma):
+def _open_source(path, reader, separator, decimal_comma, sheet=None):
     if reader is not None:
         return function_source(path, _call_reader(reader, path))
-    kind = EXTENSIONS.get(os.path.splitext(path)[1].lower())
+    kind = kind_of(path)
+    if kind is not None:
+        raise RecordError(path, f"{kind}, not a regular file: a record is read in several "
+                          "passes, which a stream cannot give; write it to a file first")
+    ext = os.path.splitext(path)[1].lower()
+    kind = EXTENSIONS.get(ext)
+    if sheet is not None and LAB_EXTENSIONS.get(ext) != "xlsx":
+        raise InvalidArgumentError("--sheet is for Excel workbooks (.xlsx)")
+    if ext in LAB_EXTENSIONS:
+        if ext != ".lvm" and (separator is not None or decimal_comma is not None):
+            raise InvalidArgumentError(f"--separator and --decimal-comma are for text "
+                                       f"files, not {LAB_EXTENSIONS[ext]}")
+        return open_lab_source(path, LAB_EXTENSIONS[ext], sheet)
     if kind is None:
         return TextSource(path, separator=separator, decimal_comma=decimal_comma)
     if separator is not None or decimal_comma is not None:

@@ -1,5 +1,6 @@
-"""Vectorised readers of a block of delimited text: pyarrow's CSV reader when pyarrow is
-installed (``pip install 'pihyst[fast]'``), else NumPy's ``loadtxt``.
+"""Vectorised readers of a block of delimited text: pihyst's own C parser of numeric
+blocks (:mod:`pihyst.io._fastcsv`, built with the package: the default install's fast
+path), else pyarrow's CSV reader when installed, else NumPy's ``loadtxt``.
 
 Each returns the (n, k) float array of the wanted fields, or None when it does not take
 the block whole (any field it cannot convert, a missing value, NaN or infinity, a line
@@ -8,6 +9,7 @@ with another number of fields, a quote, ...): the careful reader
 refuse what is valid; it never accepts what the careful reader refuses.
 """
 
+import importlib
 import io
 import re
 
@@ -19,11 +21,24 @@ _EDGE_SPACES = re.compile(rb"(?m)^ | $")
 
 
 def engine_name():
-    """'pyarrow' or 'numpy': the engine :func:`read_block` uses."""
+    """'c', 'pyarrow' or 'numpy': the engine :func:`read_block` uses."""
+    if _fast() is not None:
+        return "c"
     return "pyarrow" if _arrow() is not None else "numpy"
 
 
 _ARROW = []
+_FAST = []
+
+
+def _fast():
+    """pihyst's C parser and writer (None if the package was built without it)."""
+    if not _FAST:
+        try:     # (by name: the compiled module, imported only when first needed)
+            _FAST.append(importlib.import_module("pihyst.io._fastcsv"))
+        except ImportError:
+            _FAST.append(None)
+    return _FAST[0]
 
 
 def _arrow():
@@ -46,8 +61,12 @@ def read_block(block, dialect, wanted, engine=None):
     if dialect.decimal == "," and b"." in block:
         return None   # '1.5' in a decimal-comma file: the careful reader says where
     engine = engine or engine_name()
-    values = (_read_arrow(block, dialect, wanted) if engine == "pyarrow"
-              else _read_numpy(block, dialect, wanted))
+    if engine == "c":
+        values = _fast().parse_block(block, dialect.separator, dialect.n_fields, list(wanted))
+    elif engine == "pyarrow":
+        values = _read_arrow(block, dialect, wanted)
+    else:
+        values = _read_numpy(block, dialect, wanted)
     if values is None or not np.isfinite(values).all():
         return None
     return values

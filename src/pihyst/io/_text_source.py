@@ -1,14 +1,33 @@
 """A delimited text record read block by block: the fast engine on each block, the
 careful reader where the engine refuses one, and exact line numbers for any sample."""
 
+import dataclasses
+import math
 import os
+import re
 
 from pihyst.exceptions import CSVError, InvalidArgumentError
+from pihyst.io._numbers import is_number, parse_number
 from pihyst.io._text_check import check_block, data_line_of
 from pihyst.io._text_engines import engine_name, read_block
-from pihyst.io._text_format import AUTO, HEAD_BYTES, SEPARATOR_NAMES, sniff
+from pihyst.io._text_format import (
+    AUTO,
+    HEAD_BYTES,
+    SEPARATOR_NAMES,
+    FieldError,
+    head_lines,
+    is_skipped,
+    sniff,
+    split_fields,
+)
 
 BLOCK_BYTES = 1 << 23
+# a PI data recorder's GCSArray header: '# KEY = value' lines ending with '# END_HEADER'
+_GCS_LINE = re.compile(r"^\s*#\s*([A-Za-z_][A-Za-z_0-9]*)\s*=\s*(.*?)\s*$")
+_GCS_END = re.compile(r"^\s*#\s*END_HEADER\s*$", re.IGNORECASE)
+NUL_MESSAGE = ("not a text file (it holds NUL bytes) from this line on: the data end before "
+               "it (a file cut off, or padded with zeros?)")
+_GCS_SEPARATORS = {32: None, 9: "\t", 44: ",", 59: ";"}
 
 
 class TextSource:
@@ -33,9 +52,17 @@ class TextSource:
             self.size = os.path.getsize(self.path)
         except OSError as err:
             raise CSVError(self.path, 0, 0, f"cannot read file: {err.strerror}") from None
-        if b"\0" in head:
-            raise CSVError(self.path, 1, 0, "not a text file (it holds NUL bytes); "
-                           "binary records: .npy, .npz, .mat, .h5, .parquet")
+        nul = head.find(b"\0")
+        if nul >= 0:
+            line = head.count(b"\n", 0, nul) + 1
+            if line == 1 or not head[:nul].strip(b"\r\n\0"):
+                raise CSVError(self.path, 1, 0, "not a text file (it holds NUL bytes); "
+                               "binary records: .npy, .npz, .mat, .h5, .parquet, .tdms, "
+                               ".xlsx")
+            raise _nul_error(self.path, head, nul)
+        self.gcs = _gcs_header(head, at_eof)
+        if self.gcs is not None and sep == AUTO and "SEPARATOR" in self.gcs[0]:
+            sep = _GCS_SEPARATORS.get(_int(self.gcs[0]["SEPARATOR"]), AUTO)
         self.dialect = sniff(head, at_eof, separator=sep, decimal=decimal)
         if self.dialect is None and not at_eof:
             # nothing but blank or comment lines, then a line longer than the head
@@ -45,14 +72,125 @@ class TextSource:
         if self.dialect is None:
             raise CSVError(self.path, 1, 0, "empty file: no data lines")
         self.columns = self.dialect.header
+        self._check_first_row()
+        self._check_last_line()
+        # what the file says about its columns: units (a units row, or a GCSArray header)
+        # and a sample period
+        self.units, self.found, self.notes = {}, {}, []
+        self.units_line = 0
+        # a pihyst rig run log: its ticks without a valid reading are skipped, and counted
+        self.rig_log = self.columns == RIG_LOG_COLUMNS
+        self.skipped_ticks = None
+        if self.columns:
+            self._units_row(head, at_eof)
+        elif self.gcs is not None:
+            self._gcs_columns()
+
+    def _check_first_row(self):
+        """A first line of numbers with a value that is not a valid sample (NaN,
+        infinity, a hex number) is a data line at fault, not a header."""
+        d = self.dialect
+        if not d.header:
+            return
+        fields = [f for f in d.header if f.strip()]
+        if not fields or not all(_number_like(f, d.decimal) for f in fields):
+            return
+        for k, f in enumerate(d.header):
+            try:
+                parse_number(f, d.decimal)
+            except ValueError as err:
+                if str(err) == "missing value":
+                    continue
+                raise CSVError(self.path, d.header_line, k + 1, f"{err}: the first line holds "
+                               "numbers, so it is a sample, not a header") from None
+
+    def _check_last_line(self):
+        """A last line without its line end whose last number is cut short (``4.``,
+        ``1e``, ``-``) is an error at that line: the file was cut off."""
+        if self.size == 0:
+            return
+        with open(self.path, "rb") as f:
+            f.seek(max(0, self.size - 4096))
+            tail = f.read()
+        if tail.endswith((b"\n", b"\r")):
+            return
+        cut = max(tail.rfind(b"\n"), tail.rfind(b"\r"))
+        last = tail[cut + 1:].decode("utf-8", errors="replace")
+        if is_skipped(last):
+            return
+        try:
+            fields = split_fields(last, self.dialect.separator)
+        except FieldError:
+            return
+        end = fields[-1].strip() if fields else ""
+        if end and (end.endswith((".", "e", "E", "+", "-")) or end in (".", "-", "+")):
+            with open(self.path, "rb") as f:
+                data = f.read()
+            text = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+            line = text.count(b"\n") + 1
+            raise CSVError(self.path, line, len(fields), f"the last line ends without a line "
+                           f"end and its last number {end!r} is cut short: the file was cut "
+                           "off (truncated)?")
+
+    def _units_row(self, head, at_eof):
+        """A line of units under the header (``s, V, um``): its units are the columns',
+        and the data start below it."""
+        from pihyst.io._lab_formats import looks_unit
+        d = self.dialect
+        _, lines = head_lines(head, at_eof)
+        below = [(n, end, t) for n, end, t in lines if n > d.header_line and not is_skipped(t)]
+        if not below:
+            return
+        number, end, text = below[0]
+        try:
+            fields = split_fields(text, d.separator)
+        except FieldError:
+            return
+        if len(fields) != d.n_fields or not any(f.strip() for f in fields):
+            return
+        if not all(not f.strip() or looks_unit(f) for f in fields):
+            return
+        self.units = {i: f.strip().strip("[]()").strip() for i, f in enumerate(fields)
+                      if f.strip()}
+        self.units_line = number
+        self.dialect = dataclasses.replace(d, data_offset=end, data_line=number + 1)
+
+    def _gcs_columns(self):
+        """Column names from a GCSArray header's NAME0, NAME1, ...; the sample period
+        from its SAMPLE_TIME."""
+        keys, end_line = self.gcs
+        names = []
+        for k in range(self.dialect.n_fields):
+            name = keys.get(f"NAME{k}")
+            names.append(name.strip() if name and name.strip() else f"column {k + 1}")
+        if any(f"NAME{k}" in keys for k in range(self.dialect.n_fields)):
+            self.columns = tuple(names)
+            self.gcs_names = True
+        if "SAMPLE_TIME" in keys:
+            try:
+                period = float(keys["SAMPLE_TIME"])
+            except ValueError:
+                period = float("nan")
+            if not (period > 0 and period < float("inf")):
+                raise CSVError(self.path, end_line, 0, f"SAMPLE_TIME = {keys['SAMPLE_TIME']}"
+                               " in the GCSArray header is not a positive time")
+            self.found["rate"] = 1.0 / period
+            self.found["rate_why"] = f"SAMPLE_TIME = {keys['SAMPLE_TIME']} s in the header"
 
     # ---------------------------------------------------------------- describing
     def metadata(self):
         d = self.dialect
-        return {"format": "text", "layout": d.describe(), "engine": engine_name()}
+        layout = d.describe()
+        if self.gcs is not None:
+            layout = "PI GCSArray (data recorder) header, " + layout
+        if self.units_line:
+            layout += f", units on line {self.units_line}"
+        return {"format": "text", "layout": layout, "engine": engine_name()}
 
     def label(self, index):
         """How messages name the field ``index`` (0-based)."""
+        if self.columns and getattr(self, "gcs_names", False):
+            return f"{index + 1} {self.columns[index]!r}"
         if self.columns:
             return repr(self.columns[index])
         return f"{index + 1}"
@@ -60,7 +198,14 @@ class TextSource:
     # ---------------------------------------------------------------- reading
     def _blocks(self):
         """(first line, block, bytes read so far) of the data part: whole lines with LF
-        line ends."""
+        line ends (in a rig log, the ticks without a valid reading made comments)."""
+        for first, block, done in self._raw_blocks():
+            if self.rig_log:
+                block, n = _without_invalid_ticks(block)
+                self._dropped += n
+            yield first, block, done
+
+    def _raw_blocks(self):
         d = self.dialect
         line, carry = d.data_line, b""
         with open(self.path, "rb") as f:
@@ -86,12 +231,19 @@ class TextSource:
         """Arrays (n, len(wanted)) of the fields ``wanted`` (0-based), block by block."""
         labels = [self.label(i) for i in wanted]
         rows = 0
+        self._dropped = 0
         for first_line, block, done in self._blocks():
+            nul = block.find(b"\0")
+            if nul >= 0:        # a tail of NULs (a file cut off, a sparse file): it ends here
+                k = block.count(b"\n", 0, nul)
+                raise CSVError(self.path, first_line + k, 0, NUL_MESSAGE)
             values = read_block(block, self.dialect, wanted)
             if values is None:
                 values = check_block(self.path, block, first_line, self.dialect, wanted,
                                      labels)
             rows += len(values)
+            if self.rig_log:
+                self.skipped_ticks = self._dropped
             if progress is not None:
                 progress(done, self.size)
             if len(values):
@@ -103,6 +255,7 @@ class TextSource:
 
     def location(self, row, index):
         """(line, column) of field ``index`` of data row ``row`` (both 0-based)."""
+        self._dropped = 0
         line = data_line_of(((first, block) for first, block, _ in self._blocks()),
                             self.dialect, row)
         return (line or 0), index + 1
@@ -110,6 +263,73 @@ class TextSource:
     def error(self, row, index, message):
         line, column = self.location(row, index)
         return CSVError(self.path, line, column, message)
+
+
+# the header of a pihyst rig run log (pihyst.rig._log.COLUMNS)
+RIG_LOG_COLUMNS = ("tick", "time_s", "phase", "reference", "command_V", "voltage_V",
+                   "readback_V", "displacement_um", "sensor_status", "supply_status",
+                   "overrun", "late_s", "busy_s")
+_VOLTAGE_FIELD, _DISPLACEMENT_FIELD = 5, 7
+
+
+def _without_invalid_ticks(block):
+    """The block with each tick that has no valid reading (no finite voltage sent or
+    displacement read) turned into a comment line (so that line numbers stay), and how
+    many."""
+    lines = block.split(b"\n")
+    dropped = 0
+    for k, line in enumerate(lines):
+        if not line or line.lstrip().startswith(b"#"):
+            continue
+        fields = line.split(b",", _DISPLACEMENT_FIELD + 1)
+        try:
+            ok = all(math.isfinite(float(fields[j]))
+                     for j in (_VOLTAGE_FIELD, _DISPLACEMENT_FIELD))
+        except (ValueError, IndexError):
+            ok = True           # not a number: the careful reader names it
+        if not ok:
+            lines[k] = b"#" + line
+            dropped += 1
+    return b"\n".join(lines), dropped
+
+
+def _nul_error(path, head, nul):
+    line = head[:nul].replace(b"\r\n", b"\n").replace(b"\r", b"\n").count(b"\n") + 1
+    return CSVError(path, line, 0, NUL_MESSAGE)
+
+
+_NUMBER_LIKE = re.compile(r"[+-]?(nan|inf|infinity|0[xX][0-9a-fA-F]+|[0-9][0-9_]*(\.[0-9_]*)?"
+                          r"([eE][+-]?[0-9_]+)?)\Z", re.IGNORECASE)
+
+
+def _number_like(field, decimal):
+    """Whether a field is written as a number, valid or not (``nan``, ``inf``,
+    ``0x10``, ``1_5``)."""
+    f = field.strip()
+    return is_number(f, decimal) or bool(_NUMBER_LIKE.match(f))
+
+
+def _int(text):
+    try:
+        return int(float(text))
+    except ValueError:
+        return None
+
+
+def _gcs_header(head, at_eof):
+    """({KEY: value}, line of END_HEADER) of a GCSArray header at the top of the file,
+    else None."""
+    _, lines = head_lines(head, at_eof)
+    keys = {}
+    for number, _, text in lines:
+        if _GCS_END.match(text):
+            return (keys, number) if keys else None
+        m = _GCS_LINE.match(text)
+        if m:
+            keys[m.group(1).upper()] = m.group(2)
+        elif text.strip() and not text.lstrip().startswith(("#", "[GCS_ARRAY")):
+            return None
+    return None
 
 
 def _lf(data):

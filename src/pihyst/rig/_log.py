@@ -1,12 +1,14 @@
-"""The log of a run: a CSV that ``pihyst fit`` reads as it is.
+"""The log of a run: a plain CSV that ``pihyst fit`` reads as it is.
 
-``#`` metadata lines (pihyst version, configuration, model, limits, rate, start time),
-one header row, then one row per tick, written and flushed as the loop goes (a crash or
-a kill loses at most the tick being written), and ``#`` lines saying why the run
-stopped. A tick without a valid displacement (over-range, invalid, no reply) is written
-as a row that starts with ``#``: every tick is in the file, and readers of
-``voltage_V``/``displacement_um`` (``pihyst fit``) see only measured values.
-:func:`read_run_log` reads every tick back, those included.
+One header row, then one row per tick, every tick, written and flushed as the loop goes
+(a crash or a kill loses at most the tick being written). A tick without a valid
+reading (over-range, invalid, no reply, nothing sent) is a row like the others, with
+``nan`` where there is no value and its status columns (``sensor_status``,
+``supply_status``) saying what failed: NumPy's and pandas' default readers see every
+tick. ``pihyst fit`` (any record reader) skips the ticks without a valid reading and
+says how many. The metadata (pihyst version, configuration, model, limits, rate, start
+time) and the lines saying why the run stopped are in the sidecar ``PATH.json``.
+:func:`read_run_log` reads every tick back, and the notes.
 """
 
 import csv
@@ -72,11 +74,17 @@ class CsvRunLog:
         self.path = os.fspath(path)
         self.fsync = fsync
         self._file = open(self.path, "w", encoding="utf-8", newline="")
-        for line in metadata:
-            for part in str(line).splitlines() or [""]:
-                self._file.write(f"# {part}\n")
+        self._metadata = [part for line in metadata for part in str(line).splitlines()]
+        self._notes = []
+        self.rows = 0
         self._file.write(",".join(COLUMNS) + "\n")
         self._flush()
+        self._sidecar()
+
+    def _sidecar(self):
+        from pihyst.io._csv import write_sidecar
+        write_sidecar(self.path, COLUMNS, self.rows, self._metadata,
+                      {"kind": "pihyst rig run log", "notes": list(self._notes)})
 
     def _flush(self):
         self._file.flush()
@@ -92,26 +100,31 @@ class CsvRunLog:
                 text = '"' + text.replace('"', '""').replace("\n", " ").replace("\r", " ") + '"'
             fields.append(text)
         line = ",".join(fields)
-        self._file.write(("#" if not record.valid else "") + line + "\n")
+        self._file.write(line + "\n")
+        self.rows += 1
         self._flush()
 
     def note(self, text):
-        for part in str(text).splitlines():
-            self._file.write(f"# {part}\n")
-        self._flush()
+        """A line about the run (why it stopped), kept in the sidecar."""
+        self._notes.extend(str(text).splitlines())
+        self._sidecar()
 
     def close(self):
         if not self._file.closed:
             self._file.close()
+            self._sidecar()
 
 
 def read_run_log(path):
-    """Every tick of a run log (also the ``#`` rows of ticks without a valid reading) as a
-    dict column -> array (numbers as float, statuses and phase as str), and the ``#``
-    notes as a list of lines."""
+    """Every tick of a run log as a dict column -> array (numbers as float, statuses
+    and phase as str), and the notes (the sidecar's metadata and stop lines; ``#`` lines
+    of older logs) as a list of lines."""
+    from pihyst.io._csv import read_sidecar
     with open(path, encoding="utf-8-sig", newline="") as f:
         text = f.read()
-    notes, rows, lines, header = [], [], [], None
+    side = read_sidecar(path) or {}
+    notes = list(side.get("comments", [])) + list(side.get("notes", []))
+    rows, lines, header = [], [], None
     reader = csv.reader(io.StringIO(text))
     for row in reader:
         if not row:

@@ -25,6 +25,7 @@ import numpy as np
 
 from pihyst._atomic import write_atomically
 from pihyst.io import save_model, write_columns
+from pihyst.io._csv import sidecar_path
 from pihyst.study import _plot as plot
 
 MODEL_ORDER = ("classical", "multislope", "best")
@@ -531,6 +532,8 @@ def _write_data(study, out_dir):
         write_columns(os.path.join(out_dir, name), cols,
                       comments=[rec.description] if rec.description else ())
         names.append(name)
+        if rec.description:             # its description, in the CSV's sidecar
+            names.append(sidecar_path(name))
     for exp_name, tr in study.tracking.items():
         cols = {"time_s": tr["t"], "desired_um": tr["desired"]}
         for key in tr["voltage"]:
@@ -541,7 +544,7 @@ def _write_data(study, out_dir):
                       comments=[f"desired trajectory: {tr['description']}; voltages and "
                                 "measured displacements per compensation (none = voltage "
                                 "proportional to the desired displacement)"])
-        names.append(name)
+        names += [name, sidecar_path(name)]
     if study.rig is not None:
         names += study.rig.write_logs(out_dir)
     return names
