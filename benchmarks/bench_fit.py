@@ -76,10 +76,10 @@ def measured(tmp):
     print(f"  P-885 fitted twice: model files {'identical' if same else 'DIFFERENT'}")
     answers = []
     for name in ("l1.json", "l2.json"):
-        run_cli(["fit", *p885_args, "--max-operators", "8", "--max-latency", "0.5", "-o",
+        run_cli(["fit", *p885_args, "--max-operators", "8", "--max-latency", "5e-7", "-o",
                  str(tmp / name)])
         answers.append(pihyst.load_model(tmp / name).metadata["fit"]["family"])
-    print(f"  --max-operators 8 --max-latency 0.5 twice: {answers[0]}, {answers[1]} "
+    print(f"  --max-operators 8 --max-latency 5e-7 twice: {answers[0]}, {answers[1]} "
           f"({'the same' if answers[0] == answers[1] else 'DIFFERENT'}; files "
           f"{'identical' if filecmp.cmp(tmp / 'l1.json', tmp / 'l2.json', False) else 'differ'})")
 
