@@ -34,7 +34,8 @@ def test_rig_learn_runs_trials_that_each_end_at_zero(tmp_path, capsys, setup):
     data, _ = read_columns(out, ["trial", "rms_um", "voltage_V"])
     assert data["trial"].size == 4 * 40
     for j in range(4):
-        log = (tmp_path / f"run.trial-{j:02d}.csv").read_text()
+        # the log's stop line is in its sidecar (docs/records.md: plain CSV out)
+        log = (tmp_path / f"run.trial-{j:02d}.csv.json").read_text()
         assert "0 V sent and output off" in log
     rms = [data["rms_um"][data["trial"] == j][0] for j in range(4)]
     assert min(rms) < rms[0]
@@ -50,5 +51,5 @@ def test_a_fault_in_a_trial_stops_the_learning_at_zero(tmp_path, capsys, setup):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "learning trial 0 stopped: 5 consecutive invalid sensor" in err[0]
     assert "0 V, output off" in err[0]
-    assert "0 V sent and output off" in (tmp_path / "run.trial-00.csv").read_text()
+    assert "0 V sent and output off" in (tmp_path / "run.trial-00.csv.json").read_text()
     assert not out.exists()

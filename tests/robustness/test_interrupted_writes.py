@@ -19,7 +19,10 @@ from pihyst._atomic import AtomicFile, AtomicFolder
 # `pihyst predict` through main(), stalled after its first block of rows: the test
 # signals it there. argv[1]: 'named' forces the fallback without O_TMPFILE.
 _STALLED_PREDICT = """
-import sys, time
+import signal, sys, time
+# as in a foreground process, whatever started the suite (a shell's background job
+# ignores SIGINT, and its children inherit that)
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from pihyst import _atomic
 from pihyst.io import _csv
 if sys.argv[1] == "named":
@@ -100,7 +103,8 @@ def test_a_symbolic_link_is_written_through(tmp_path):
 @pytest.mark.parametrize("command", [
     ["predict", GOOD_MODEL, VOLTS],
     ["simulate", "--cycles", "1"],
-    ["compensate", GOOD_MODEL, os.path.join(os.path.dirname(VOLTS), "desired.csv")],
+    ["compensate", GOOD_MODEL, os.path.join(os.path.dirname(VOLTS), "desired.csv"),
+     "--saturate"],
 ])
 def test_a_named_pipe_as_output_is_streamed_not_replaced(tmp_path, command):
     fifo = tmp_path / "pipe"

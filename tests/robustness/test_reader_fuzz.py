@@ -229,6 +229,8 @@ def test_a_mat_file_that_crashes_scipy_is_one_line():
 
     from harness import CORPUS
     path = os.path.join(CORPUS, "csv", "scipy-segv.mat")
-    with pytest.raises(RecordError, match=r"scipy-segv.mat: cannot read MATLAB file: SciPy's "
-                                          r"reader crashed on it \(SIGSEGV\)"):
+    # the crash depends on the process's memory: in some processes loadmat raises
+    # instead (ZeroDivisionError seen in the full suite); either way one line
+    with pytest.raises(RecordError, match=r"scipy-segv.mat: cannot read MATLAB file: ") as info:
         read_record(path)
+    assert "\n" not in str(info.value)
