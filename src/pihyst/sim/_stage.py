@@ -184,7 +184,7 @@ def make_stage(name="paper-beam", *, modes=((800.0, 0.04),), rate_hz=20_000.0,
     >>> import numpy as np
     >>> stage = make_stage(noise_um=0.0)
     >>> y = stage.run_periodic(np.full(200, 75.0))
-    >>> bool(np.ptp(y) < 1e-6)                    # a constant voltage: at rest
+    >>> bool(np.ptp(y) < 0.1)       # held at 75 V: the step's slow tail moves it < 0.1 um
     True
     """
     from pihyst.sim._plant import _VARIANTS, SUPPLY_STEP_V
