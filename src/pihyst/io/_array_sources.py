@@ -113,7 +113,9 @@ class ArraySource:
                               "numbers")
         return out.astype(np.float64)
 
-    def blocks(self, refs, block_rows, progress=None):
+    def common_length(self, refs):
+        """The one length of the quantities ``refs`` (RecordError if they differ or are
+        empty)."""
         n = {self.length(r) for r in refs}
         if len(n) != 1:
             lengths = ", ".join(f"{self.label(r)} {self.length(r)}" for r in refs)
@@ -121,6 +123,10 @@ class ArraySource:
         n = n.pop()
         if n == 0:
             raise RecordError(self.path, "no samples")
+        return n
+
+    def blocks(self, refs, block_rows, progress=None):
+        n = self.common_length(refs)
         for start in range(0, n, block_rows):
             stop = min(n, start + block_rows)
             values = np.column_stack([self.read(r, start, stop) for r in refs])

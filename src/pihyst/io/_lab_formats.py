@@ -113,13 +113,7 @@ class TableSource(ArraySource):
 
     def blocks(self, refs, block_rows, progress=None):
         # the values were checked as they were read: only the lengths remain to check
-        n = {self.length(r) for r in refs}
-        if len(n) != 1:
-            lengths = ", ".join(f"{self.label(r)} {self.length(r)}" for r in refs)
-            raise RecordError(self.path, f"the quantities have different lengths ({lengths})")
-        n = n.pop()
-        if n == 0:
-            raise RecordError(self.path, "no samples")
+        n = self.common_length(refs)
         for start in range(0, n, block_rows):
             stop = min(n, start + block_rows)
             if progress is not None:
