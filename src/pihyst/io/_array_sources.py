@@ -240,6 +240,8 @@ def _loadmat_guarded(path):
         pid = os.fork()
     if pid == 0:                         # the child: read, send back, exit at once
         os.close(r)
+        import faulthandler
+        faulthandler.disable()           # its crash is the parent's one line, not a dump
         try:
             try:
                 out = ("ok", _loadmat(path))
