@@ -351,3 +351,12 @@ def test_what_pihyst_writes_opens_in_numpy_and_pandas_defaults(tmp_path, capsys)
         rec = reader.read()
         assert "metadata from out.csv.json" in reader.describe()
     assert rec.metadata["sidecar"]["comments"] == side["comments"]
+
+
+def test_an_lvm_with_bytes_undefined_in_cp1252_is_one_line_not_a_crash(tmp_path):
+    """Found by the reader fuzz: 0x8d is neither UTF-8 nor defined in cp1252."""
+    path = tmp_path / "bad.lvm"
+    path.write_bytes(b"\x8dLabVIEW Measurement\t\n")
+    with pytest.raises((RecordError, CSVError)) as info:
+        read_record(path)
+    assert "\n" not in str(info.value)

@@ -272,7 +272,8 @@ def _vector(a):
     return a
 
 
-def _need(module, extra, path):
+def need(module, extra, path):
+    """Import ``module`` or raise a one-line RecordError naming the pip extra."""
     try:
         return __import__(module)
     except ImportError:
@@ -281,7 +282,7 @@ def _need(module, extra, path):
 
 
 def _open_hdf5(path, transpose, kind="hdf5"):
-    h5py = _need("h5py", "hdf5", path)
+    h5py = need("h5py", "hdf5", path)
     f = h5py.File(path, "r")
     variables = {}
 
@@ -321,7 +322,7 @@ class _Transposed:
 
 
 def _open_parquet(path):
-    _need("pyarrow", "fast", path)
+    need("pyarrow", "fast", path)
     import pyarrow.parquet as pq
     table = pq.read_table(path)
     variables = {name: table.column(name).to_numpy() for name in table.column_names

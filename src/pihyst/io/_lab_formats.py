@@ -15,7 +15,7 @@ import re
 import numpy as np
 
 from pihyst.exceptions import CSVError, InvalidArgumentError, RecordError
-from pihyst.io._array_sources import ArraySource
+from pihyst.io._array_sources import ArraySource, need
 from pihyst.io._numbers import parse_number
 
 # what a column's name says it holds, for files whose columns are named by lab software
@@ -29,15 +29,6 @@ GUESSES = {
                                r"sensor|stroke|auslenkung", re.IGNORECASE),
 }
 PREFERRED = re.compile(r"actual|measured|sensor|ist", re.IGNORECASE)
-
-
-def need(module, extra, path):
-    """Import ``module`` or raise a one-line RecordError naming the pip extra."""
-    try:
-        return __import__(module)
-    except ImportError:
-        raise RecordError(path, f"reading this file needs {module}: "
-                          f"pip install 'pihyst[{extra}]'") from None
 
 
 class TableSource(ArraySource):
@@ -146,7 +137,11 @@ def open_lvm(path):
             raw = f.read()
     except OSError as err:
         raise RecordError(path, f"cannot read file: {err.strerror or err}") from None
-    text = raw.decode("utf-8", errors="replace") if not _cp1252(raw) else raw.decode("cp1252")
+    # LabVIEW writes the system code page (cp1252 on Western Windows); five bytes are
+    # undefined there, and a damaged file may hold them: replaced, the line then fails
+    # as a number where it should
+    text = (raw.decode("cp1252", errors="replace") if _cp1252(raw) else
+            raw.decode("utf-8", errors="replace"))
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     if not lines[0].lstrip("\ufeff").startswith("LabVIEW Measurement"):
         raise CSVError(path, 1, 0, "not a LabVIEW Measurement File (its first line is not "
