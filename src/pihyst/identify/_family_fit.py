@@ -14,6 +14,11 @@ import numpy as np
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
 from pihyst.identify._assess import minor_loops_determined
+from pihyst.identify._constants import (
+    CONSTANT_COLUMN,
+    KP_UNDETERMINED_TOLERANCE,
+    SETTLE_MAX_SHARE,
+)
 from pihyst.identify._cycles import (
     MIN_SAMPLES,
     checked_signals,
@@ -34,20 +39,8 @@ from pihyst.identify._subsets import (
 from pihyst.metrics import error_summary
 
 INITIAL_STATES = ("auto", "cycled", "settle", "zero", "rise", "fall")
-# "auto" on a record that does not start at the bottom: when its first full sweep (which
-# settles the operators) would take more than this share of it (a sine growing from the
-# middle of the range sweeps it only at the end) or never ends, the record is fitted
-# whole from "rise" or "fall" instead (identify/_start_state.py)
-SETTLE_MAX_SHARE = 0.5
 KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
 KP_DEFAULT_LAMBDA = 1e-2
-# When the record holds no minor loops, the kernel basis takes the strongest
-# regularization whose held-back RMS is within this of the lowest: the density closest
-# to the penalty's (KrasnoselskiiPokrovskii.penalty) the record allows (measured on the
-# P-885 pair, test record: 0.35 -> 0.30 um with the record's delay, 0.78 -> 0.58 um
-# without it, against the lowest held-back RMS)
-KP_UNDETERMINED_TOLERANCE = 0.10
-CONSTANT_COLUMN = 1e-9  # an operator whose output varies less than this * S never moved
 PREDICTIONS_KEPT = 8
 KERNEL_SAMPLES = 100_000
 
@@ -103,6 +96,13 @@ class FramedRecord:
         self.layout = layout(self.v, self.S, settle=(mode == "settle"), holdout=holdout)
         self.has_held_back = self.layout.count("held_back") > 0
         self.through = self._through_indices(through)
+
+    def with_start_choice(self, choice):
+        """This record with what "auto" compared to choose its start state
+        (identify/_start_state.py)."""
+        out = copy.copy(self)
+        out.state_choice = choice
+        return out
 
     def shifted(self, delay, stop=None):
         """This record with its output ``delay`` samples later (u[k] paired with
