@@ -30,6 +30,7 @@ import numpy as np
 from pihyst.exceptions import FitError
 from pihyst.identify._constants import REFINE_REACH
 from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
+from pihyst.identify._responses import Responses, digest
 from pihyst.model._boucwen import (
     MAX_EXPONENT,
     MAX_SHAPE,
@@ -245,7 +246,8 @@ def _keep(u, target, path=None):
 
 
 def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="alternate",
-                refit=True, n=None, shape=None, layout_=None, refine_below=None):
+                refit=True, n=None, shape=None, layout_=None, refine_below=None,
+                responses=None):
     """Fit a :class:`pihyst.model.BoucWenModel` to a record (module notes).
 
     Parameters
@@ -276,6 +278,9 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         Refine the best shape of the grid by Nelder-Mead only if its fitted RMS is
         below this (the comparison of families: ``REFINE_REACH`` times the best other
         family's judged RMS); else the grid's shape is kept.
+    responses : Responses, optional
+        Where the shape grid's z trajectories, which depend on the input only, are kept
+        for the other fits of the same input (identify/_responses.py).
 
     Returns
     -------
@@ -299,7 +304,8 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     fit_i, held_i = lay.indices("fit"), lay.indices("held_back")
     if fit_i.size < 5:
         raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
-    search = _ShapeSearch(v / span, y, fit_i, settle, n, shape, refine_below)
+    search = _ShapeSearch(v / span, y, fit_i, settle, n, shape, refine_below,
+                          Responses() if responses is None else responses)
     shape_found, lin = search.shape_and_start(held_i, first_reversal(v))
     beta, gamma, nn = shape_found
     z, sens, (coef, b) = lin
@@ -347,8 +353,9 @@ class _ShapeSearch:
     a grid of shapes on a decimated record, then Nelder-Mead from the best of them
     (module notes), with the linear part fitted by :func:`_solve_linear` for each."""
 
-    def __init__(self, x, y, fit_i, settle, n, shape, refine_below):
+    def __init__(self, x, y, fit_i, settle, n, shape, refine_below, responses):
         self.x, self.y, self.fit_i, self.settle = x, y, fit_i, settle
+        self.responses = responses
         self.n, self.shape, self.refine_below = n, shape, refine_below
         self.rest_z = {}
         self.free_start = False      # the start of z a free column (start_sensitivity)
@@ -363,7 +370,6 @@ class _ShapeSearch:
         self.ns = GRID_N if n is None else (float(n),)
         self.xk, self.yk = x[keep], y[keep]
         self.grid = [(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in self.ns]
-        self.grid_z = []
         self.skipped_refinement = []     # the grid's best fitted RMS, where not refined
 
     def start(self, beta, gamma, nn):
@@ -374,6 +380,15 @@ class _ShapeSearch:
         if (beta, gamma, nn) not in self.rest_z:
             self.rest_z[beta, gamma, nn] = cycled_z(beta, gamma, nn)
         return 0.0, self.rest_z[beta, gamma, nn]
+
+    def grid_z(self):
+        """Each grid shape's z along the decimated input: it depends on the input only,
+        so it is computed once per input (the searches with a free start, and the fits
+        of the same input with creep removed, share it)."""
+        key = ("bouc-wen grid z", digest(self.xk), self.settle,
+               float(self.x[0]) if self.settle else None, self.ns)
+        return self.responses.get(key, lambda: [trajectory(self.xk, *self.start(*g), *g)
+                                                for g in self.grid])
 
     def with_sensitivity(self, xs, z, beta, gamma, nn):
         """(z, its sensitivity to z0 with free_start, else None)."""
@@ -412,11 +427,8 @@ class _ShapeSearch:
 
         shape, n = self.shape, self.n
         if shape is None:
-            if not self.grid_z:     # each shape's z, shared by the searches with a free start
-                self.grid_z.extend(trajectory(self.xk, *self.start(*g), *g)
-                                   for g in self.grid)
             rms = [self.fitted_rms(*g, *self.with_sensitivity(self.xk, zk, *g))
-                   for g, zk in zip(self.grid, self.grid_z)]
+                   for g, zk in zip(self.grid, self.grid_z())]
             b0, g0, n0 = self.grid[int(np.argmin(rms))]
         else:
             b0, g0, n0 = (float(shape["beta"]), float(shape["gamma"]),
@@ -529,7 +541,7 @@ def family_fit(family, fitter, rival_rms=None):
                   # and its start is then fitted as unknown (fit_boucwen)
                   initial_state=("cycled" if from_data or rec.state_mode in ("rise", "fall")
                                  else rec.state_mode),
-                  n=family.n, layout_=rec.layout)
+                  n=family.n, layout_=rec.layout, responses=fitter.responses)
     model, report = fit_boucwen(rec.u, rec.y, refit=False, refine_below=(
         None if rival_rms is None else REFINE_REACH * rival_rms), **kwargs)
 

@@ -41,6 +41,7 @@ from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._qp import solve_qp
 from pihyst.identify._record_fit import fit_record
 from pihyst.identify._record_start import record_start_check
+from pihyst.identify._responses import Responses
 from pihyst.model._boucwen import BoucWenModel
 from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 
@@ -235,13 +236,14 @@ def fit_with_creep(u, y, t, options, steps):
     y = np.asarray(y, dtype=np.float64)
     decide = options.creep == "auto"
     plain = options.but(creep="off")
+    responses = Responses()          # the same input is fitted up to three times
     if options.through is not None:
         if decide:
             return _without_creep(fit_record(u, y, plain, steps, t=t).result, {
                 "kept": False, "reason": "through= (equality constraints) is not available "
                                          "with creep"})
         raise FitError("through= (equality constraints) is not available with creep=True")
-    first = fit_record(u, y, plain, steps, t=t)   # the record's own errors first
+    first = fit_record(u, y, plain, steps, t=t, responses=responses)  # its errors first
     steps.done(f"fit without creep: {first.result.report.chosen}")
     dt_fixed, dt, duration = _times(t, u.size)
     tau = (default_time_constants(dt_fixed, duration) if options.time_constants is None
@@ -265,7 +267,7 @@ def fit_with_creep(u, y, t, options, steps):
     elif start is None:
         raise FitError(f"a {first.result.report.chosen} model has no creep: fit creep with "
                        f"one of {', '.join(CREEP_FAMILIES)}")
-    trial = _Trial(u, y, t, d, rec, plain, first, rows, held, decide, steps)
+    trial = _Trial(u, y, t, d, rec, plain, first, rows, held, decide, steps, responses)
     if not decide:
         second = trial.structure(start)
         return _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, None)
@@ -291,8 +293,9 @@ class _Trial:
     """The ordinary fit of the record with one creep estimate removed, and its
     judgement on the held-back cycles (``decide``)."""
 
-    def __init__(self, u, y, t, d, rec, plain, first, rows, held, decide, steps):
+    def __init__(self, u, y, t, d, rec, plain, first, rows, held, decide, steps, responses):
         self.u, self.y, self.t, self.d, self.rec = u, y, t, d, rec
+        self.responses = responses
         self.plain, self.first, self.rows, self.held = plain, first, rows, held
         self.decide, self.steps = decide, steps
         self.warnings = {}
@@ -315,13 +318,13 @@ class _Trial:
         y = np.r_[self.y[:self.d], rec.y + psi @ gains]
         if not self.decide:
             return fit_record(self.u, y, options, self.steps, t=self.t,
-                              delay=self.first.delay.given())
+                              delay=self.first.delay.given(), responses=self.responses)
         # a trial: its warnings are about the record with this creep estimate removed,
         # and are the user's only if that structure is kept (keep_warnings)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PihystWarning)
             second = fit_record(self.u, y, options, self.steps, t=self.t,
-                                delay=self.first.delay.given())
+                                delay=self.first.delay.given(), responses=self.responses)
         self.warnings[id(second)] = [w for w in caught
                                      if issubclass(w.category, PihystWarning)]
         for w in caught:

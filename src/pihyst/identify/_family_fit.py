@@ -30,6 +30,7 @@ from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._kernel_product import product_density_fit
 from pihyst.identify._qp import solve_qp
+from pihyst.identify._responses import Responses
 from pihyst.identify._subsets import (
     DEFAULT_MAX_EXHAUSTIVE,
     PATH_MAX_EXHAUSTIVE,
@@ -238,8 +239,10 @@ class FamilyFitter:
 
     def __init__(self, rec, *, thresholds=None, candidates=None, n_candidates=16,
                  n_operators=None, nonnegative=True, bounds=None,
-                 max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+                 max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, responses=None):
         self.rec = rec
+        # output-independent results shared by the fits of this record's input
+        self.responses = Responses() if responses is None else responses
         self.thresholds = None if thresholds is None else np.sort(np.asarray(thresholds, float))
         self.candidates = None if candidates is None else np.sort(np.asarray(candidates, float))
         self.n_candidates, self.n_operators = n_candidates, n_operators

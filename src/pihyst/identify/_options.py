@@ -97,12 +97,14 @@ class FitOptions:
         return FramedRecord(u, y, input_range=self.input_range, initial_state=state,
                             holdout=self.holdout, offset=self.offset, through=self.through)
 
-    def fitter(self, rec):
-        """A :class:`FamilyFitter` of the framed record ``rec`` with these options."""
+    def fitter(self, rec, responses=None):
+        """A :class:`FamilyFitter` of the framed record ``rec`` with these options,
+        sharing ``responses`` (a ``_responses.Responses``) with the other fits of the
+        same input."""
         return FamilyFitter(rec, thresholds=self.thresholds, candidates=self.candidates,
                             n_candidates=self.n_candidates, n_operators=self.n_operators,
                             nonnegative=self.nonnegative, bounds=self.bounds,
-                            max_exhaustive=self.max_exhaustive)
+                            max_exhaustive=self.max_exhaustive, responses=responses)
 
 
 def _sorted(values, name):

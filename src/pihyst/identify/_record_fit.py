@@ -27,6 +27,7 @@ from pihyst.identify._constants import DELAY_NOTE_GAIN
 from pihyst.identify._decisions import Choice, Delay, FamiliesFitted, StartState
 from pihyst.identify._latency import estimate_latency
 from pihyst.identify._report import FitReport, FitResult
+from pihyst.identify._responses import Responses
 from pihyst.identify._start_state import start_state
 from pihyst.identify._sufficiency import check_fit, check_record
 
@@ -57,21 +58,23 @@ class _Attempt:
     choice: Choice
 
 
-def fit_record(u, y, options, steps, *, t=None, delay=None):
+def fit_record(u, y, options, steps, *, t=None, delay=None, responses=None):
     """:class:`RecordFit` of ``(u, y)`` with ``options`` (a FitOptions; creep is not
     this function's step); ``delay``: a :class:`Delay` decided before (else decided
-    here); ``steps`` reports each step's end."""
+    here); ``responses``: the output-independent results of other fits of the same
+    input (a ``_responses.Responses``); ``steps`` reports each step's end."""
+    responses = Responses() if responses is None else responses
     rec, start = decide_start_state(u, y, options)
     steps.done(f"start state: {start.mode}")
     if delay is None:
         delay = decide_delay(rec, options)
     steps.done(f"delay: {delay.samples} samples"
                + (" (decided on the record itself)" if delay.decided_before else ""))
-    attempt = fit_at_delay(rec, delay, options, steps)
-    refused, reuse = delay_refusal(rec, attempt, delay, options)
+    attempt = fit_at_delay(rec, delay, options, steps, responses)
+    refused, reuse = delay_refusal(rec, attempt, delay, options, responses)
     if refused is not None:
         delay = refused
-        attempt = fit_at_delay(rec, delay, options, steps, reuse=reuse)
+        attempt = fit_at_delay(rec, delay, options, steps, responses, reuse=reuse)
     return finish(attempt, start, delay, options, steps, t)
 
 
@@ -125,7 +128,7 @@ def decide_delay(rec, options):
                  probe=f"classical PI, {_delay.PROBE_PLAYS} equally spaced plays")
 
 
-def delay_refusal(rec, attempt, delay, options):
+def delay_refusal(rec, attempt, delay, options, responses):
     """(refused :class:`Delay`, {family: (FamilyFit, warnings)} to reuse) when the
     family chosen with the delay "auto" adopted holds back better without it, else
     (None, None). The probe and the modified PI that confirm a delay can both fail to
@@ -138,7 +141,7 @@ def delay_refusal(rec, attempt, delay, options):
     chosen = attempt.choice.chosen
     validation = (None if options.validate is None else
                   ValidationRecord.build(options.validate, rec.lo, rec.S, 0))
-    fitter = options.fitter(rec)
+    fitter = options.fitter(rec, responses)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PihystWarning)
         try:
@@ -155,14 +158,14 @@ def delay_refusal(rec, attempt, delay, options):
 
 
 # ------------------------------------------------------------------ families and choice
-def fit_at_delay(rec, delay, options, steps, reuse=None):
+def fit_at_delay(rec, delay, options, steps, responses, reuse=None):
     """The :class:`_Attempt` of every family on ``rec`` with its output ``delay``
     samples later: cycles and held-back data, each family's fit, the choice."""
     if delay.samples:
         rec = rec.shifted(delay.samples)
     validation = (None if options.validate is None else
                   ValidationRecord.build(options.validate, rec.lo, rec.S, delay.samples))
-    fitter = options.fitter(rec)
+    fitter = options.fitter(rec, responses)
     if reuse:
         fitter = next(iter(reuse.values()))[1]
     minor_loops = minor_loops_determined(rec, validation)
