@@ -51,7 +51,7 @@ SEARCH_SAMPLES = 600    # the shape search runs on about this many samples (+ re
 # first ones show (the P-885 identification record: 40 cycles, 80 ranges; the shape
 # found on its first 6 holds back 0.212 um on all 20 held-back cycles, the search on
 # all 40 0.210 um, in a third of the time). The linear parameters are fitted on the
-# whole record; fewer than MIN_SEARCH_FITTED fitted samples there: the search uses all.
+# whole record; fewer than MIN_SEARCH_FITTED fitted samples there: twice the path.
 SEARCH_PATH = 6.0
 # Nelder-Mead's stop: (log beta, atanh(gamma/beta), n) within SEARCH_XATOL, the fitted
 # RMS within SEARCH_FATOL of the output's span, or SEARCH_EVALUATIONS evaluations. On
@@ -363,9 +363,14 @@ class _ShapeSearch:
         self.evaluations = 0
         where = np.zeros(x.size, dtype=bool)
         where[fit_i] = True
-        keep = _keep(x, SEARCH_SAMPLES, SEARCH_PATH)
-        if np.count_nonzero(where[keep]) < MIN_SEARCH_FITTED:
-            keep = _keep(x, SEARCH_SAMPLES)     # the first cycles hold too few fitted samples
+        # the first cycles hold too few fitted samples: twice the path, until they do
+        # (the whole record at once took 100 s on 10^6 samples of level ramps, every one
+        # of its 5,000 reversals kept)
+        path = SEARCH_PATH
+        keep = _keep(x, SEARCH_SAMPLES, path)
+        while np.count_nonzero(where[keep]) < MIN_SEARCH_FITTED and keep[-1] < x.size - 1:
+            path *= 2
+            keep = _keep(x, SEARCH_SAMPLES, path)
         self.kfit = np.flatnonzero(where[keep])
         self.ns = GRID_N if n is None else (float(n),)
         self.xk, self.yk = x[keep], y[keep]

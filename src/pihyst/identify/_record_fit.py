@@ -33,6 +33,14 @@ from pihyst.identify._sufficiency import check_fit, check_record
 
 __all__ = ["RecordFit", "fit_record"]
 
+# A record longer than this is fitted, judged and refitted on about this many samples
+# plus every input extremum (FramedRecord.subsampled: the operators are rate-independent,
+# so their outputs there are exactly those of the whole record; only fewer squares are
+# summed). A search budget, not a decision: every record the population and the measured
+# sets judge the fit on has at most 50,001 samples and is fitted whole; a 10^6-sample
+# record then costs about what a 60,000-sample one does, plus its predictions.
+FIT_SAMPLES = 60_000
+
 
 @dataclass(frozen=True)
 class RecordFit:
@@ -141,7 +149,7 @@ def delay_refusal(rec, attempt, delay, options, responses):
     chosen = attempt.choice.chosen
     validation = (None if options.validate is None else
                   ValidationRecord.build(options.validate, rec.lo, rec.S, 0))
-    fitter = options.fitter(rec, responses)
+    fitter = options.fitter(rec.subsampled(FIT_SAMPLES), responses)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PihystWarning)
         try:
@@ -165,12 +173,12 @@ def fit_at_delay(rec, delay, options, steps, responses, reuse=None):
         rec = rec.shifted(delay.samples)
     validation = (None if options.validate is None else
                   ValidationRecord.build(options.validate, rec.lo, rec.S, delay.samples))
-    fitter = options.fitter(rec, responses)
+    fitter = options.fitter(rec.subsampled(FIT_SAMPLES), responses)
     if reuse:
         fitter = next(iter(reuse.values()))[1]
     minor_loops = minor_loops_determined(rec, validation)
-    fitted = fit_families(rec, fitter, options, minor_loops, steps, reuse or {})
-    choice = choose_family(rec, fitter, fitted, validation, minor_loops, options)
+    fitted = fit_families(fitter.rec, fitter, options, minor_loops, steps, reuse or {})
+    choice = choose_family(fitter.rec, fitter, fitted, validation, minor_loops, options)
     return _Attempt(rec=rec, fitter=fitter, validation=validation, minor_loops=minor_loops,
                     fitted=fitted, choice=choice)
 
@@ -273,6 +281,7 @@ def finish(attempt, start, delay, options, steps, t):
     check_fit(rec, best_c.judged_rms, model)
     report = FitReport.build(
         rec, start, attempt.choice, attempt.fitted.skipped,
+        fitted_on=int(attempt.fitter.rec.u.size),
         refit=final_errors is not None, final_errors=final_errors,
         delay=delay.to_report(),
         validation=None if attempt.validation is None else attempt.validation.describe(),

@@ -82,11 +82,12 @@ class FitReport:
 
     @classmethod
     def build(cls, rec, start, choice, skipped, *, refit, final_errors, delay, validation,
-              undetermined):
+              undetermined, fitted_on=None):
         """The report of a fit of the framed record ``rec`` from the decisions made on
         it: the start state (``_decisions.StartState``), the choice (``Choice``), the
         families skipped, the refit's errors, the delay's report entry, the validation
-        record's description and what the data could not determine."""
+        record's description and what the data could not determine; ``fitted_on``: the
+        samples a long record was fitted and judged on (all if None)."""
         lay = rec.layout
         candidates, chosen = choice.candidates, choice.chosen.name
         units = dict(candidates[0].fitted.model.units)
@@ -111,6 +112,7 @@ class FitReport:
             "through": list(rec.through),
             "delay": delay,
             "validation": validation,
+            "fitted_on_samples": int(rec.u.size if fitted_on is None else fitted_on),
         }
         families = [cls._family_entry(c, c.name == chosen, rec.S) for c in candidates]
         out = {"data": data, "families": families, "skipped": list(skipped),
@@ -214,9 +216,12 @@ class FitReport:
             + (f"{d['held_back_cycles']} cycles, {d['held_back_samples']} samples "
                f"({d['holdout']})" if d["held_back_samples"] else "none") +
             f"; offset {d['offset']}",
-            "",
         ]
-        return lines
+        if d.get("fitted_on_samples", d["n_samples"]) < d["n_samples"]:
+            lines.append(f"fitted and judged on {d['fitted_on_samples']} of the "
+                         f"{d['n_samples']} samples (evenly spaced, and every input extremum: "
+                         f"the operators' outputs there are exactly the whole record's)")
+        return lines + [""]
 
     def _family_lines(self):
         """The table of families: errors, latency, skipped and excluded ones."""
