@@ -39,7 +39,7 @@ from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
 from pihyst.identify._constants import CREEP_REACH, TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._qp import solve_qp
-from pihyst.identify._record_fit import fit_record
+from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
 from pihyst.identify._record_start import record_start_check
 from pihyst.identify._responses import Responses
 from pihyst.model._boucwen import BoucWenModel
@@ -102,11 +102,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
     ``free_weights=False`` (a regularized kernel basis): the weights keep their shape,
     w = q w_0 with one scale q >= 0, so the joint QP cannot undo the regularization.
     """
-    fitted = np.zeros(u.size, dtype=bool)
-    if rows is None:
-        fitted[start:] = True
-    else:
-        fitted[rows] = True
+    fitted = _fitted_rows(u.size, start, rows)
     hyst = model.replace(creep=None)
     h = hyst.predict(u)
     basis = np.eye(model.n_operators) if free_weights else model.weights[:, None].copy()
@@ -133,11 +129,11 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
             b = min(a + CHUNK, u.size)
             phi = hyst.operators(u[a:b], initial_state=state)
             state = phi[-1]
-            phi = phi @ basis
             sel = fitted[a:b]
             if not sel.any():
                 continue
-            x = np.hstack([phi[sel], np.ones((int(sel.sum()), int(fit_offset))),
+            phi = phi[sel] if free_weights else (phi @ basis)[sel]   # basis: I when free
+            x = np.hstack([phi, np.ones((int(sel.sum()), int(fit_offset))),
                            -psi[a:b][sel] @ tie])
             d = y[a:b][sel] - (fixed_offset or 0.0)
             gram += x.T @ x
@@ -165,15 +161,29 @@ def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, r
     if offset is not True:
         raise FitError("bouc-wen fits its own offset: a fixed offset is not available "
                        "with creep")
-    fitted = np.zeros(u.size, dtype=bool)
-    if rows is None:
-        fitted[start:] = True
-    else:
-        fitted[rows] = True
+    fitted = _fitted_rows(u.size, start, rows)
     tie = log_t_basis(tau.size, int(np.count_nonzero(tau <= duration)))
     hyst, gains, passes, _ = fit_shape_and_creep(model.replace(creep=None), u, y, dt, tau,
                                                  tie, fitted, fixed_n=fixed_n)
     return hyst, gains, passes
+
+
+def _fitted_rows(n, start, rows):
+    """The mask of the samples a joint QP sums over: ``rows`` (default every sample from
+    ``start``), every k-th of them when they are more than ``FIT_SAMPLES`` (the lags
+    still run over every sample; only fewer squares are summed, as the structure of a
+    long record is fitted on a subsample, identify/_record_fit.py)."""
+    fitted = np.zeros(n, dtype=bool)
+    if rows is None:
+        fitted[start:] = True
+    else:
+        fitted[rows] = True
+    count = int(np.count_nonzero(fitted))
+    if count > FIT_SAMPLES:
+        idx = np.flatnonzero(fitted)
+        fitted[:] = False
+        fitted[idx[::int(np.ceil(count / FIT_SAMPLES))]] = True
+    return fitted
 
 
 def _joint_qp_of(model, fixed_n=None):
