@@ -189,3 +189,32 @@ def test_no_function_in_identify_is_over_100_lines_of_code():
                 if n > MAX_CODE_LINES:
                     long.append(f"{path.name}:{node.name} ({n})")
     assert not long, long
+
+
+@pytest.mark.parametrize("family", ["classical", "kp"])
+def test_a_long_records_creep_rows_have_the_whole_records_operator_outputs(monkeypatch,
+                                                                           family):
+    """Creep's joint QP on a long record runs the operators on its (thinned) fitted rows
+    and every input extremum only: the outputs there are exactly those of every sample."""
+    from pihyst.identify import _creep
+
+    rng = np.random.default_rng(3)
+    levels = np.r_[0.0, 150.0, 0.0, rng.uniform(0, 150, 400)]
+    u = np.concatenate([np.linspace(a, b, 200, endpoint=False)
+                        for a, b in zip(levels[:-1], levels[1:])])
+    model = (ClassicalPI(np.linspace(0, 70, 16), np.full(16, 0.1)) if family == "classical"
+             else pihyst.fit(u[:4000], ClassicalPI([0, 30], [0.2, 0.1]).predict(u[:4000]),
+                             family="kp").model)
+    monkeypatch.setattr(_creep, "FIT_SAMPLES", 20_000)
+    fitted = _creep._fitted_rows(u.size, 150, None)
+    assert 0 < np.count_nonzero(fitted) <= 20_000 < u.size - 150
+    basis = model.weights[:, None]
+    for free in (True, False):
+        (long, sel, a, b), = _creep._operator_rows(model, u, fitted, basis, free)
+        monkeypatch.setattr(_creep, "FIT_SAMPLES", 10 ** 9)
+        chunked = np.vstack([p for p, *_ in _creep._operator_rows(model, u, fitted, basis,
+                                                                 free)])
+        monkeypatch.setattr(_creep, "FIT_SAMPLES", 20_000)
+        assert (a, b) == (0, u.size) and sel is fitted
+        np.testing.assert_array_equal(long, chunked) if free else \
+            np.testing.assert_allclose(long, chunked, rtol=1e-13, atol=1e-13)

@@ -124,15 +124,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
         passes += 1
         psi = _lag_deficits(hyst, h, dt, tau, hyst.initial_state)
         gram, rhs = np.zeros((cols, cols)), np.zeros(cols)
-        state = hyst.initial_state
-        for a in range(0, u.size, CHUNK):
-            b = min(a + CHUNK, u.size)
-            phi = hyst.operators(u[a:b], initial_state=state)
-            state = phi[-1]
-            sel = fitted[a:b]
-            if not sel.any():
-                continue
-            phi = phi[sel] if free_weights else (phi @ basis)[sel]   # basis: I when free
+        for phi, sel, a, b in _operator_rows(hyst, u, fitted, basis, free_weights):
             x = np.hstack([phi, np.ones((int(sel.sum()), int(fit_offset))),
                            -psi[a:b][sel] @ tie])
             d = y[a:b][sel] - (fixed_offset or 0.0)
@@ -166,6 +158,30 @@ def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, r
     hyst, gains, passes, _ = fit_shape_and_creep(model.replace(creep=None), u, y, dt, tau,
                                                  tie, fitted, fixed_n=fixed_n)
     return hyst, gains, passes
+
+
+def _operator_rows(hyst, u, fitted, basis, free_weights):
+    """(operator outputs times ``basis`` at the fitted rows of a block, its mask, start,
+    stop) for each block of the record: in chunks of every sample, or for a record
+    longer than ``FIT_SAMPLES`` (whose fitted rows are thinned) in one block, the
+    operators run on the fitted rows and every input extremum only (their outputs
+    there are exactly the whole record's: identify/_record_fit.py)."""
+    if u.size > FIT_SAMPLES:
+        rows = np.flatnonzero(fitted)
+        dv = np.diff(u)
+        turns = np.flatnonzero(dv[1:] * dv[:-1] <= 0) + 1
+        keep = np.unique(np.r_[0, rows, turns, u.size - 1])
+        phi = hyst.operators(u[keep], initial_state=hyst.initial_state)[np.isin(keep, rows)]
+        yield (phi if free_weights else phi @ basis), fitted, 0, u.size
+        return
+    state = hyst.initial_state
+    for a in range(0, u.size, CHUNK):
+        b = min(a + CHUNK, u.size)
+        phi = hyst.operators(u[a:b], initial_state=state)
+        state = phi[-1]
+        sel = fitted[a:b]
+        if sel.any():
+            yield (phi[sel] if free_weights else (phi @ basis)[sel]), sel, a, b
 
 
 def _fitted_rows(n, start, rows):
