@@ -536,10 +536,10 @@ def family_fit(family, fitter, rival_rms=None):
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
                        f"state: drop {', '.join(unsupported)}")
     # a long record: fitted and judged on FAMILY_SAMPLES samples and every input extremum
-    on = fitter.subsampled(FAMILY_SAMPLES)
-    if on is not fitter:        # judged there too (the PI families are judged on all)
-        fitter.notes[-1] = fitter.notes[-1].replace("errors on all", "errors on those "
-                                                    "samples")
+    # judged there too (the PI families are judged on all)
+    on = fitter.subsampled(FAMILY_SAMPLES, note=lambda kept, n: (
+        f"fitted on {kept} of {n} samples (evenly spaced, and every input extremum); "
+        f"errors on those samples"))
     rec = on.rec
     kwargs = dict(input_range=(rec.lo, rec.lo + rec.S),
                   # rise, fall: z rises from rest at the bottom to the first sample,

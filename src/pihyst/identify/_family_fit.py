@@ -251,18 +251,28 @@ class FamilyFitter:
         self.notes = []
         self._predictions = []
 
-    def subsampled(self, max_samples):
+    def subsampled(self, max_samples, note=None):
         """This fitter on the record subsampled to about ``max_samples`` samples and
         every input extremum (``FramedRecord.subsampled``: exact operator outputs, fewer
-        squares summed), or itself for a record that short; a note says so."""
+        squares summed), or itself for a record that short; the note says so (``note``:
+        its text from the samples kept and the samples there were, default: fitted on
+        those, errors on all)."""
         rec = self.rec.subsampled(max_samples)
         if rec is self.rec:
             return self
         out = copy.copy(self)
         out.rec, out._predictions = rec, []
-        self.notes.append(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly "
-                          f"spaced, and every input extremum); errors on all")
+        if note is None:
+            self.note(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly spaced, "
+                      f"and every input extremum); errors on all")
+        else:
+            self.note(note(rec.u.size, self.rec.u.size))
         return out
+
+    def note(self, text):
+        """Adds ``text`` to the notes of the family being fitted (once)."""
+        if text not in self.notes:
+            self.notes.append(text)
 
     def fit(self, family, rival_rms=None):
         """``family`` fitted to the record (notes collected afresh); ``rival_rms``, the
@@ -354,7 +364,7 @@ class FamilyFitter:
             cand = np.delete(cand, const)
             template = fam.template(cand, rec.S)
             state0, parts, rows = self.grams(fam, template)
-            self.notes.append(f"candidate thresholds {_fmt_list(dropped)} dropped: the input "
+            self.note(f"candidate thresholds {_fmt_list(dropped)} dropped: the input "
                               f"never moves their operators")
         names = [f"r={r:g}" for r in cand] + [f"input segment {j}" for j in range(fam.n_fixed)]
         prob = self.problem(fam, parts, rows, len(cand), names)
@@ -446,7 +456,7 @@ class FamilyFitter:
             pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
             template = fam.template(pairs, rec.S)
             state0, parts, rows = on.grams(fam, template)
-            self.notes.append(f"{const.size} kernel{'s' if const.size > 1 else ''} dropped: "
+            self.note(f"{const.size} kernel{'s' if const.size > 1 else ''} dropped: "
                               f"the input never moves {'them' if const.size > 1 else 'it'}")
         names = [f"kernel {p}" for p in pairs]
         prob = on.problem(fam, parts, rows, len(pairs), names)
@@ -492,7 +502,7 @@ class FamilyFitter:
         else:
             lam = KP_DEFAULT_LAMBDA
             rule = "default (nothing held back to choose it on)"
-            self.notes.append("nothing held back: regularization strength not chosen from data")
+            self.note("nothing held back: regularization strength not chosen from data")
         x = solve(shape, lam, prob.fit, product, warn=True)
         reg = {"lambda": lam, "scale": scales[shape], "rule": rule, "tried": tried,
                "kernels": len(pairs),
