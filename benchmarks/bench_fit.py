@@ -10,6 +10,9 @@
    `np.loadtxt` of the same file (target <= 20x, peak memory <= 1 GB).
 4. `pihyst.fit(u, y)` on 10^6 samples without times (random level ramps) against one
    `scipy.optimize.nnls` of a 10^6 x 16 matrix (target <= 3x).
+5. `pihyst fit-many` on a folder of three copies of the P-885 file, per record, against
+   `pihyst fit` of it (part 1), and the model files compared with it (target: identical,
+   <= 1.5x per record).
 
 Times are CPU seconds of the process (user + system; wall beside them): on a shared
 machine the wall time also counts other jobs' share of the cores.
@@ -82,6 +85,27 @@ def measured(tmp):
     print(f"  --max-operators 8 --max-latency 5e-7 twice: {answers[0]}, {answers[1]} "
           f"({'the same' if answers[0] == answers[1] else 'DIFFERENT'}; files "
           f"{'identical' if filecmp.cmp(tmp / 'l1.json', tmp / 'l2.json', False) else 'differ'})")
+
+    print("5. pihyst fit-many, per record")
+    folder = tmp / "fleet"
+    folder.mkdir()
+    for k in range(3):
+        (folder / f"p885-{k}.dat").write_bytes((p885 / "Model_Vi_Do.dat").read_bytes())
+    cpu_m, wall_m, _, _ = run_cli(["fit-many", str(folder), "-o", str(tmp / "models"),
+                                   *p885_args[1:]])
+    same = all(_fitted(tmp / "a.json") == _fitted(path)
+               for path in sorted((tmp / "models").glob("p885-*.json")))
+    print(f"  fit-many, 3 records : {cpu_m:6.2f} / {wall_m:6.2f}   {cpu_m / 3:.2f} CPU s per "
+          f"record, {cpu_m / 3 / cpu_d:.2f}x pihyst fit (target <= 1.5x); model files "
+          f"{'identical to' if same else 'DIFFERENT from'} pihyst fit's (but for the "
+          f"command and record they name)")
+
+
+def _fitted(path):
+    """A model file's model and fit, without its provenance (command, file read)."""
+    data = pihyst.load_model(path).to_dict()
+    data.get("metadata", {}).pop("source", None)
+    return data
 
 
 def level_ramps(n, seed=0, per_level=200):

@@ -74,7 +74,7 @@ def test_bad_options_and_validation_files(tmp_path, data, capsys):
     # --max-latency in seconds, as pihyst.fit's max_latency (the report shows us)
     err = _fails(capsys, ["fit", str(data), "--model", "classical", "--max-latency",
                           "1e-12", "-o", str(out)], out)
-    assert "more than max_latency = 1e-06 us" in err
+    assert "more than max_latency = 1e-06 µs" in err
     err = _fails(capsys, ["fit", str(data), "--model", "kp", "--max-operators", "3", "-o",
                           str(out)], out)
     assert "no fitted family meets the bounds" in err

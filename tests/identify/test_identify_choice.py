@@ -51,6 +51,12 @@ def _cand(name, n_ops, rms, worst=1e-7, fixed=True, piecewise=True):
 
 
 def _choose(cands, known=True, **bounds):
+    """(chosen, criterion) and the candidates as judged (each with why it was excluded)."""
+    choice = _decide(cands, known, **bounds)
+    return choice.chosen, choice.criterion
+
+
+def _decide(cands, known=True, **bounds):
     return choose(cands, minor_loops_known=known, unknown_reason="only major loops",
                   judged_on_held_back=True, n_fitted=1000, **bounds)
 
@@ -82,20 +88,20 @@ def test_an_iterative_compensator_only_when_clearly_more_accurate():
 
 def test_bounds_exclude_and_say_why():
     cands = [_cand("big", 130, 0.15, worst=2e-5), _cand("small", 5, 0.30, worst=2e-7)]
-    chosen, criterion = _choose(cands, max_operators=10)
-    assert chosen.name == "small" and "max_operators = 10" in criterion
-    assert "130 operators" in cands[0].excluded
-    cands = [_cand("big", 130, 0.15, worst=2e-5), _cand("small", 5, 0.30, worst=2e-7)]
-    chosen, _ = _choose(cands, max_latency=1e-6)
-    assert chosen.name == "small" and "latency" in cands[0].excluded
+    choice = _decide(cands, max_operators=10)
+    assert choice.chosen.name == "small" and "max_operators = 10" in choice.criterion
+    assert "130 operators" in choice.excluded["big"] and "small" not in choice.excluded
+    choice = _decide(cands, max_latency=1e-6)
+    assert choice.chosen.name == "small" and "latency" in choice.candidates[0].excluded
+    assert cands[0].excluded is None      # the candidates given are values, not changed
     with pytest.raises(FitError, match="no fitted family meets the bounds"):
         _choose([_cand("big", 130, 0.15)], max_operators=3)
 
 
 def test_unknown_minor_loops_prefer_structures_that_fix_them():
     cands = [_cand("kp", 130, 0.10, fixed=False), _cand("classical", 5, 0.30)]
-    chosen, _ = _choose(cands, known=False)
-    assert chosen.name == "classical" and "only major loops" in cands[0].excluded
+    choice = _decide(cands, known=False)
+    assert choice.chosen.name == "classical" and "only major loops" in choice.excluded["kp"]
     chosen, _ = _choose([_cand("kp", 130, 0.10, fixed=False)], known=False)
     assert chosen.name == "kp"           # nothing else was fitted
     chosen, _ = _choose([_cand("kp", 130, 0.10, fixed=False), _cand("c", 5, 0.30)])
@@ -110,11 +116,12 @@ def test_choice_property(specs, known, max_ops):
     cands = [_cand(f"f{i}", n, r, w, fixed, piecewise)
              for i, (n, r, w, fixed, piecewise) in enumerate(specs)]
     try:
-        chosen, _ = _choose(cands, known=known, max_operators=max_ops)
-    except FitError:
-        assert all(c.excluded for c in cands)
+        choice = _decide(cands, known=known, max_operators=max_ops)
+    except FitError as err:
+        assert all(f"{c.name}: " in str(err) for c in cands)   # every one excluded, why
         return
-    eligible = [c for c in cands if c.excluded is None]
+    chosen = choice.chosen
+    eligible = [c for c in choice.candidates if c.excluded is None]
     assert chosen in eligible
     best = min(c.judged_rms for c in eligible)
     assert chosen.judged_rms <= best * (1 + TOLERANCE)
@@ -163,7 +170,7 @@ def test_report_gives_errors_per_kind_latency_and_what_is_undetermined():
         assert "held-back major cycles" in f["held_back_by_kind"]
         assert f["judged_rms"] == f["errors"]["held_back"]["rms"]
     text = str(res.report)
-    assert "latency us" in text and "what the data could not determine" in text
+    assert "latency µs" in text and "what the data could not determine" in text
     assert "  multislope" in text and "skipped: its minor loops" in text
     meta = res.model.metadata["fit"]
     assert meta["latency"]["worst_us"] > 0 and meta["undetermined"] == rep["undetermined"]

@@ -17,8 +17,11 @@ records the fitting family.
 Behind it, one private module per step (the order of docs/theory/identification.md's
 table of decisions):
 
-- ``_fit``: :func:`fit`, the steps in order; ``_progress``: each step's end, for the
-  command line;
+- ``_fit``: :func:`fit`: the options, the record's fit, creep; ``_options``: the options
+  (``FitOptions``), checked once; ``_record_fit``: the steps in order for one record
+  (``fit_record``); ``_decisions``: what each step decided, as frozen values;
+  ``_constants``: every number that decides something, with the evidence for it;
+  ``_progress``: each step's end, for the command line;
 - ``_sufficiency``: whether the record can be fitted at all, and whether the fit explains it;
 - ``_family_fit``: the record in the fitting frame (``FramedRecord``) and one family's fit
   (``FamilyFitter``); ``_family_result``: its :class:`FamilyFit`;

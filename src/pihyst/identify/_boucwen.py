@@ -28,7 +28,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pihyst.exceptions import FitError
+from pihyst.identify._constants import REFINE_REACH
 from pihyst.identify._cycles import checked_signals, layout, starts_at_rest
+from pihyst.identify._responses import Responses, digest
 from pihyst.model._boucwen import (
     MAX_EXPONENT,
     MAX_SHAPE,
@@ -49,7 +51,7 @@ SEARCH_SAMPLES = 600    # the shape search runs on about this many samples (+ re
 # first ones show (the P-885 identification record: 40 cycles, 80 ranges; the shape
 # found on its first 6 holds back 0.212 um on all 20 held-back cycles, the search on
 # all 40 0.210 um, in a third of the time). The linear parameters are fitted on the
-# whole record; fewer than MIN_SEARCH_FITTED fitted samples there: the search uses all.
+# whole record; fewer than MIN_SEARCH_FITTED fitted samples there: twice the path.
 SEARCH_PATH = 6.0
 # Nelder-Mead's stop: (log beta, atanh(gamma/beta), n) within SEARCH_XATOL, the fitted
 # RMS within SEARCH_FATOL of the output's span, or SEARCH_EVALUATIONS evaluations. On
@@ -59,11 +61,6 @@ SEARCH_XATOL = 1e-3
 SEARCH_FATOL = 1e-6
 SEARCH_EVALUATIONS = 100
 MIN_SEARCH_FITTED = 100
-# In the comparison of families, the grid's best shape is refined only where its fitted
-# RMS is within this factor of the best PI family's judged RMS: on the 7 records above,
-# refinement lowered the held-back RMS by at most 3.5 times (a Bouc-Wen actuator), and
-# it cannot bring a shape further off within the choice's 2 %
-REFINE_REACH = 5.0
 # How sharp a shape the search may try: the model integrates z in substeps of
 # 1/(32 (beta + |gamma|)) of the range (model._boucwen.substep), so its cost, in the fit
 # and in every compensator step, grows with beta + |gamma|. Beyond 200 (for n = 1: z
@@ -249,7 +246,8 @@ def _keep(u, target, path=None):
 
 
 def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="alternate",
-                refit=True, n=None, shape=None, layout_=None, refine_below=None):
+                refit=True, n=None, shape=None, layout_=None, refine_below=None,
+                responses=None):
     """Fit a :class:`pihyst.model.BoucWenModel` to a record (module notes).
 
     Parameters
@@ -280,13 +278,14 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
         Refine the best shape of the grid by Nelder-Mead only if its fitted RMS is
         below this (the comparison of families: ``REFINE_REACH`` times the best other
         family's judged RMS); else the grid's shape is kept.
+    responses : Responses, optional
+        Where the shape grid's z trajectories, which depend on the input only, are kept
+        for the other fits of the same input (identify/_responses.py).
 
     Returns
     -------
     (BoucWenModel, BoucWenReport)
     """
-    from scipy.optimize import minimize
-
     u, y = checked_signals(u, y)
     lo, hi = (float(u.min()), float(u.max())) if input_range is None else map(float,
                                                                                input_range)
@@ -305,155 +304,30 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     fit_i, held_i = lay.indices("fit"), lay.indices("held_back")
     if fit_i.size < 5:
         raise FitError("too few fitted samples for a Bouc-Wen model (5 parameters)")
-    x = v / span
-
-    rest_z = {}
-
-    def start(beta, gamma, nn):
-        # (x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
-        # settled by the first sweep)
-        if settle:
-            return x[0], 0.0
-        if (beta, gamma, nn) not in rest_z:
-            rest_z[beta, gamma, nn] = cycled_z(beta, gamma, nn)
-        return 0.0, rest_z[beta, gamma, nn]
-
-    free_start = False      # the start of z a free column (see start_sensitivity)
-
-    def with_sensitivity(xs, z, beta, gamma, nn):
-        """(z, its sensitivity to z0 with free_start, else None)."""
-        if not free_start:
-            return z, None
-        return z, start_sensitivity(xs, *start(beta, gamma, nn), z, beta, gamma, nn)
-
-    def z_and_sensitivity(xs, beta, gamma, nn):
-        """z along xs from the start (the model's own arithmetic, in the C core), and
-        (with free_start) its sensitivity to z0."""
-        return with_sensitivity(xs, trajectory(xs, *start(beta, gamma, nn), beta, gamma, nn),
-                                beta, gamma, nn)
-
-    where = np.zeros(x.size, dtype=bool)
-    where[fit_i] = True
-    keep = _keep(x, SEARCH_SAMPLES, SEARCH_PATH)
-    if np.count_nonzero(where[keep]) < MIN_SEARCH_FITTED:
-        keep = _keep(x, SEARCH_SAMPLES)     # the first cycles hold too few fitted samples
-    kfit = np.flatnonzero(where[keep])
-    ns = GRID_N if n is None else (float(n),)
-    xk, yk = x[keep], y[keep]
-    evaluations = 0
-
-    def fitted_rms(beta, gamma, nn, zk, sk):
-        xf, zf, yf = xk[kfit], zk[kfit], yk[kfit]
-        sf = None if sk is None else sk[kfit]
-        (off, c1, c2, a), b = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma), sf)
-        r = yf - (off + c1 * xf + c2 * xf * xf + a * zf + (0 if sf is None else b * sf))
-        return float(np.sqrt(np.mean(r * r)))
-
-    def objective(p):
-        # fitted RMS on the decimated record (reversals kept: z is that of the full one)
-        nonlocal evaluations
-        evaluations += 1
-        shape_ = searched_shape(p, n)
-        if shape_ is None:
-            return math.inf
-        return fitted_rms(*shape_, *z_and_sensitivity(xk, *shape_))
-
-    grid = [(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in ns]
-    grid_z = []
-    skipped_refinement = []     # the grid's best fitted RMS, where it was not refined
-
-    def search():
-        """(beta, gamma, n): 1. a grid of shapes on the decimated record, 2. Nelder-Mead
-        from the best of them on the fitted samples."""
-        if shape is None:
-            if not grid_z:      # each shape's z, shared by the searches with a free start
-                grid_z.extend(trajectory(xk, *start(*g), *g) for g in grid)
-            rms = [fitted_rms(*g, *with_sensitivity(xk, zk, *g)) for g, zk in zip(grid, grid_z)]
-            b0, g0, n0 = grid[int(np.argmin(rms))]
-        else:
-            b0, g0, n0 = (float(shape["beta"]), float(shape["gamma"]),
-                          float(shape.get("n", 1)))
-        p0 = np.array([math.log(b0), math.atanh(np.clip(g0 / b0, -0.95, 0.95)), n0])
-        p_best = p0
-        if shape is None and refine_below is not None and min(rms) > refine_below:
-            skipped_refinement.append(min(rms))
-        elif shape is None:
-            res = minimize(objective, p0, method="Nelder-Mead",
-                           options={"xatol": SEARCH_XATOL, "fatol": SEARCH_FATOL * np.ptp(y),
-                                    "maxfev": SEARCH_EVALUATIONS,
-                                    "initial_simplex": p0 + np.vstack(
-                                        [np.zeros(3), np.diag([0.3, 0.3, 0.25])])})
-            p_best = res.x if res.fun <= objective(p0) else p0
-        return searched_shape(p_best, n) or searched_shape(p0, n)
-
-    def linear_fit(beta, gamma, nn, rows):
-        z, sens = z_and_sensitivity(x, beta, gamma, nn)
-        d = 2 * beta / (beta + gamma)
-        return z, sens, _solve_linear(x[rows], z[rows], y[rows], d,
-                                      None if sens is None else sens[rows])
-
-    def rms_from_rest(z, coef, rows):
-        off, c1, c2, a = coef
-        r = y[rows] - (off + c1 * x[rows] + c2 * x[rows] ** 2 + a * z[rows])
-        return float(np.sqrt(np.mean(r * r))) if rows.size else math.inf
-
-    start_free = bool(shape is not None and shape.get("start_of_z_fitted")) and not settle
-    free_start = start_free
-    beta, gamma, nn = search()
-    z, sens, (coef, b) = linear_fit(beta, gamma, nn, fit_i)
-    later = fit_i[fit_i >= first_reversal(v)]
-    if not settle and shape is None and (held_i.size or later.size):
-        # a record taken to start at rest may not (a partial cycle before it): the search
-        # again with the start of z free, kept if the actuator, predicted from rest, then
-        # holds back better (after its first sweep, without held-back cycles)
-        judge = held_i if held_i.size else later
-        free_start = True
-        shape2 = search()
-        z2, sens2, (coef2, b2) = linear_fit(*shape2, fit_i)
-        if rms_from_rest(z2, coef2, judge) < rms_from_rest(z, coef, judge):
-            (beta, gamma, nn), z, sens, coef, b = shape2, z2, sens2, coef2, b2
-            start_free = True
-        free_start = False
-
-    def model_of(coef):
-        off, c1, c2, a = coef
-        return BoucWenModel(beta=beta, gamma=gamma, n=nn, hysteretic=a, linear=c1,
-                            quadratic=c2, offset=off, input_range=(lo, hi))
-
-    def residual(coef, b, rows):
-        # the record's own start (b s: z0 other than at rest); the model starts at rest
-        off, c1, c2, a = coef
-        xr = x[rows]
-        start_term = 0.0 if sens is None else b * sens[rows]
-        return y[rows] - (off + c1 * xr + c2 * xr * xr + a * z[rows] + start_term)
-
-    errors = {"fit": _errors(residual(coef, b, fit_i)),
-              "held_back": _errors(residual(coef, b, held_i))}
+    search = _ShapeSearch(v / span, y, fit_i, settle, n, shape, refine_below,
+                          Responses() if responses is None else responses)
+    shape_found, lin = search.shape_and_start(held_i, first_reversal(v))
+    beta, gamma, nn = shape_found
+    z, sens, (coef, b) = lin
+    errors = {"fit": _errors(search.residual(z, sens, coef, b, fit_i)),
+              "held_back": _errors(search.residual(z, sens, coef, b, held_i))}
     final = errors
     if refit and held_i.size:
         both = np.sort(np.r_[fit_i, held_i])
-        coef, b = _solve_linear(x[both], z[both], y[both], 2 * beta / (beta + gamma),
+        coef, b = _solve_linear(search.x[both], z[both], y[both], 2 * beta / (beta + gamma),
                                 None if sens is None else sens[both])
-        final = {"all": _errors(residual(coef, b, both))}
-    model = model_of(coef)
-    how = (f"grid of {len(GRID_BETA) * len(GRID_RATIO) * len(ns)} shapes + {evaluations} "
-           f"Nelder-Mead evaluations" if shape is None else "shape given")
-    if skipped_refinement:
-        how = (f"grid of {len(grid)} shapes, not refined: its best fitted RMS, "
-               f"{skipped_refinement[0]:.4g}, is more than {REFINE_REACH:g} times the best "
-               f"other family's judged RMS")
-    summary = f"beta {beta:.4g}, gamma {gamma:.4g}, n {nn:.3g} on the normalized input ({how})"
-    if start_free:
-        summary += ("; shape found with the start of z unknown (the record does not start "
-                    "at rest: predicted from rest, it holds back better)")
-    data = {"samples": int(x.size), "fit_samples": int(fit_i.size),
+        final = {"all": _errors(search.residual(z, sens, coef, b, both))}
+    off, c1, c2, a = coef
+    model = BoucWenModel(beta=beta, gamma=gamma, n=nn, hysteretic=a, linear=c1,
+                         quadratic=c2, offset=off, input_range=(lo, hi))
+    data = {"samples": int(v.size), "fit_samples": int(fit_i.size),
             "held_back_samples": int(held_i.size), "settle_samples": int(lay.settle_end),
             "holdout": lay.holdout, "initial_state": initial_state,
-            "start_of_z_fitted": start_free}
+            "start_of_z_fitted": search.start_free}
     report = BoucWenReport(
         chosen="bouc-wen", errors=errors, final_errors=final,
-        search={"summary": summary, "beta": beta, "gamma": gamma, "n": nn,
-                "evaluations": evaluations},
+        search={"summary": search.summary(shape_found), "beta": beta, "gamma": gamma,
+                "n": nn, "evaluations": search.evaluations},
         data=data,
         families=[{"family": "bouc-wen", "chosen": True, "n_params": 7, "errors": errors}])
     fit_meta = {"family": "bouc-wen", "errors": errors, "search": report.search,
@@ -462,8 +336,8 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
     # (z0 + b / a: the start column b s is the first-order change of z0), or z = 0 at
     # the first sample when the first sweep settles it; what the model predicts the
     # record from (the check of the record's creep start, identify/_creep.py)
-    x0, z0 = start(beta, gamma, nn)
-    if start_free and coef[3] != 0.0:
+    x0, z0 = search.start(beta, gamma, nn)
+    if search.start_free and coef[3] != 0.0:
         fit_meta["record_start"] = [float(lo + x0 * span), float(z0 + b / coef[3])]
     elif settle:
         fit_meta["record_start"] = [float(lo + x0 * span), float(z0)]
@@ -472,6 +346,172 @@ def fit_boucwen(u, y, *, input_range=None, initial_state="auto", holdout="altern
                                "state": [float(u[lay.settle_end - 1]),
                                          float(z[lay.settle_end - 1])]}
     return model.replace(metadata={"fit": fit_meta}), report
+
+
+class _ShapeSearch:
+    """The search for a Bouc-Wen shape (beta, gamma, n) on the normalized input ``x``:
+    a grid of shapes on a decimated record, then Nelder-Mead from the best of them
+    (module notes), with the linear part fitted by :func:`_solve_linear` for each."""
+
+    def __init__(self, x, y, fit_i, settle, n, shape, refine_below, responses):
+        self.x, self.y, self.fit_i, self.settle = x, y, fit_i, settle
+        self.responses = responses
+        self.n, self.shape, self.refine_below = n, shape, refine_below
+        self.rest_z = {}
+        self.free_start = False      # the start of z a free column (start_sensitivity)
+        self.start_free = False      # the shape kept was found with it
+        self.evaluations = 0
+        where = np.zeros(x.size, dtype=bool)
+        where[fit_i] = True
+        # the first cycles hold too few fitted samples: twice the path, until they do
+        # (the whole record at once took 100 s on 10^6 samples of level ramps, every one
+        # of its 5,000 reversals kept)
+        path = SEARCH_PATH
+        keep = _keep(x, SEARCH_SAMPLES, path)
+        while np.count_nonzero(where[keep]) < MIN_SEARCH_FITTED and keep[-1] < x.size - 1:
+            path *= 2
+            keep = _keep(x, SEARCH_SAMPLES, path)
+        self.kfit = np.flatnonzero(where[keep])
+        self.ns = GRID_N if n is None else (float(n),)
+        self.xk, self.yk = x[keep], y[keep]
+        self.grid = [(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in self.ns]
+        self.skipped_refinement = []     # the grid's best fitted RMS, where not refined
+
+    def start(self, beta, gamma, nn):
+        """(x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
+        settled by the first sweep)."""
+        if self.settle:
+            return self.x[0], 0.0
+        if (beta, gamma, nn) not in self.rest_z:
+            self.rest_z[beta, gamma, nn] = cycled_z(beta, gamma, nn)
+        return 0.0, self.rest_z[beta, gamma, nn]
+
+    def grid_z(self):
+        """Each grid shape's z along the decimated input: it depends on the input only,
+        so it is computed once per input (the searches with a free start, and the fits
+        of the same input with creep removed, share it)."""
+        key = ("bouc-wen grid z", digest(self.xk), self.settle,
+               float(self.x[0]) if self.settle else None, self.ns)
+        return self.responses.get(key, lambda: [trajectory(self.xk, *self.start(*g), *g)
+                                                for g in self.grid])
+
+    def with_sensitivity(self, xs, z, beta, gamma, nn):
+        """(z, its sensitivity to z0 with free_start, else None)."""
+        if not self.free_start:
+            return z, None
+        return z, start_sensitivity(xs, *self.start(beta, gamma, nn), z, beta, gamma, nn)
+
+    def z_and_sensitivity(self, xs, beta, gamma, nn):
+        """z along xs from the start (the model's own arithmetic, in the C core), and
+        (with free_start) its sensitivity to z0."""
+        return self.with_sensitivity(
+            xs, trajectory(xs, *self.start(beta, gamma, nn), beta, gamma, nn),
+            beta, gamma, nn)
+
+    def fitted_rms(self, beta, gamma, nn, zk, sk):
+        kfit = self.kfit
+        xf, zf, yf = self.xk[kfit], zk[kfit], self.yk[kfit]
+        sf = None if sk is None else sk[kfit]
+        (off, c1, c2, a), b = _solve_linear(xf, zf, yf, 2 * beta / (beta + gamma), sf)
+        r = yf - (off + c1 * xf + c2 * xf * xf + a * zf + (0 if sf is None else b * sf))
+        return float(np.sqrt(np.mean(r * r)))
+
+    def objective(self, p):
+        """The fitted RMS on the decimated record (reversals kept: z is that of the
+        full one)."""
+        self.evaluations += 1
+        shape_ = searched_shape(p, self.n)
+        if shape_ is None:
+            return math.inf
+        return self.fitted_rms(*shape_, *self.z_and_sensitivity(self.xk, *shape_))
+
+    def search(self):
+        """(beta, gamma, n): 1. a grid of shapes on the decimated record, 2. Nelder-Mead
+        from the best of them on the fitted samples."""
+        from scipy.optimize import minimize
+
+        shape, n = self.shape, self.n
+        if shape is None:
+            rms = [self.fitted_rms(*g, *self.with_sensitivity(self.xk, zk, *g))
+                   for g, zk in zip(self.grid, self.grid_z())]
+            b0, g0, n0 = self.grid[int(np.argmin(rms))]
+        else:
+            b0, g0, n0 = (float(shape["beta"]), float(shape["gamma"]),
+                          float(shape.get("n", 1)))
+        p0 = np.array([math.log(b0), math.atanh(np.clip(g0 / b0, -0.95, 0.95)), n0])
+        p_best = p0
+        if shape is None and self.refine_below is not None and min(rms) > self.refine_below:
+            self.skipped_refinement.append(min(rms))
+        elif shape is None:
+            res = minimize(self.objective, p0, method="Nelder-Mead",
+                           options={"xatol": SEARCH_XATOL,
+                                    "fatol": SEARCH_FATOL * np.ptp(self.y),
+                                    "maxfev": SEARCH_EVALUATIONS,
+                                    "initial_simplex": p0 + np.vstack(
+                                        [np.zeros(3), np.diag([0.3, 0.3, 0.25])])})
+            p_best = res.x if res.fun <= self.objective(p0) else p0
+        return searched_shape(p_best, n) or searched_shape(p0, n)
+
+    def linear_fit(self, beta, gamma, nn, rows):
+        """(z, its sensitivity or None, ((offset, c_1, c_2, a), b)) on ``rows``."""
+        x, y = self.x, self.y
+        z, sens = self.z_and_sensitivity(x, beta, gamma, nn)
+        d = 2 * beta / (beta + gamma)
+        return z, sens, _solve_linear(x[rows], z[rows], y[rows], d,
+                                      None if sens is None else sens[rows])
+
+    def rms_from_rest(self, z, coef, rows):
+        off, c1, c2, a = coef
+        x, y = self.x, self.y
+        r = y[rows] - (off + c1 * x[rows] + c2 * x[rows] ** 2 + a * z[rows])
+        return float(np.sqrt(np.mean(r * r))) if rows.size else math.inf
+
+    def shape_and_start(self, held_i, first_turn):
+        """(shape, linear fit) searched from rest (or settled) and, for a record taken
+        to start at rest that may not (a partial cycle before it), searched again with
+        the start of z free, kept if the actuator, predicted from rest, then holds back
+        better (after its first sweep, without held-back cycles)."""
+        fit_i = self.fit_i
+        self.start_free = self.free_start = bool(
+            self.shape is not None and self.shape.get("start_of_z_fitted")) and not self.settle
+        shape = self.search()
+        lin = self.linear_fit(*shape, fit_i)
+        later = fit_i[fit_i >= first_turn]
+        if not self.settle and self.shape is None and (held_i.size or later.size):
+            judge = held_i if held_i.size else later
+            self.free_start = True
+            shape2 = self.search()
+            lin2 = self.linear_fit(*shape2, fit_i)
+            if self.rms_from_rest(lin2[0], lin2[2][0], judge) < \
+                    self.rms_from_rest(lin[0], lin[2][0], judge):
+                shape, lin = shape2, lin2
+                self.start_free = True
+            self.free_start = False
+        return shape, lin
+
+    def residual(self, z, sens, coef, b, rows):
+        """The record's residual on ``rows``, with its own start (b s: z0 other than at
+        rest); the model starts at rest."""
+        off, c1, c2, a = coef
+        xr = self.x[rows]
+        start_term = 0.0 if sens is None else b * sens[rows]
+        return self.y[rows] - (off + c1 * xr + c2 * xr * xr + a * z[rows] + start_term)
+
+    def summary(self, shape):
+        """The report's sentence on the shape and how it was found."""
+        beta, gamma, nn = shape
+        how = (f"grid of {len(GRID_BETA) * len(GRID_RATIO) * len(self.ns)} shapes + "
+               f"{self.evaluations} Nelder-Mead evaluations" if self.shape is None
+               else "shape given")
+        if self.skipped_refinement:
+            how = (f"grid of {len(self.grid)} shapes, not refined: its best fitted RMS, "
+                   f"{self.skipped_refinement[0]:.4g}, is more than {REFINE_REACH:g} times "
+                   f"the best other family's judged RMS")
+        out = f"beta {beta:.4g}, gamma {gamma:.4g}, n {nn:.3g} on the normalized input ({how})"
+        if self.start_free:
+            out += ("; shape found with the start of z unknown (the record does not start "
+                    "at rest: predicted from rest, it holds back better)")
+        return out
 
 
 def family_fit(family, fitter, rival_rms=None):
@@ -496,17 +536,17 @@ def family_fit(family, fitter, rival_rms=None):
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
                        f"state: drop {', '.join(unsupported)}")
     # a long record: fitted and judged on FAMILY_SAMPLES samples and every input extremum
-    on = fitter.subsampled(FAMILY_SAMPLES)
-    if on is not fitter:        # judged there too (the PI families are judged on all)
-        fitter.notes[-1] = fitter.notes[-1].replace("errors on all", "errors on those "
-                                                    "samples")
+    # judged there too (the PI families are judged on all)
+    on = fitter.subsampled(FAMILY_SAMPLES, note=lambda kept, n: (
+        f"fitted on {kept} of {n} samples (evenly spaced, and every input extremum); "
+        f"errors on those samples"))
     rec = on.rec
     kwargs = dict(input_range=(rec.lo, rec.lo + rec.S),
                   # rise, fall: z rises from rest at the bottom to the first sample,
                   # and its start is then fitted as unknown (fit_boucwen)
                   initial_state=("cycled" if from_data or rec.state_mode in ("rise", "fall")
                                  else rec.state_mode),
-                  n=family.n, layout_=rec.layout)
+                  n=family.n, layout_=rec.layout, responses=fitter.responses)
     model, report = fit_boucwen(rec.u, rec.y, refit=False, refine_below=(
         None if rival_rms is None else REFINE_REACH * rival_rms), **kwargs)
 

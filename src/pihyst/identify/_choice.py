@@ -25,17 +25,14 @@ fitted offset), since a fitted error always favours the larger model.
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from pihyst.exceptions import FitError
-
-# A judged error within 2 % of the best counts as equally good. On the simulated beams
-# (decaying triangles) a 3.6 % better held-back RMS still meant a 35 % better fit of
-# random ramps, so the tolerance is kept small: size and speed break near-ties only.
-TOLERANCE = 0.02
+from pihyst.identify._constants import TOLERANCE
+from pihyst.identify._decisions import Choice
 
 
-@dataclass
+@dataclass(frozen=True)
 class Candidate:
     """A fitted family with what the choice needs."""
 
@@ -57,18 +54,13 @@ class Candidate:
 
 def choose(candidates, *, minor_loops_known, unknown_reason, judged_on_held_back,
            n_fitted, max_operators=None, max_latency=None):
-    """(chosen Candidate, criterion text); marks every excluded candidate's reason."""
-    trusted = [c for c in candidates if c.fitted.family.minor_loops_fixed]
-    for c in candidates:
-        if max_operators is not None and c.fitted.n_operators > max_operators:
-            c.excluded = (f"{c.fitted.n_operators} operators, more than max_operators = "
-                          f"{max_operators}")
-        elif max_latency is not None and c.worst_latency > max_latency:
-            c.excluded = (f"worst-case compensator latency {1e6 * c.worst_latency:.3g} us, "
-                          f"more than max_latency = {1e6 * max_latency:.3g} us")
-        elif not minor_loops_known and not c.fitted.family.minor_loops_fixed and trusted:
-            c.excluded = (f"its minor loops are not fixed by its structure and the data "
-                          f"cannot determine them: {unknown_reason}")
+    """The :class:`~pihyst.identify._decisions.Choice` among ``candidates``: the one
+    chosen, every candidate with why it was excluded (if it was), the criterion."""
+    trusted = any(c.fitted.family.minor_loops_fixed for c in candidates)
+    candidates = tuple(replace(c, excluded=_exclusion(c, trusted, minor_loops_known,
+                                                      unknown_reason, max_operators,
+                                                      max_latency))
+                       for c in candidates)
     eligible = [c for c in candidates if c.excluded is None]
     if not eligible:
         raise FitError("no fitted family meets the bounds: " + "; ".join(
@@ -88,8 +80,21 @@ def choose(candidates, *, minor_loops_known, unknown_reason, judged_on_held_back
                      + c.fitted.n_params * math.log(n_fitted))
         criterion = "lowest BIC on the fitted data (nothing held back)"
     bounds = [f"max_operators = {max_operators}" if max_operators is not None else None,
-              f"max_latency = {1e6 * max_latency:.3g} us" if max_latency is not None else None]
+              f"max_latency = {1e6 * max_latency:.3g} µs" if max_latency is not None else None]
     bounds = [b for b in bounds if b]
     if bounds:
         criterion += f"; within {', '.join(bounds)}"
-    return chosen, criterion
+    return Choice(chosen=chosen, candidates=candidates, criterion=criterion)
+
+
+def _exclusion(c, trusted, minor_loops_known, unknown_reason, max_operators, max_latency):
+    """Why the candidate ``c`` may not be chosen, or None."""
+    if max_operators is not None and c.fitted.n_operators > max_operators:
+        return f"{c.fitted.n_operators} operators, more than max_operators = {max_operators}"
+    if max_latency is not None and c.worst_latency > max_latency:
+        return (f"worst-case compensator latency {1e6 * c.worst_latency:.3g} µs, more than "
+                f"max_latency = {1e6 * max_latency:.3g} µs")
+    if not minor_loops_known and not c.fitted.family.minor_loops_fixed and trusted:
+        return (f"its minor loops are not fixed by its structure and the data cannot "
+                f"determine them: {unknown_reason}")
+    return None

@@ -30,30 +30,24 @@ joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_cre
 
 import functools
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
-from pihyst.identify._choice import TOLERANCE
+from pihyst.identify._constants import CREEP_REACH, TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
-from pihyst.identify._family_fit import FramedRecord
-from pihyst.identify._progress import Steps
 from pihyst.identify._qp import solve_qp
+from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
 from pihyst.identify._record_start import record_start_check
+from pihyst.identify._responses import Responses
 from pihyst.model._boucwen import BoucWenModel
 from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 
 __all__ = ["fit_with_creep"]
 
 CHUNK = 1 << 15
-# Creep estimated with the other kind of model (Bouc-Wen against PI operators) is tried
-# only where it could win: that kind's held-back RMS without creep at most CREEP_REACH
-# times what the chosen family reaches with creep. Creep lowered a family's held-back RMS
-# by up to 10x on the population (benchmarks/bench_population.py: Bouc-Wen actuators
-# 4.9-10.3x, Preisach 2.6-9.1x with their own kind); twice that for margin. The other
-# kind costs a second creep fit (a Bouc-Wen one doubles the fit time).
-CREEP_REACH = 20.0
 MAX_PASSES = 6
 
 
@@ -108,11 +102,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
     ``free_weights=False`` (a regularized kernel basis): the weights keep their shape,
     w = q w_0 with one scale q >= 0, so the joint QP cannot undo the regularization.
     """
-    fitted = np.zeros(u.size, dtype=bool)
-    if rows is None:
-        fitted[start:] = True
-    else:
-        fitted[rows] = True
+    fitted = _fitted_rows(u.size, start, rows)
     hyst = model.replace(creep=None)
     h = hyst.predict(u)
     basis = np.eye(model.n_operators) if free_weights else model.weights[:, None].copy()
@@ -134,16 +124,8 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
         passes += 1
         psi = _lag_deficits(hyst, h, dt, tau, hyst.initial_state)
         gram, rhs = np.zeros((cols, cols)), np.zeros(cols)
-        state = hyst.initial_state
-        for a in range(0, u.size, CHUNK):
-            b = min(a + CHUNK, u.size)
-            phi = hyst.operators(u[a:b], initial_state=state)
-            state = phi[-1]
-            phi = phi @ basis
-            sel = fitted[a:b]
-            if not sel.any():
-                continue
-            x = np.hstack([phi[sel], np.ones((int(sel.sum()), int(fit_offset))),
+        for phi, sel, a, b in _operator_rows(hyst, u, fitted, basis, free_weights):
+            x = np.hstack([phi, np.ones((int(sel.sum()), int(fit_offset))),
                            -psi[a:b][sel] @ tie])
             d = y[a:b][sel] - (fixed_offset or 0.0)
             gram += x.T @ x
@@ -171,15 +153,53 @@ def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, r
     if offset is not True:
         raise FitError("bouc-wen fits its own offset: a fixed offset is not available "
                        "with creep")
-    fitted = np.zeros(u.size, dtype=bool)
-    if rows is None:
-        fitted[start:] = True
-    else:
-        fitted[rows] = True
+    fitted = _fitted_rows(u.size, start, rows)
     tie = log_t_basis(tau.size, int(np.count_nonzero(tau <= duration)))
     hyst, gains, passes, _ = fit_shape_and_creep(model.replace(creep=None), u, y, dt, tau,
                                                  tie, fitted, fixed_n=fixed_n)
     return hyst, gains, passes
+
+
+def _operator_rows(hyst, u, fitted, basis, free_weights):
+    """(operator outputs times ``basis`` at the fitted rows of a block, its mask, start,
+    stop) for each block of the record: in chunks of every sample, or for a record
+    longer than ``FIT_SAMPLES`` (whose fitted rows are thinned) in one block, the
+    operators run on the fitted rows and every input extremum only (their outputs
+    there are exactly the whole record's: identify/_record_fit.py)."""
+    if u.size > FIT_SAMPLES:
+        rows = np.flatnonzero(fitted)
+        dv = np.diff(u)
+        turns = np.flatnonzero(dv[1:] * dv[:-1] <= 0) + 1
+        keep = np.unique(np.r_[0, rows, turns, u.size - 1])
+        phi = hyst.operators(u[keep], initial_state=hyst.initial_state)[np.isin(keep, rows)]
+        yield (phi if free_weights else phi @ basis), fitted, 0, u.size
+        return
+    state = hyst.initial_state
+    for a in range(0, u.size, CHUNK):
+        b = min(a + CHUNK, u.size)
+        phi = hyst.operators(u[a:b], initial_state=state)
+        state = phi[-1]
+        sel = fitted[a:b]
+        if sel.any():
+            yield (phi[sel] if free_weights else (phi @ basis)[sel]), sel, a, b
+
+
+def _fitted_rows(n, start, rows):
+    """The mask of the samples a joint QP sums over: ``rows`` (default every sample from
+    ``start``), every k-th of them when they are more than ``FIT_SAMPLES`` (the lags
+    still run over every sample; only fewer squares are summed, as the structure of a
+    long record is fitted on a subsample, identify/_record_fit.py)."""
+    fitted = np.zeros(n, dtype=bool)
+    if rows is None:
+        fitted[start:] = True
+    else:
+        fitted[rows] = True
+    count = int(np.count_nonzero(fitted))
+    if count > FIT_SAMPLES:
+        idx = np.flatnonzero(fitted)
+        fitted[:] = False
+        fitted[idx[::int(np.ceil(count / FIT_SAMPLES))]] = True
+    return fitted
 
 
 def _joint_qp_of(model, fixed_n=None):
@@ -197,216 +217,268 @@ def _fixed_exponent(family):
                  if getattr(f, "name", None) == BoucWenModel.family), None)
 
 
-def _free(model):
-    """Whether the joint QP may move every weight: not for the regularized kernel basis
-    (family kp), whose weights it would overfit without the regularization."""
-    return model.metadata.get("fit", {}).get("family") != "kp"
-
-
 def _rms(model, u, y, t, start):
     y_hat = model.predict(u) if t is None else model.predict(u, t=t)
     return float(np.sqrt(np.mean((y_hat[start:] - y[start:]) ** 2)))
 
 
-def fit_with_creep(fit, u, y, t, *, time_constants=None, decide=False, **kwargs):
-    """``fit(u, y, **kwargs)`` with creep: the structure from the ordinary fit of the
-    record with its creep removed, then weights and creep gains in one QP (module notes).
+@dataclass(frozen=True)
+class CreepStart:
+    """A model to estimate creep with: the model, its fitting family's name and the end
+    of the settling sweep of the record it was fitted on."""
 
-    ``decide`` (``creep="auto"``): creep is kept only if it lowers the held-back RMS of
-    the fit by more than the choice's tolerance (:func:`_judge`); otherwise the ordinary
-    fit is returned, with the comparison in its report and metadata.
+    model: object
+    family: str
+    settled_sample: int
 
-    ``fit`` is :func:`pihyst.fit` (passed in: this module sits beside it).
-    """
+    @property
+    def free_weights(self):
+        """Whether the joint QP may move every weight: not for the regularized kernel
+        basis (family kp), whose weights it would overfit without the regularization."""
+        return self.family != "kp"
+
+
+@dataclass(frozen=True)
+class _Aligned:
+    """The record with its output ``d`` samples later (u[k] -> y[k + d]), its sample
+    intervals and times at the output, the creep time constants and the QP options."""
+
+    u: np.ndarray
+    y: np.ndarray
+    dt: np.ndarray
+    t: np.ndarray
+    tau: np.ndarray
+    qp: dict
+    fixed_n: object
+
+
+def fit_with_creep(u, y, t, options, steps):
+    """The fit with creep (``options.creep`` "auto" or "always"): the structure from the
+    ordinary fit of the record with its creep removed, then weights and creep gains in
+    one QP (module notes). "auto": creep is kept only if it lowers the held-back RMS of
+    the fit by more than the choice's tolerance (:func:`_judge`); otherwise the
+    ordinary fit is returned, with the comparison in its report and metadata."""
     u = np.asarray(u, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
-    # the ordinary fits see the sample times too (a fitted delay's sample period)
-    fit = functools.partial(fit, t=t, creep=False)
-    if kwargs.get("through") is not None:
+    decide = options.creep == "auto"
+    plain = options.but(creep="off")
+    responses = Responses()          # the same input is fitted up to three times
+    if options.through is not None:
         if decide:
-            return _without_creep(fit(u, y, **kwargs), {
+            return _without_creep(fit_record(u, y, plain, steps, t=t).result, {
                 "kept": False, "reason": "through= (equality constraints) is not available "
                                          "with creep"})
         raise FitError("through= (equality constraints) is not available with creep=True")
-    step = Steps(kwargs.get("progress"))
-    first = fit(u, y, **kwargs)         # the record's own errors (too short, ...) first
-    step.done(f"fit without creep: {first.report.chosen}")
+    first = fit_record(u, y, plain, steps, t=t, responses=responses)  # its errors first
+    steps.done(f"fit without creep: {first.result.report.chosen}")
     dt_fixed, dt, duration = _times(t, u.size)
-    tau = (default_time_constants(dt_fixed, duration) if time_constants is None
-           else np.sort(np.asarray(time_constants, dtype=np.float64)))
-    if tau.size == 0 or not np.all(np.isfinite(tau)) or np.any(tau <= 0):
-        raise FitError("creep time constants must be finite and > 0 s")
-    offset = kwargs.get("offset", True)
-    nonnegative = kwargs.get("nonnegative", True)
+    tau = (default_time_constants(dt_fixed, duration) if options.time_constants is None
+           else np.asarray(options.time_constants, dtype=np.float64))
     t = np.asarray(t, dtype=np.float64)
-    # the delay the first fit chose (or was given) holds for the second; the creep QPs
-    # run on the aligned record u[k] -> y[k + d], its lags at the output's times
-    d = first.model.delay
-    kwargs["delay"] = d
-    ua, ya, dta, ta = u[:u.size - d], y[d:], np.r_[dt[0], dt[d + 1:]], t[d:]
-    qp = dict(offset=offset, nonnegative=nonnegative, duration=duration)
-    fixed_n = _fixed_exponent(kwargs.get("family"))
-    start_model = _creep_capable(first, kwargs.get("family") is not None or decide)
-    rows = None
+    d = first.delay.samples
+    rec = _aligned(u, y, dt, t, d, tau, options, duration)
+    start = _creep_capable(first, options.explicit_family or decide)
+    rows = held = None
     if decide:
-        rec = FramedRecord(ua, ya, input_range=kwargs.get("input_range"),
-                           initial_state=kwargs.get("initial_state", "auto"),
-                           holdout=kwargs.get("holdout", "alternate"), offset=offset,
-                           through=None)
-        if not rec.has_held_back:
-            return _without_creep(first, {"kept": False, "reason": "nothing held back to "
-                                          "judge it on (creep=True fits it regardless)"})
-        if start_model is None:
-            return _without_creep(first, {"kept": False, "reason": f"the chosen family, "
-                                          f"{first.report.chosen}, cannot carry creep"})
-        rows = rec.layout.indices("fit")
-    elif start_model is None:
-        raise FitError(f"a {first.report.chosen} model has no creep: fit creep with one of "
-                       f"{', '.join(CREEP_FAMILIES)}")
+        framed = plain.frame(rec.u, rec.y)    # through= is None here
+        if not framed.has_held_back:
+            return _without_creep(first.result, {
+                "kept": False, "reason": "nothing held back to judge it on (creep=True "
+                                         "fits it regardless)"})
+        if start is None:
+            return _without_creep(first.result, {
+                "kept": False, "reason": f"the chosen family, {first.result.report.chosen}, "
+                                         f"cannot carry creep"})
+        rows, held = framed.layout.indices("fit"), framed.layout.indices("held_back")
+    elif start is None:
+        raise FitError(f"a {first.result.report.chosen} model has no creep: fit creep with "
+                       f"one of {', '.join(CREEP_FAMILIES)}")
+    trial = _Trial(u, y, t, d, rec, plain, first, rows, held, decide, steps, responses)
+    if not decide:
+        second = trial.structure(start)
+        return _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, None)
+    second, judged = trial.judged(start)
+    second, judged = _other_kind_tried(trial, first, start, second, judged)
+    if not judged["kept"]:
+        return _not_kept(first, rec, judged, duration)
+    trial.keep_warnings(second)
+    return _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, judged)
 
-    def structure_without_creep(model, families=None):
-        """The ordinary fit of the record with the creep ``model``'s joint QP estimates
-        removed (the settled displacement the structure is chosen on), among
-        ``families`` (default: every creep-capable family the fit was given)."""
-        model = model.replace(creep=None, delay=0)
-        start = model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
-        # every weight free (a kp basis may overfit here; only the creep estimate is
-        # kept, the structure and weights are fitted again)
-        hyst, gains, _ = _joint_qp_of(model, fixed_n)(model, ua, ya, dta, tau, start=start,
-                                                      rows=rows, **qp)
-        psi = _lag_deficits(hyst, hyst.predict(ua), dta, tau, hyst.initial_state)
-        second_kw = dict(kwargs)
-        if families is not None:
-            second_kw["family"] = families
-        elif second_kw.get("family") is None:
-            second_kw["family"] = list(CREEP_FAMILIES)
-        if not decide:
-            return fit(u, np.r_[y[:d], ya + psi @ gains], **second_kw)
+
+def _aligned(u, y, dt, t, d, tau, options, duration):
+    """The record aligned by the delay the first fit chose (or was given): the creep
+    QPs run on u[k] -> y[k + d], its lags at the output's times."""
+    fixed_n = _fixed_exponent(options.families if options.explicit_family else None)
+    return _Aligned(u=u[:u.size - d], y=y[d:], dt=np.r_[dt[0], dt[d + 1:]], t=t[d:],
+                    tau=tau, fixed_n=fixed_n,
+                    qp=dict(offset=options.offset, nonnegative=options.nonnegative,
+                            duration=duration))
+
+
+class _Trial:
+    """The ordinary fit of the record with one creep estimate removed, and its
+    judgement on the held-back cycles (``decide``)."""
+
+    def __init__(self, u, y, t, d, rec, plain, first, rows, held, decide, steps, responses):
+        self.u, self.y, self.t, self.d, self.rec = u, y, t, d, rec
+        self.responses = responses
+        self.plain, self.first, self.rows, self.held = plain, first, rows, held
+        self.decide, self.steps = decide, steps
+        self.warnings = {}
+
+    def structure(self, start, families=None):
+        """:class:`RecordFit` of the record with the creep ``start``'s joint QP
+        estimates removed (the settled displacement the structure is chosen on), among
+        ``families`` (default: every creep-capable family the fit was given). Every
+        weight is free in that QP (a kp basis may overfit there; only the creep estimate
+        is kept, the structure and weights are fitted again)."""
+        rec = self.rec
+        model = start.model.replace(creep=None, delay=0)
+        hyst, gains, _ = _joint_qp_of(model, rec.fixed_n)(
+            model, rec.u, rec.y, rec.dt, rec.tau, start=start.settled_sample,
+            rows=self.rows, **rec.qp)
+        psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
+        names = families if families is not None else (
+            self.plain.families if self.plain.explicit_family else CREEP_FAMILIES)
+        options = self.plain.but(families=names, explicit_family=True)
+        y = np.r_[self.y[:self.d], rec.y + psi @ gains]
+        if not self.decide:
+            return fit_record(self.u, y, options, self.steps, t=self.t,
+                              delay=self.first.delay.given(), responses=self.responses)
         # a trial: its warnings are about the record with this creep estimate removed,
-        # and are the user's only if that structure is kept (_keep_warnings)
+        # and are the user's only if that structure is kept (keep_warnings)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PihystWarning)
-            second = fit(u, np.r_[y[:d], ya + psi @ gains], **second_kw)
-        trial_warnings[id(second)] = [w for w in caught
-                                      if issubclass(w.category, PihystWarning)]
+            second = fit_record(self.u, y, options, self.steps, t=self.t,
+                                delay=self.first.delay.given(), responses=self.responses)
+        self.warnings[id(second)] = [w for w in caught
+                                     if issubclass(w.category, PihystWarning)]
         for w in caught:
             if not issubclass(w.category, PihystWarning):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         return second
 
-    trial_warnings = {}
+    def judged(self, start, families=None):
+        """(RecordFit, judgement) of the structure chosen with ``start``'s estimate."""
+        second = self.structure(start, families)
+        judged = _judge(self.first.result, second, self.rec, self.rows, self.held)
+        self.steps.done(f"creep estimated with {start.family}: {judged['family_with']} "
+                        f"holds back {judged['held_back_rms_with']:.4g}")
+        return second, judged
 
-    judged = None
-    if decide:
-        # each kind of model estimates creep its own way; the structure chosen on the
-        # record with one kind's estimate removed is judged against the other's
-        def judged_structure(model, families=None):
-            second = structure_without_creep(model, families)
-            start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
-            judged = _judge(first, second, ua, ya, ta, dta, tau, start, rows,
-                            rec.layout.indices("held_back"), qp, fixed_n)
-            step.done(f"creep estimated with "
-                      f"{model.metadata.get('fit', {}).get('family', model.family)}: "
-                      f"{judged['family_with']} holds back {judged['held_back_rms_with']:.4g}")
-            return second, start, judged
+    def keep_warnings(self, second):
+        """The warnings of the structure kept: what its fit said about the record is the
+        user's."""
+        for w in self.warnings.get(id(second), ()):
+            warnings.warn(w.message, w.category, stacklevel=4)
 
-        second, start, judged = judged_structure(start_model)
-        other = _other_kind(first, start_model)
-        if other is not None:
-            model, families, rms_without = other
-            name = model.metadata["fit"]["family"]
-            if rms_without <= CREEP_REACH * judged["held_back_rms_with"]:
-                alternative = judged_structure(model, families)
-                tried = [dict(family=judged["family_without"], **_with_creep(judged)),
-                         dict(family=name, **_with_creep(alternative[2]))]
-                if alternative[2]["held_back_rms_with"] < judged["held_back_rms_with"]:
-                    second, start, judged = alternative
-                judged["creep_estimated_with"] = tried
-            else:
-                judged["other_kind_not_tried"] = (
-                    f"{name}: its held-back RMS without creep, {rms_without:.4g}, is more "
-                    f"than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
-                    f"{judged['family_with']} reaches with creep")
-        if not judged["kept"]:
-            # from the state the record started from as fitted (a Bouc-Wen z away from
-            # rest): its hysteresis forgetting that start is no creep decay
-            plain = first.model.replace(delay=0).predict(
-                ua, initial_state=first.model.metadata.get("fit", {}).get("record_start"))
-            judged["record_start"] = record_start_check(ya[start:] - plain[start:], ta[start:],
-                                                        tau, duration, np.ptp(ya[start:]))
-            return _without_creep(first, judged)
-    else:
-        second = structure_without_creep(start_model)
-        start = second.model.metadata.get("fit", {}).get("settled", {}).get("sample", 0)
-    for w in trial_warnings.get(id(second), ()):
-        # the structure kept: what its fit said about the record is the user's
-        warnings.warn(w.message, w.category, stacklevel=3)
-    hyst, gains, passes = _joint_qp_of(second.model, fixed_n)(
-        second.model.replace(delay=0), ua, ya, dta, tau, start=start,
-        free_weights=_free(second.model), **qp)
-    aligned = hyst.replace(creep=Creep(tau, gains, dt_fixed))
+
+def _other_kind_tried(trial, first, start, second, judged):
+    """Each kind of model estimates creep its own way; the structure chosen on the
+    record with one kind's estimate removed is judged against the other's: (second,
+    judged) of the better, with both in the judgement."""
+    other = _other_kind(first, start.model)
+    if other is None:
+        return second, judged
+    start_other, families, rms_without = other
+    if rms_without > CREEP_REACH * judged["held_back_rms_with"]:
+        judged["other_kind_not_tried"] = (
+            f"{start_other.family}: its held-back RMS without creep, {rms_without:.4g}, is "
+            f"more than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
+            f"{judged['family_with']} reaches with creep")
+        return second, judged
+    second_other, judged_other = trial.judged(start_other, families)
+    tried = [dict(family=judged["family_without"], **_with_creep(judged)),
+             dict(family=start_other.family, **_with_creep(judged_other))]
+    if judged_other["held_back_rms_with"] < judged["held_back_rms_with"]:
+        second, judged = second_other, judged_other
+    judged["creep_estimated_with"] = tried
+    return second, judged
+
+
+def _not_kept(first, rec, judged, duration):
+    """The ordinary fit, with the judgement and whether the record started at rest:
+    from the state the record started from as fitted (a Bouc-Wen z away from rest),
+    its hysteresis forgetting that start is no creep decay."""
+    start = first.settled_sample
+    plain = first.result.model.replace(delay=0).predict(rec.u, initial_state=first.record_start)
+    judged["record_start"] = record_start_check(rec.y[start:] - plain[start:], rec.t[start:],
+                                                rec.tau, duration, np.ptp(rec.y[start:]))
+    return _without_creep(first.result, judged)
+
+
+def _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, judged):
+    """The structure ``second`` (a RecordFit) with its weights and creep gains fitted
+    together on every sample after the settling sweep, its report and metadata."""
+    start = second.settled_sample
+    chosen = second.result.model
+    hyst, gains, passes = _joint_qp_of(chosen, rec.fixed_n)(
+        chosen.replace(delay=0), rec.u, rec.y, rec.dt, rec.tau, start=start,
+        free_weights=second.result.report.chosen != "kp", **rec.qp)
+    aligned = hyst.replace(creep=Creep(rec.tau, gains, dt_fixed))
     model = aligned.replace(delay=d, sample_period=dt_fixed if d else None)
-    residual = ya[start:] - aligned.predict(ua, t=t[d:])[start:]
-    record_start = record_start_check(residual, ta[start:], tau, duration,
-                                      np.ptp(ya[start:]))
+    residual = rec.y[start:] - aligned.predict(rec.u, t=t[d:])[start:]
+    record_start = record_start_check(residual, rec.t[start:], rec.tau, duration,
+                                      np.ptp(rec.y[start:]))
     if judged is not None:
         judged["record_start"] = record_start
-    meta = dict(second.model.metadata)
+    meta = dict(chosen.metadata)
     summary = dict(meta.get("fit", {}))
     summary["creep"] = {
-        "tau_s": tau.tolist(), "gain": gains.tolist(), "dt_s": dt_fixed,
+        "tau_s": rec.tau.tolist(), "gain": gains.tolist(), "dt_s": dt_fixed,
         "creep_total": float(gains.sum()), "qp_passes": passes,
-        "rms_without_creep": _rms(first.model.replace(delay=0), ua, ya, None, start),
+        "rms_without_creep": _rms(first.result.model.replace(delay=0), rec.u, rec.y, None,
+                                  start),
         "rms_with_creep": float(np.sqrt(np.mean(residual ** 2))),
         "record_start": record_start,
         "weights": ("shape and linear part (offset, c_1, c_2, a) fitted with the gains"
                     if isinstance(hyst, BoucWenModel) else
-                    "free" if _free(second.model) else "one scale (regularized kp shape)"),
+                    "free" if second.result.report.chosen != "kp" else
+                    "one scale (regularized kp shape)"),
         "note": ("family and thresholds chosen on the record with the estimated creep "
                  "removed; weights, offset and creep gains fitted together on every "
                  "sample after the settling sweep"),
         **({} if judged is None else {"decision": judged}),
     }
     meta["fit"] = summary
-    report = second.report
-    if d and "delay" in summary.get("data", {}):
-        # the delay was chosen by the first fit (the second was given it): its report
-        report = _with_delay_of(second.report, first.report)
-        summary["data"] = report.to_dict()["data"]
-        summary["undetermined"] = report.to_dict()["undetermined"]
     model = model.replace(metadata=meta)
-    models = dict(second.models)
+    models = dict(second.result.models)
     models[summary.get("family", model.family)] = model
+    report = second.result.report
     if judged is not None:
         report = report.with_creep(judged)
-    return type(second)(model=model, report=report, models=models)
+    return type(second.result)(model=model, report=report, models=models)
 
 
-def _creep_capable(result, chosen_only):
-    """The model to estimate creep with: the chosen one if it can carry creep (every
-    family of CREEP_FAMILIES, Bouc-Wen included), else (with ``chosen_only`` False) the
-    creep-capable family with the lowest judged error; None if none.
+def _creep_capable(first, chosen_only):
+    """The :class:`CreepStart` to estimate creep with: the chosen model if it can carry
+    creep (every family of CREEP_FAMILIES, Bouc-Wen included), else (with
+    ``chosen_only`` False) the creep-capable family with the lowest judged error; None
+    if none.
 
     With ``creep="auto"`` only the chosen family is given creep: the family is chosen
     on the record as it is. Otherwise the lags of a PI family absorb what its structure
-    lacks (the
-    drifting minor loops of a Bouc-Wen actuator, docs/theory/creep.md) and win the
-    held-back cycles: measured on a random Bouc-Wen actuator with a triangle record,
-    modified-pi with creep erred 1.4 % on ramps and staircases, Bouc-Wen alone 0.8 %."""
-    if result.report.chosen in CREEP_FAMILIES or chosen_only:
-        name = result.report.chosen
-        return result.models[name] if name in CREEP_FAMILIES else None
+    lacks (the drifting minor loops of a Bouc-Wen actuator, docs/theory/creep.md) and
+    win the held-back cycles: measured on a random Bouc-Wen actuator with a triangle
+    record, modified-pi with creep erred 1.4 % on ramps and staircases, Bouc-Wen alone
+    0.8 %."""
+    result = first.result
+    name = result.report.chosen
+    if name in CREEP_FAMILIES or chosen_only:
+        return (CreepStart(result.models[name], name, first.settled_sample)
+                if name in CREEP_FAMILIES else None)
     fams = [f for f in result.report.families if f["family"] in CREEP_FAMILIES]
     if not fams:
         return None
     best = min(fams, key=lambda f: f["judged_rms"])["family"]
-    return _as_start(result, best)
+    return CreepStart(result.models[best], best, first.settled_sample)
 
 
-def _other_kind(result, model):
-    """(model, families, held-back RMS): the best eligible creep-capable family of
-    ``result`` of the other kind than ``model`` (Bouc-Wen against PI operators), the
-    eligible families of that kind and its held-back RMS without creep; None if none.
+def _other_kind(first, model):
+    """(CreepStart, families, held-back RMS): the best eligible creep-capable family of
+    the fit ``first`` of the other kind than ``model`` (Bouc-Wen against PI operators),
+    the eligible families of that kind and its held-back RMS without creep; None if
+    none.
 
     The creep the joint QP estimates depends on the model it is estimated with, and the
     structure chosen on the record with that creep removed leans to the same kind:
@@ -414,6 +486,7 @@ def _other_kind(result, model):
     (benchmarks/bench_population.py, seed 28), creep estimated with Bouc-Wen led to
     Bouc-Wen with creep (held back 0.24 um, 1.0 % of range on ramps and staircases),
     while the PI estimate led to a kp basis that held back 0.09 um (0.2 %)."""
+    result = first.result
     bw = isinstance(model, BoucWenModel)
     fams = [f for f in result.report.families
             if f["family"] in CREEP_FAMILIES and f.get("excluded") is None
@@ -421,8 +494,8 @@ def _other_kind(result, model):
     if not fams:
         return None
     best = min(fams, key=lambda f: f["judged_rms"])
-    return (_as_start(result, best["family"]), [f["family"] for f in fams],
-            float(best["errors"]["held_back"]["rms"]))
+    return (CreepStart(result.models[best["family"]], best["family"], first.settled_sample),
+            [f["family"] for f in fams], float(best["errors"]["held_back"]["rms"]))
 
 
 def _with_creep(judged):
@@ -430,32 +503,28 @@ def _with_creep(judged):
             "held_back_rms_with": judged["held_back_rms_with"]}
 
 
-def _as_start(result, name):
-    """``result``'s model of family ``name``, with the metadata the creep fit reads."""
-    return result.models[name].replace(metadata={"fit": {
-        "family": name, **({"settled": result.model.metadata["fit"]["settled"]}
-                           if "settled" in result.model.metadata.get("fit", {}) else {})}})
-
-
-def _judge(first, second, u, y, t, dt, tau, start, fit_rows, held_rows, qp, fixed_n=None):
-    """Whether creep generalizes: the structure of ``second`` (chosen on the record with
-    its creep removed) with weights and creep gains fitted on the fitted cycles only,
-    against the ordinary fit, both on the held-back cycles (the choice's RMS, before any
-    refit). Creep is kept when it lowers that RMS by more than the choice's tolerance."""
-    joint_qp = _joint_qp_of(second.model, fixed_n)
-    hyst, gains, _ = joint_qp(second.model.replace(delay=0), u, y, dt, tau, start=start,
-                              rows=fit_rows, free_weights=_free(second.model), **qp)
-    with_creep = hyst.replace(creep=Creep(tau, gains, float(np.median(dt))))
-    r = with_creep.predict(u, t=t)[held_rows] - y[held_rows]
+def _judge(first, second, rec, fit_rows, held_rows):
+    """Whether creep generalizes: the structure of ``second`` (a RecordFit, chosen on
+    the record with its creep removed) with weights and creep gains fitted on the
+    fitted cycles only, against the ordinary fit ``first`` (a FitResult), both on the
+    held-back cycles (the choice's RMS, before any refit). Creep is kept when it lowers
+    that RMS by more than the choice's tolerance."""
+    chosen = second.result.model
+    hyst, gains, _ = _joint_qp_of(chosen, rec.fixed_n)(
+        chosen.replace(delay=0), rec.u, rec.y, rec.dt, rec.tau,
+        start=second.settled_sample, rows=fit_rows,
+        free_weights=second.result.report.chosen != "kp", **rec.qp)
+    with_creep = hyst.replace(creep=Creep(rec.tau, gains, float(np.median(rec.dt))))
+    r = with_creep.predict(rec.u, t=rec.t)[held_rows] - rec.y[held_rows]
     rms_creep = float(np.sqrt(np.mean(r * r)))
-    chosen = first.report.family(first.report.chosen)
-    rms_plain = float(chosen["errors"]["held_back"]["rms"])
+    rms_plain = float(first.report.family(first.report.chosen)["errors"]["held_back"]["rms"])
     kept = rms_creep < (1.0 - TOLERANCE) * rms_plain
+    name_with = second.result.report.chosen
     return {"kept": bool(kept), "held_back_rms_without": rms_plain,
             "family_without": first.report.chosen,
-            "held_back_rms_with": rms_creep, "family_with": second.report.chosen,
+            "held_back_rms_with": rms_creep, "family_with": name_with,
             "creep_total_on_fitted_cycles": float(gains.sum()),
-            "reason": (f"held-back RMS {rms_creep:.4g} with creep ({second.report.chosen}) "
+            "reason": (f"held-back RMS {rms_creep:.4g} with creep ({name_with}) "
                        f"against {rms_plain:.4g} without ({first.report.chosen}): "
                        + ("more than" if kept else "not")
                        + f" {100 * TOLERANCE:g} % lower")}
@@ -467,13 +536,3 @@ def _without_creep(result, decision):
     meta["fit"] = {**meta.get("fit", {}), "creep": {"decision": decision}}
     return type(result)(model=result.model.replace(metadata=meta),
                         report=result.report.with_creep(decision), models=result.models)
-
-
-def _with_delay_of(report, chooser):
-    """``report`` with the delay entry and the delay's note of the report ``chooser``."""
-    data, other = report.to_dict(), chooser.to_dict()
-    data["data"]["delay"] = other["data"]["delay"]
-    note = "the input-output delay:"
-    data["undetermined"] = ([t for t in data["undetermined"] if not t.startswith(note)]
-                            + [t for t in other["undetermined"] if t.startswith(note)])
-    return type(report)(data)

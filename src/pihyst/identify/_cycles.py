@@ -22,10 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst.exceptions import FitError
+from pihyst.identify._constants import MAJOR_TOLERANCE, REST_TOLERANCE, REVERSAL_TOLERANCE
 
-REVERSAL_TOLERANCE = 0.01
-MAJOR_TOLERANCE = 0.05
-REST_TOLERANCE = 0.01
 MIN_SAMPLES = 20
 
 

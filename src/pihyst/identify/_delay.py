@@ -11,7 +11,7 @@ and judging each d on the held-back cycles finds the lag the data support. The p
 structure is a classical PI with ``PROBE_PLAYS`` equally spaced plays (linear in all its
 weights, one fast Gram pass per d), so the choice does not depend on a threshold
 search. (On the P-885 record a modified PI probe, which also fits asymmetric loops,
-finds the same delay at 3x the cost.) d_max is ``MAX_FRACTION`` of the
+finds the same delay at 3x the cost.) d_max is ``DELAY_MAX_FRACTION`` of the
 median cycle length (at most ``MAX_SAMPLES``). The record's cycles are cut once, on the
 input; each d only delays the output. To bound the cost on long records the probe runs
 on the whole cycles within the first ``WINDOW`` samples (when they include fitted and
@@ -46,9 +46,9 @@ paper beam: the probe's best is 8, the modified PI's 10).
 import numpy as np
 
 from pihyst.exceptions import FitError
+from pihyst.identify._constants import ADOPT_GAIN, DELAY_MAX_FRACTION
 from pihyst.identify._families import Classical, ModifiedPI
 
-MAX_FRACTION = 0.05
 MAX_SAMPLES = 50
 PROBE_PLAYS = 8
 WINDOW = 100_000
@@ -57,13 +57,12 @@ FULL_SCAN = 12
 MIN_PROBE_SAMPLES = 20
 PROBE = Classical
 CONFIRM = ModifiedPI
-ADOPT_GAIN = 0.05     # (2): a delay must lower both probes' held-back RMS by 5 %
 
 
 def max_delay(rec):
     """Largest delay tried on the record ``rec``: a fraction of its median cycle."""
     lengths = [z - a for a, z, role in rec.layout.segments if role != "settle"]
-    return int(min(MAX_SAMPLES, max(1, MAX_FRACTION * np.median(lengths))))
+    return int(min(MAX_SAMPLES, max(1, DELAY_MAX_FRACTION * np.median(lengths))))
 
 
 def window(rec):

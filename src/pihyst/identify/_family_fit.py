@@ -14,6 +14,11 @@ import numpy as np
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
 from pihyst.identify._assess import minor_loops_determined
+from pihyst.identify._constants import (
+    CONSTANT_COLUMN,
+    KP_UNDETERMINED_TOLERANCE,
+    SETTLE_MAX_SHARE,
+)
 from pihyst.identify._cycles import (
     MIN_SAMPLES,
     checked_signals,
@@ -25,6 +30,7 @@ from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._kernel_product import product_density_fit
 from pihyst.identify._qp import solve_qp
+from pihyst.identify._responses import Responses
 from pihyst.identify._subsets import (
     DEFAULT_MAX_EXHAUSTIVE,
     PATH_MAX_EXHAUSTIVE,
@@ -34,20 +40,8 @@ from pihyst.identify._subsets import (
 from pihyst.metrics import error_summary
 
 INITIAL_STATES = ("auto", "cycled", "settle", "zero", "rise", "fall")
-# "auto" on a record that does not start at the bottom: when its first full sweep (which
-# settles the operators) would take more than this share of it (a sine growing from the
-# middle of the range sweeps it only at the end) or never ends, the record is fitted
-# whole from "rise" or "fall" instead (identify/_start_state.py)
-SETTLE_MAX_SHARE = 0.5
 KP_LAMBDAS = 10.0 ** np.arange(-6, 4)
 KP_DEFAULT_LAMBDA = 1e-2
-# When the record holds no minor loops, the kernel basis takes the strongest
-# regularization whose held-back RMS is within this of the lowest: the density closest
-# to the penalty's (KrasnoselskiiPokrovskii.penalty) the record allows (measured on the
-# P-885 pair, test record: 0.35 -> 0.30 um with the record's delay, 0.78 -> 0.58 um
-# without it, against the lowest held-back RMS)
-KP_UNDETERMINED_TOLERANCE = 0.10
-CONSTANT_COLUMN = 1e-9  # an operator whose output varies less than this * S never moved
 PREDICTIONS_KEPT = 8
 KERNEL_SAMPLES = 100_000
 
@@ -103,6 +97,13 @@ class FramedRecord:
         self.layout = layout(self.v, self.S, settle=(mode == "settle"), holdout=holdout)
         self.has_held_back = self.layout.count("held_back") > 0
         self.through = self._through_indices(through)
+
+    def with_start_choice(self, choice):
+        """This record with what "auto" compared to choose its start state
+        (identify/_start_state.py)."""
+        out = copy.copy(self)
+        out.state_choice = choice
+        return out
 
     def shifted(self, delay, stop=None):
         """This record with its output ``delay`` samples later (u[k] paired with
@@ -238,8 +239,10 @@ class FamilyFitter:
 
     def __init__(self, rec, *, thresholds=None, candidates=None, n_candidates=16,
                  n_operators=None, nonnegative=True, bounds=None,
-                 max_exhaustive=DEFAULT_MAX_EXHAUSTIVE):
+                 max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, responses=None):
         self.rec = rec
+        # output-independent results shared by the fits of this record's input
+        self.responses = Responses() if responses is None else responses
         self.thresholds = None if thresholds is None else np.sort(np.asarray(thresholds, float))
         self.candidates = None if candidates is None else np.sort(np.asarray(candidates, float))
         self.n_candidates, self.n_operators = n_candidates, n_operators
@@ -248,18 +251,28 @@ class FamilyFitter:
         self.notes = []
         self._predictions = []
 
-    def subsampled(self, max_samples):
+    def subsampled(self, max_samples, note=None):
         """This fitter on the record subsampled to about ``max_samples`` samples and
         every input extremum (``FramedRecord.subsampled``: exact operator outputs, fewer
-        squares summed), or itself for a record that short; a note says so."""
+        squares summed), or itself for a record that short; the note says so (``note``:
+        its text from the samples kept and the samples there were, default: fitted on
+        those, errors on all)."""
         rec = self.rec.subsampled(max_samples)
         if rec is self.rec:
             return self
         out = copy.copy(self)
         out.rec, out._predictions = rec, []
-        self.notes.append(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly "
-                          f"spaced, and every input extremum); errors on all")
+        if note is None:
+            self.note(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly spaced, "
+                      f"and every input extremum); errors on all")
+        else:
+            self.note(note(rec.u.size, self.rec.u.size))
         return out
+
+    def note(self, text):
+        """Adds ``text`` to the notes of the family being fitted (once)."""
+        if text not in self.notes:
+            self.notes.append(text)
 
     def fit(self, family, rival_rms=None):
         """``family`` fitted to the record (notes collected afresh); ``rival_rms``, the
@@ -351,7 +364,7 @@ class FamilyFitter:
             cand = np.delete(cand, const)
             template = fam.template(cand, rec.S)
             state0, parts, rows = self.grams(fam, template)
-            self.notes.append(f"candidate thresholds {_fmt_list(dropped)} dropped: the input "
+            self.note(f"candidate thresholds {_fmt_list(dropped)} dropped: the input "
                               f"never moves their operators")
         names = [f"r={r:g}" for r in cand] + [f"input segment {j}" for j in range(fam.n_fixed)]
         prob = self.problem(fam, parts, rows, len(cand), names)
@@ -443,7 +456,7 @@ class FamilyFitter:
             pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
             template = fam.template(pairs, rec.S)
             state0, parts, rows = on.grams(fam, template)
-            self.notes.append(f"{const.size} kernel{'s' if const.size > 1 else ''} dropped: "
+            self.note(f"{const.size} kernel{'s' if const.size > 1 else ''} dropped: "
                               f"the input never moves {'them' if const.size > 1 else 'it'}")
         names = [f"kernel {p}" for p in pairs]
         prob = on.problem(fam, parts, rows, len(pairs), names)
@@ -489,7 +502,7 @@ class FamilyFitter:
         else:
             lam = KP_DEFAULT_LAMBDA
             rule = "default (nothing held back to choose it on)"
-            self.notes.append("nothing held back: regularization strength not chosen from data")
+            self.note("nothing held back: regularization strength not chosen from data")
         x = solve(shape, lam, prob.fit, product, warn=True)
         reg = {"lambda": lam, "scale": scales[shape], "rule": rule, "tried": tried,
                "kernels": len(pairs),

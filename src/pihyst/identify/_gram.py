@@ -72,8 +72,10 @@ def accumulate(model, u, d, segments, initial_state, *, offset=True, rows_at=())
     rows : dict index -> ndarray
     """
     k = model.n_operators
-    m = k + int(offset)
-    parts = {"fit": _empty(m), "held_back": _empty(m)}
+    # the sums of each role, kept apart until the end: a record of many short cycles
+    # (10^4 segments) would otherwise spend its time building a block matrix per segment
+    sums = {role: [np.zeros((k, k)), np.zeros(k), np.zeros(k), 0.0, 0.0, 0]
+            for role in ("fit", "held_back")}
     rows = {}
     cuts = sorted(set(int(i) for i in rows_at))
     # The bank's state advances over each chunk in turn; chunks are the segments, cut
@@ -87,11 +89,23 @@ def accumulate(model, u, d, segments, initial_state, *, offset=True, rows_at=())
                 bank.run(ua)
             else:
                 G, b, s = bank.gram(ua, da)
-                if offset:
-                    G = np.block([[G, s[:, None]], [s[None, :], np.array([[z - a]])]])
-                    b = np.r_[b, da.sum()]
-                parts[role] = parts[role] + Gram(G, b, float(da @ da), z - a)
+                acc = sums[role]
+                acc[0] = acc[0] + G
+                acc[1] = acc[1] + b
+                acc[2] = acc[2] + s
+                acc[3] = acc[3] + da.sum()
+                acc[4] = acc[4] + float(da @ da)
+                acc[5] += z - a
             if z - 1 in cuts:
                 state = bank.state
                 rows[z - 1] = np.r_[state, 1.0] if offset else state
-    return parts, rows
+    return {role: _gram_of(acc, offset) for role, acc in sums.items()}, rows
+
+
+def _gram_of(acc, offset):
+    """The Gram of one role's sums, with the constant column when ``offset``."""
+    G, b, s, d_sum, dd, n = acc
+    if offset:
+        G = np.block([[G, s[:, None]], [s[None, :], np.array([[float(n)]])]])
+        b = np.r_[b, d_sum]
+    return Gram(G, b, dd, n)

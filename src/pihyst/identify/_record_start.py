@@ -30,9 +30,8 @@ import warnings
 import numpy as np
 
 from pihyst.exceptions import InsufficientDataWarning
+from pihyst.identify._constants import MIN_DECAY, UNSETTLED_SHARE
 
-UNSETTLED_SHARE = 0.2
-MIN_DECAY = 5e-4          # of the output range: a decay smaller than that is left alone
 # the residual's least squares on the decays runs on at most about this many samples
 MAX_ROWS = 50_000
 

@@ -81,9 +81,15 @@ class FitReport:
         self._data = data
 
     @classmethod
-    def build(cls, rec, candidates, skipped, chosen, criterion, *, refit, final_errors,
-              delay, validation, undetermined):
+    def build(cls, rec, start, choice, skipped, *, refit, final_errors, delay, validation,
+              undetermined, fitted_on=None):
+        """The report of a fit of the framed record ``rec`` from the decisions made on
+        it: the start state (``_decisions.StartState``), the choice (``Choice``), the
+        families skipped, the refit's errors, the delay's report entry, the validation
+        record's description and what the data could not determine; ``fitted_on``: the
+        samples a long record was fitted and judged on (all if None)."""
         lay = rec.layout
+        candidates, chosen = choice.candidates, choice.chosen.name
         units = dict(candidates[0].fitted.model.units)
         data = {
             "n_samples": int(rec.u.size),
@@ -91,8 +97,8 @@ class FitReport:
             "output_range": [float(rec.y.min()), float(rec.y.max())],
             "measured_range": rec.measured_range,
             "units": units,
-            "initial_state": rec.state_mode,
-            "initial_state_choice": rec.state_choice,
+            "initial_state": start.mode,
+            "initial_state_choice": start.compared,
             "settle_samples": int(lay.settle_end),
             "cycles": lay.n_cycles,
             "minor_cycles": lay.n_minor,
@@ -106,10 +112,11 @@ class FitReport:
             "through": list(rec.through),
             "delay": delay,
             "validation": validation,
+            "fitted_on_samples": int(rec.u.size if fitted_on is None else fitted_on),
         }
         families = [cls._family_entry(c, c.name == chosen, rec.S) for c in candidates]
-        out = {"data": data, "families": families, "skipped": skipped, "chosen": chosen,
-               "criterion": criterion, "undetermined": list(undetermined),
+        out = {"data": data, "families": families, "skipped": list(skipped),
+               "chosen": chosen, "criterion": choice.criterion, "undetermined": list(undetermined),
                "final": {"refit": refit, "errors": final_errors}}
         return cls(_num(out))
 
@@ -190,6 +197,11 @@ class FitReport:
 
     # ------------------------------------------------------------------ text
     def __str__(self):
+        return "\n".join(self._data_lines() + self._family_lines() + self._record_lines()
+                         + self._chosen_lines())
+
+    def _data_lines(self):
+        """The record: samples, ranges, start state, cycles, what was held back."""
         d = self._data["data"]
         uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
         lines = [
@@ -204,8 +216,18 @@ class FitReport:
             + (f"{d['held_back_cycles']} cycles, {d['held_back_samples']} samples "
                f"({d['holdout']})" if d["held_back_samples"] else "none") +
             f"; offset {d['offset']}",
-            "",
         ]
+        if d.get("fitted_on_samples", d["n_samples"]) < d["n_samples"]:
+            lines.append(f"fitted and judged on {d['fitted_on_samples']} of the "
+                         f"{d['n_samples']} samples (evenly spaced, and every input extremum: "
+                         f"the operators' outputs there are exactly the whole record's)")
+        return lines + [""]
+
+    def _family_lines(self):
+        """The table of families: errors, latency, skipped and excluded ones."""
+        d = self._data["data"]
+        uout = d["units"].get("output", "um")
+        lines = []
         held = d["held_back_samples"] > 0
         fams = self._data["families"]
         kinds = [k for k in ("held-back minor cycles", "validation record")
@@ -214,7 +236,7 @@ class FitReport:
         head = (f"  {'family':<24}{'ops':>5}{'fit RMS':>10}"
                 + (f"{'held-back RMS':>15}" if held else "")
                 + "".join(f"{short[k]:>12}" for k in kinds)
-                + f"{'max |e|':>10}{'% range':>9}{'latency us':>16}")
+                + f"{'max |e|':>10}{'% range':>9}{'latency µs':>16}")
         judged = ("judged on held-back data" if held or kinds else "on the fitted data")
         lines += [f"errors in {uout} ({judged}; RMS unless stated), compensator latency "
                   f"per sample (typical / worst case):", head]
@@ -238,6 +260,12 @@ class FitReport:
         for f in fams:
             if f["excluded"]:
                 lines.append(f"x {f['family']}: not chosen, {f['excluded']}")
+        return lines
+
+    def _record_lines(self):
+        """The validation record, the delay, creep and what the data could not tell."""
+        d = self._data["data"]
+        lines = []
         val = d.get("validation")
         if val:
             lines.append(f"validation record: {val['samples']} samples, judged from sample "
@@ -267,6 +295,13 @@ class FitReport:
         if self._data["undetermined"]:
             lines.append("what the data could not determine:")
             lines += [f"  - {t}" for t in self._data["undetermined"]]
+        return lines
+
+    def _chosen_lines(self):
+        """The chosen family: the criterion, the refit, its structure and why."""
+        d = self._data["data"]
+        uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
+        lines = []
         best = self.family(self.chosen)
         lines += ["", f"chosen: {best['family']} ({best['title']}), {self._data['criterion']}"]
         fin = self._data["final"]
@@ -315,4 +350,4 @@ class FitReport:
             lines.append(f"note: {n}")
         for w in best["warnings"]:
             lines.append(f"warning: {w}")
-        return "\n".join(lines)
+        return lines

@@ -24,14 +24,9 @@ SEARCH_SAMPLES = 20_000
 
 def _search_fitter(fitter):
     """``fitter`` on the subsampled record (itself for a short record)."""
-    notes = list(fitter.notes)
-    out = fitter.subsampled(SEARCH_SAMPLES)
-    if out is not fitter:
-        fitter.notes[:] = notes + [f"shape searched on {out.rec.u.size} of "
-                                   f"{fitter.rec.u.size} samples (evenly spaced, and every "
-                                   f"input extremum), the weights then fitted on all"]
-        fitter.notes[:] = list(dict.fromkeys(fitter.notes))
-    return out
+    return fitter.subsampled(SEARCH_SAMPLES, note=lambda kept, n: (
+        f"shape searched on {kept} of {n} samples (evenly spaced, and every input "
+        f"extremum), the weights then fitted on all"))
 
 
 def _names(fam):
@@ -90,7 +85,7 @@ def _minimize(fitter, fam, fractions=None):
     at_bound = [f"{k} = {v:.4g}" for k, v, (lo, hi) in zip(names, x, bounds)
                 if min(v - lo, hi - v) <= 1e-3 * (hi - lo)]
     if at_bound and res.fun < f0:
-        fitter.notes.append(f"identified shape at the edge of its search range: "
+        fitter.note(f"identified shape at the edge of its search range: "
                             f"{', '.join(at_bound)} (the data favour a shape beyond it)")
     return fam.with_shape(**dict(zip(names, (float(v) for v in x)))), f0, min(res.fun, f0)
 
@@ -102,7 +97,7 @@ def identify_shape(fitter, fam):
     new, f0, f1 = _minimize(fitter, fam)
     end = new.shape(S)
     changes = ", ".join(f"{k} {start[k]:.4g} -> {end[k]:.4g}" for k in _names(fam))
-    fitter.notes.append(f"shape identified with all candidate operators: {changes}; "
+    fitter.note(f"shape identified with all candidate operators: {changes}; "
                         f"fitted RMS {f0:.4g} -> {f1:.4g}")
     return new
 
@@ -114,7 +109,7 @@ def refine_shape(fitter, fitted):
     fractions = np.asarray(fitted.operators, dtype=float) / fam.max_threshold(S)
     new, f0, f1 = _minimize(fitter, fam, fractions)
     if f1 < f0:
-        fitter.notes.append(f"shape refined for the chosen operators: a={new.a:.4g}, "
+        fitter.note(f"shape refined for the chosen operators: a={new.a:.4g}, "
                             f"b={new.b:.4g}, h={new.h:.4g}; fitted RMS {f0:.4g} -> {f1:.4g}")
     r = fractions * new.max_threshold(S)
     template = new.template(r, S)

@@ -24,14 +24,7 @@ import numpy as np
 
 from pihyst.exceptions import FitError
 from pihyst.identify import _delay
-
-# the probe has no creep, and a creep transient at the start of a record from rest can
-# look like an initial loading curve: population seed 46 (Preisach, 1.9 %/decade,
-# triangle) fitted 1.4x better from zero, and from zero its model erred 0.78 % of range
-# on ramps and staircases, against 0.08 % from rest. Records truly from zero fitted
-# 13-25x better from it, 3-6x with sensor noise of 0.5 % of range
-# (tests/identify/test_start_state.py); a factor 2 is asked
-ZERO_GAIN = 0.5
+from pihyst.identify._constants import ZERO_GAIN
 
 
 def start_state(rec, record_in, fitter_of):

@@ -20,16 +20,14 @@ import numpy as np
 import quadprog
 
 from pihyst.exceptions import InfeasibleConstraintsError
+from pihyst.identify._constants import SIZE_TOLERANCE, STALL, TIE
 from pihyst.identify._qp import DEFAULT_RCOND, solve_qp
 
 DEFAULT_MAX_EXHAUSTIVE = 2000     # a requested size: 4 of 16 (1820 subsets) is exhaustive
 PATH_MAX_EXHAUSTIVE = 600         # every size in turn: 1..3 of 16 exhaustive, then greedy
-SIZE_TOLERANCE = 0.01  # automatic size: the smallest within 1 % of the best held-back RMS
-STALL = 0.002          # automatic size: a size gaining less than 0.2 % does not count
 # batched subset QPs: only matrices whose condition number is below this fraction of
 # solve_qp's limit (1 / DEFAULT_RCOND) take the batched path; the others get its ridge
 BATCH_CONDITION_MARGIN = 1e-2
-TIE = 1e-9             # judged RMS values this close (relative) are equal
 
 
 @dataclass

@@ -25,14 +25,16 @@ import warnings
 import numpy as np
 
 from pihyst.exceptions import FitError, InsufficientDataWarning
+from pihyst.identify._constants import (
+    MIN_EXPLAINED,
+    MIN_INPUT_LEVELS,
+    MIN_LOOP_WIDTH,
+    WEAK_EXPLAINED,
+)
 
 MAX_MAGNITUDE = 1e100        # sums of N squares stay far from the float64 overflow
 MIN_MAGNITUDE = 1e-100       # spans smaller than this underflow once squared
 MIN_RELATIVE_SPAN = 1e-9     # span / magnitude: fewer digits than that left to fit
-MIN_INPUT_LEVELS = 4
-MIN_EXPLAINED = 0.5
-WEAK_EXPLAINED = 0.9
-MIN_LOOP_WIDTH = 0.002       # of the output span
 _LOOP_POINTS = 201
 
 

@@ -1,0 +1,220 @@
+"""The identification pipeline as a newcomer reads it: each step a function returning a
+frozen decision, every deciding number in one module, the decision table of
+docs/theory/identification.md true to the code, and no function in identify/ over 100
+lines of code."""
+
+import ast
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pihyst
+from pihyst import ClassicalPI, FitError
+from pihyst.identify import _constants, _record_fit
+from pihyst.identify._decisions import Choice, Delay, FamiliesFitted, StartState
+from pihyst.identify._options import FitOptions
+from pihyst.identify._progress import Steps
+from pihyst.identify._responses import Responses, digest
+
+ROOT = Path(__file__).resolve().parents[2]
+IDENTIFY = ROOT / "src" / "pihyst" / "identify"
+TABLE = ROOT / "docs" / "theory" / "identification.md"
+MAX_CODE_LINES = 100
+
+
+def ramps(levels, n=40):
+    levels = np.asarray(levels, dtype=float)
+    return np.concatenate([np.linspace(a, b, n, endpoint=False) for a, b in
+                           zip(levels[:-1], levels[1:])] + [levels[-1:]])
+
+
+def record(delay=0, noise=0.0, seed=0):
+    """A classical PI actuator at rest after a full cycle, on major and minor loops,
+    its output ``delay`` samples late."""
+    true = ClassicalPI([0, 20, 45], [0.3, 0.2, 0.1], offset=1.0)
+    true = true.replace(initial_state=true.simulate(np.array([0.0, 150.0, 0.0])).final_state)
+    rng = np.random.default_rng(seed)
+    levels = [0.0]
+    for _ in range(5):
+        inner = np.sort(rng.uniform(10, 140, 4))
+        levels += [150.0, 0.0, inner[3], inner[0], inner[2], 0.0]
+    u = ramps(levels)
+    y = true.predict(u) + noise * rng.standard_normal(u.size)
+    y = np.r_[np.full(delay, y[0]), y[:u.size - delay]]
+    return u, y
+
+
+def test_each_step_returns_a_frozen_decision_the_report_is_built_from():
+    u, y = record(delay=3)
+    options = FitOptions.from_arguments(family=["classical", "modified-pi"])
+    rec, start = _record_fit.decide_start_state(u, y, options)
+    assert isinstance(start, StartState) and start.mode == "cycled"
+    delay = _record_fit.decide_delay(rec, options)
+    assert isinstance(delay, Delay) and delay.samples == 3 and delay.auto
+    attempt = _record_fit.fit_at_delay(rec, delay, options, Steps(None), Responses())
+    assert isinstance(attempt.fitted, FamiliesFitted) and isinstance(attempt.choice, Choice)
+    assert {r.name for r in attempt.fitted.results} == {"classical", "modified-pi"}
+    done = _record_fit.finish(attempt, start, delay, options, Steps(None), None)
+    data = done.result.report.to_dict()
+    assert data["data"]["delay"] == delay.to_report()
+    assert data["chosen"] == done.choice.chosen.name
+    assert data["data"]["initial_state"] == start.mode
+    for decision in (start, delay, attempt.fitted, attempt.choice, done):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(decision, dataclasses.fields(decision)[0].name, None)
+
+
+def test_the_pipeline_gives_what_fit_gives():
+    u, y = record(delay=2, noise=0.01)
+    options = FitOptions.from_arguments()
+    by_steps = _record_fit.fit_record(u, y, options, Steps(None)).result
+    by_fit = pihyst.fit(u, y)
+    assert by_steps.model == by_fit.model
+    assert by_steps.report.to_dict() == by_fit.report.to_dict()
+
+
+def test_the_decided_delay_is_not_made_again():
+    u, y = record(delay=3)
+    options = FitOptions.from_arguments(family="classical")
+    rec, _ = _record_fit.decide_start_state(u, y, options)
+    decided = _record_fit.decide_delay(rec, options).given()
+    assert decided.decided_before and decided.samples == 3
+    lines = []
+    fitted = _record_fit.fit_record(u, y, options, Steps(lines.append), delay=decided)
+    assert fitted.delay is decided and fitted.result.model.delay == 3
+    assert any("decided on the record itself" in line for line in lines)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"thresholds": [0, 10], "candidates": [0, 5]}, "not both"),
+    ({"thresholds": [0, 10], "n_operators": 2}, "not both"),
+    ({"n_operators": 0}, "positive integer"),
+    ({"max_operators": 2.5}, "positive integer"),
+    ({"max_latency": -1}, "positive number of seconds"),
+    ({"delay": -1}, "number of samples"),
+    ({"bounds": (0, 1, 2)}, "pair"),
+    ({"creep": "yes"}, "creep must be"),
+    ({"creep": [1.0, -2.0]}, "finite and > 0"),
+    ({"creep": ["a"]}, "creep must be"),
+    ({"thresholds": ["a", "b"]}, "list of numbers"),
+    ({"family": ["classical", "classical"]}, "given once"),
+    ({"family": "nonsense"}, "unknown model family"),
+])
+def test_options_are_checked_once_before_the_data(kwargs, match):
+    with pytest.raises(FitError, match=match):
+        FitOptions.from_arguments(**kwargs)
+    u, y = record()
+    with pytest.raises(FitError, match=match):
+        pihyst.fit(u, y, **kwargs)
+
+
+def test_options_are_a_frozen_value():
+    options = FitOptions.from_arguments(family="kp", has_times=True)
+    assert options.creep == "auto" and not options.chooses_thresholds
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        options.delay = 0
+    other = options.but(delay=0, families=["classical"])
+    assert other.delay == 0 and options.delay == "auto"
+    assert [f.name for f in other.families] == ["classical"]
+    assert FitOptions.from_arguments(creep=True).creep == "always"
+    assert FitOptions.from_arguments(creep="auto").creep == "off"   # no sample times
+
+
+def test_responses_are_computed_once_per_input():
+    responses, calls = Responses(), []
+
+    def compute():
+        calls.append(1)
+        return 42
+
+    a = np.arange(5.0)
+    assert responses.get(digest(a), compute) == responses.get(digest(a.copy()), compute)
+    assert len(calls) == 1 and digest(a) != digest(a + 1) and digest(a) != digest(a[:4])
+
+
+def _deciding_constants():
+    return {name for name, value in vars(_constants).items()
+            if name.isupper() and isinstance(value, (int, float))}
+
+
+def test_the_decision_table_is_true_to_the_code():
+    text = TABLE.read_text(encoding="utf-8")
+    table = text[text.index("## The procedure"):text.index("## Fitting families")]
+    named = set(re.findall(r"`([A-Z][A-Z_0-9]+)`", table))
+    # every constant the table names is a deciding constant, and every one is named
+    assert named == _deciding_constants(), (named ^ _deciding_constants())
+    # every step function and decision it names exists
+    for name in re.findall(r"\(`([a-z_]+)` →", table):
+        assert callable(getattr(_record_fit, name)), name
+    for name in re.findall(r"→ `([A-Za-z]+)`\)", table):
+        assert name in {"StartState", "Delay", "FamiliesFitted", "Choice"}, name
+    modules = set(re.findall(r"`(_[a-z_]+)`", table))
+    missing = [m for m in modules if not (IDENTIFY / f"{m}.py").exists()]
+    assert not missing, missing
+
+
+def test_deciding_numbers_live_in_one_module():
+    """No module of identify/ defines a deciding constant of _constants again."""
+    deciding = _deciding_constants()
+    for path in IDENTIFY.glob("_*.py"):
+        if path.stem == "_constants":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defined = {t.id for node in tree.body if isinstance(node, ast.Assign)
+                   for t in node.targets if isinstance(t, ast.Name)}
+        assert not defined & deciding, (path.name, defined & deciding)
+
+
+def _code_lines(source, node):
+    body = node.body
+    doc = set()
+    if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+            and isinstance(body[0].value.value, str):
+        doc = set(range(body[0].lineno, body[0].end_lineno + 1))
+    lines = source.splitlines()[node.lineno - 1:node.end_lineno]
+    return sum(1 for i, line in enumerate(lines, start=node.lineno)
+               if line.strip() and not line.strip().startswith("#") and i not in doc)
+
+
+def test_no_function_in_identify_is_over_100_lines_of_code():
+    long = []
+    for path in sorted(IDENTIFY.glob("*.py")):
+        source = path.read_text(encoding="utf-8")
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = _code_lines(source, node)
+                if n > MAX_CODE_LINES:
+                    long.append(f"{path.name}:{node.name} ({n})")
+    assert not long, long
+
+
+@pytest.mark.parametrize("family", ["classical", "kp"])
+def test_a_long_records_creep_rows_have_the_whole_records_operator_outputs(monkeypatch,
+                                                                           family):
+    """Creep's joint QP on a long record runs the operators on its (thinned) fitted rows
+    and every input extremum only: the outputs there are exactly those of every sample."""
+    from pihyst.identify import _creep
+
+    rng = np.random.default_rng(3)
+    levels = np.r_[0.0, 150.0, 0.0, rng.uniform(0, 150, 400)]
+    u = np.concatenate([np.linspace(a, b, 200, endpoint=False)
+                        for a, b in zip(levels[:-1], levels[1:])])
+    model = (ClassicalPI(np.linspace(0, 70, 16), np.full(16, 0.1)) if family == "classical"
+             else pihyst.fit(u[:4000], ClassicalPI([0, 30], [0.2, 0.1]).predict(u[:4000]),
+                             family="kp").model)
+    monkeypatch.setattr(_creep, "FIT_SAMPLES", 20_000)
+    fitted = _creep._fitted_rows(u.size, 150, None)
+    assert 0 < np.count_nonzero(fitted) <= 20_000 < u.size - 150
+    basis = model.weights[:, None]
+    for free in (True, False):
+        (long, sel, a, b), = _creep._operator_rows(model, u, fitted, basis, free)
+        monkeypatch.setattr(_creep, "FIT_SAMPLES", 10 ** 9)
+        chunked = np.vstack([p for p, *_ in _creep._operator_rows(model, u, fitted, basis,
+                                                                 free)])
+        monkeypatch.setattr(_creep, "FIT_SAMPLES", 20_000)
+        assert (a, b) == (0, u.size) and sel is fitted
+        np.testing.assert_array_equal(long, chunked) if free else \
+            np.testing.assert_allclose(long, chunked, rtol=1e-13, atol=1e-13)
