@@ -547,7 +547,9 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  *     than half); the segment of m then either holds the answer, solved exactly, or
  *     moves L up to its right end or H down to its left end. The bracket thus loses
  *     m's segment and at least half of itself every other probe, and stops when it holds
- *     no breakpoint.
+ *     no breakpoint. These probes (probe_active) visit only the operators with a
+ *     breakpoint inside the bracket of the moment, kept in a compact set that shrinks
+ *     with it.
  * The answer is the least p with z(p) = target, as on the lists: a flat stretch with
  * z = target is passed over to its start (H moves down across it). Cost: O(K) per probe,
  * O(1 + segments passed) probes tracking, O(log K)-like probes for a jump (measured in
@@ -732,8 +734,15 @@ static PIHYST_INLINE void probe(size_t K, const real *PIHYST_RESTRICT lo, const 
 #else
     /* one lane: on a scalar FPU the lanes' partial results do not fit in its registers
      * (when this probe had five of them, bench-m4f measured a KP jump of K = 134 at
-     * 83,000 instructions in lanes, 71,000 so) */
-    for (; k < K; ++k) RAMP_PROBE_TERM(k, 0);
+     * 83,000 instructions in lanes, 71,000 so). An operator whose interval starts above
+     * m (q <= m) adds nothing but that start, found without the rest of the term. */
+    for (; k < K; ++k) {
+        if (lo[k] > m) {
+            nx[0] = lo[k] < nx[0] ? lo[k] : nx[0];
+            continue;
+        }
+        RAMP_PROBE_TERM(k, 0);
+    }
 #endif
     r->z = z[0];
     r->right = sr[0];
@@ -764,19 +773,19 @@ static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const re
  * [L, H] adds its slope to lin, one with nothing inside (L, H) adds nothing beyond zL.
  * Each probe first clips the set to the current bracket, folding or dropping operators,
  * and writes what is left compactly to (a, b, w) (from lo, hi, s: the first probe reads
- * every operator, later ones the set in place); then it finds at m what ramps_probe
- * finds, with next and prev bounded by H and L. The bracket shrinks with every probe, so
+ * every operator, later ones the set in place); then it finds at m z(m), the slopes just
+ * right and left of m and the nearest breakpoints above and below m (bounded by H and
+ * L), and with zH, z(H). The bracket shrinks with every probe, so
  * the set does too: a jump costs about one pass over the operators plus passes over
  * ever fewer, instead of a pass over all of them per probe. */
 static void probe_active(size_t *n, const real *lo, const real *hi, const real *s, real *a,
                          real *b, real *w, real L, real H, real zL, real *lin, real m,
-                         ramp_probe *r)
+                         real *zH, ramp_probe *r)
 {
     size_t i, j = 0;
-    real z = RC(0.0), sr = RC(0.0), sl = RC(0.0), nx = H, pv = L, lin_ = *lin;
+    real z = RC(0.0), zh = RC(0.0), sr = RC(0.0), sl = RC(0.0), nx = H, pv = L, lin_ = *lin;
     for (i = 0; i < *n; ++i) {
         const real l = lo[i] > L ? lo[i] : L, h = hi[i] < H ? hi[i] : H, wi = s[i];
-        real cm, nb, pb;
         if (!(l < h) || !(wi > RC(0.0))) continue; /* nothing inside (L, H) */
         if (l <= L && h >= H) { /* covers the bracket: linear in it */
             lin_ += wi;
@@ -786,18 +795,29 @@ static void probe_active(size_t *n, const real *lo, const real *hi, const real *
         b[j] = h;
         w[j] = wi;
         ++j;
-        cm = m > l ? m : l;
-        cm = cm < h ? cm : h;
-        z += wi * (cm - l);
-        sr += ((l <= m) & (m < h)) ? wi : RC(0.0);
-        sl += ((l < m) & (m <= h)) ? wi : RC(0.0);
-        nb = l > m ? l : (h > m ? h : R_INF);
-        nx = nb < nx ? nb : nx;
-        pb = h < m ? h : (l < m ? l : -R_INF);
-        pv = pb > pv ? pb : pv;
+        zh += wi * (h - l);
+        /* the terms of ramps_probe at m: nothing but its start above m, its whole rise
+         * and its end below m, or m on it (the branches of a scalar FPU without min/max) */
+        if (l > m) {
+            nx = l < nx ? l : nx;
+        } else if (h < m) {
+            z += wi * (h - l);
+            pv = h > pv ? h : pv;
+        } else {
+            z += wi * (m - l);
+            if (m < h) {
+                sr += wi;
+                nx = h < nx ? h : nx;
+            }
+            if (l < m) {
+                sl += wi;
+                pv = l > pv ? l : pv;
+            }
+        }
     }
     *n = j;
     *lin = lin_;
+    if (zH) *zH = zL + lin_ * (H - L) + zh;
     r->z = zL + lin_ * (m - L) + z;
     r->right = lin_ + sr;
     r->left = lin_ + sl;
@@ -945,9 +965,11 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
         L = nb;
         zL = zn;
     }
-    /* a jump: bracket [L, H] */
-    ramps_probe_right(K, lo, hi, s, H, q, &r);
-    zH = r.z;
+    /* a jump: bracket [L, H]. The first probe, at the midpoint (H if L and H are
+     * adjacent numbers), reads every operator and also gives z(H) */
+    p = L + RC(0.5) * (H - L);
+    if (!(p > L && p < H)) p = H;
+    probe_active(&n_active, lo, hi, s, act, act + K, act + 2 * K, L, H, zL, &lin, p, &zH, &r);
     if (zH < target) {
         *d = span;
         return 0;
@@ -955,14 +977,16 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
     width = H - L;
     for (i = 0; i < 100; ++i) {
         /* the secant point, or the midpoint if the bracket shrank by less than half */
-        real m = halve ? L + RC(0.5) * (H - L) : ramp_interpolate(L, zL, H, zH, target);
-        if (!(m > L && m < H)) m = L + RC(0.5) * (H - L);
-        if (!(m > L && m < H)) break; /* L, H adjacent numbers */
-        if (i == 0)
-            probe_active(&n_active, lo, hi, s, act, act + K, act + 2 * K, L, H, zL, &lin, m, &r);
-        else
+        real m = p;
+        if (i > 0) {
+            m = halve ? L + RC(0.5) * (H - L) : ramp_interpolate(L, zL, H, zH, target);
+            if (!(m > L && m < H)) m = L + RC(0.5) * (H - L);
+            if (!(m > L && m < H)) break; /* L, H adjacent numbers */
             probe_active(&n_active, act, act + K, act + 2 * K, act, act + K, act + 2 * K, L, H,
-                         zL, &lin, m, &r);
+                         zL, &lin, m, NULL, &r);
+        } else if (!(m < H)) {
+            break;
+        }
         if (r.z < target) { /* the answer lies right of m */
             const real nb = r.next < H ? r.next : H;
             const real zn = r.z + r.right * (nb - m);
