@@ -778,15 +778,17 @@ static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const re
  * L), and with zH, z(H). The bracket shrinks with every probe, so
  * the set does too: a jump costs about one pass over the operators plus passes over
  * ever fewer, instead of a pass over all of them per probe. */
-static void probe_active(size_t *n, const real *lo, const real *hi, const real *s, real *a,
-                         real *b, real *w, real L, real H, real zL, real *lin, real m,
-                         real *zH, ramp_probe *r)
+static PIHYST_INLINE void probe_active(size_t *n, const real *lo, const real *hi,
+                                       const real *s, real *a, real *b, real *w, real L,
+                                       real H, real zL, real *lin, real m, real *zH,
+                                       ramp_probe *r)
 {
     size_t i, j = 0;
     real z = RC(0.0), zh = RC(0.0), sr = RC(0.0), sl = RC(0.0), nx = H, pv = L, lin_ = *lin;
     for (i = 0; i < *n; ++i) {
         const real l = lo[i] > L ? lo[i] : L, h = hi[i] < H ? hi[i] : H, wi = s[i];
-        if (!(l < h) || !(wi > RC(0.0))) continue; /* nothing inside (L, H) */
+        /* nothing inside (L, H); an operator without slope has lo = hi (ramps_reverse_*) */
+        if (!(l < h)) continue;
         if (l <= L && h >= H) { /* covers the bracket: linear in it */
             lin_ += wi;
             continue;
@@ -795,7 +797,7 @@ static void probe_active(size_t *n, const real *lo, const real *hi, const real *
         b[j] = h;
         w[j] = wi;
         ++j;
-        zh += wi * (h - l);
+        if (zH) zh += wi * (h - l);
         /* the terms of ramps_probe at m: nothing but its start above m, its whole rise
          * and its end below m, or m on it (the branches of a scalar FPU without min/max) */
         if (l > m) {
