@@ -765,7 +765,6 @@ static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const re
     probe(K, lo, hi, s, m, q, r);
 }
 
-
 /* A jump's probes on the operators that still matter. Inside the bracket [L, H],
  *     z(p) = zL + lin (p - L) + sum_{k in A} s_k (clamp(p, a_k, b_k) - a_k)
  * where A holds the operators with a breakpoint strictly inside (L, H), clipped to it
@@ -775,9 +774,9 @@ static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const re
  * and writes what is left compactly to (a, b, w) (from lo, hi, s: the first probe reads
  * every operator, later ones the set in place); then it finds at m z(m), the slopes just
  * right and left of m and the nearest breakpoints above and below m (bounded by H and
- * L), and with zH, z(H). The bracket shrinks with every probe, so
- * the set does too: a jump costs about one pass over the operators plus passes over
- * ever fewer, instead of a pass over all of them per probe. */
+ * L), and with zH, z(H). The bracket shrinks with every probe, so the set does too: a
+ * jump costs about one pass over the operators plus passes over ever fewer, instead of a
+ * pass over all of them per probe. */
 static PIHYST_INLINE void probe_active(size_t *n, const real *lo, const real *hi,
                                        const real *s, real *a, real *b, real *w, real L,
                                        real H, real zL, real *lin, real m, real *zH,
@@ -798,8 +797,8 @@ static PIHYST_INLINE void probe_active(size_t *n, const real *lo, const real *hi
         w[j] = wi;
         ++j;
         if (zH) zh += wi * (h - l);
-        /* the terms of ramps_probe at m: nothing but its start above m, its whole rise
-         * and its end below m, or m on it (the branches of a scalar FPU without min/max) */
+        /* its term at m: nothing but its start above m, its whole rise and its end
+         * below m, or m on it (branches: a scalar FPU has no min/max) */
         if (l > m) {
             nx = l < nx ? l : nx;
         } else if (h < m) {

@@ -7,8 +7,8 @@
  * prints the figures in instructions, not cycles (docs/c-core.md says what that means on
  * a real part).
  *
- * For each model: the model step and the compensator step (single precision unless the
- * name says double), each
+ * For each model: the model step and the compensator step, in single precision (the
+ * model with creep: its _f32 lags too), each
  *   tracking: the mean over a 1 Hz full-range voltage sine sampled at 1 kHz (the
  *             compensator: the model's output for that sine as the desired value);
  *   worst:    the most expensive single sample of a jump to a random value every sample
