@@ -89,6 +89,55 @@ size_t pihyst_creep_compensator_run(pihyst_creep *cr, pihyst_compensator *c,
 /** Human-readable text of a status code (static storage). */
 const char *pihyst_creep_status_text(pihyst_creep_status status);
 
+/* ---- single precision (_f32): the same lags for a single-precision FPU ----------------
+ * A float lag cannot be stepped as (C2) is written: with alpha_i as small as 5e-6 (a
+ * 1000 s lag at 200 Hz), z_i + alpha_i (H - z_i) rounds back to z_i whenever
+ * alpha_i |H - z_i| is below half an ulp of z_i, i.e. the lag stops anywhere within
+ * ulp(z_i) / (2 alpha_i) of H (0.8 um at -120 um). The _f32 lags therefore keep the
+ * deviations e_i = z_i - h from the last hysteresis output h, which shrink to zero as
+ * the lags settle, and step them with the change of H (the same model as (C2)-(C5)):
+ *     x_i = e_i[t-1] - (H[t] - H[t-1]),   e_i[t] = x_i - alpha_i x_i           (C2')
+ *     y[t] = H[t] + sum_i g_i e_i[t]                                             (C3')
+ *     H*[t] = H[t-1] + (y_d - H[t-1] - sum_i g_i (1 - alpha_i) e_i[t-1]) / (1 - beta) (C5')
+ * Rounding is relative to the deviations, not to H. The state is e_i (n floats) and h,
+ * h = 0 at init, so initial_state gives z_i as in the double API. */
+typedef struct {
+    size_t n;          /**< number of lags */
+    const float *tau;  /**< n time constants, > 0 (caller-owned) */
+    const float *gain; /**< n gains, >= 0, sum < 1 (caller-owned) */
+    float dt;          /**< the fixed sample interval, >= 0 */
+    float *alpha;      /**< n floats (caller-owned), written by init: (C1) for dt */
+    float beta;        /**< (C4) for dt */
+    float *state;      /**< n floats e_i = z_i[t-1] - h (caller-owned) */
+    float h;           /**< the last hysteresis output H[t-1] */
+} pihyst_creep_f32;
+
+/** Validate and wire up (as pihyst_creep_init). state (the deviations) is set so that
+ *  z_i = initial_state[i] (n values, h = 0), or to zeros if NULL. */
+pihyst_creep_status pihyst_creep_init_f32(pihyst_creep_f32 *c, size_t n, const float *tau,
+                                          const float *gain, float dt, float *alpha,
+                                          float *state, const float *initial_state);
+/** At rest at the hysteresis output h: every z_i = h. */
+void pihyst_creep_settle_f32(pihyst_creep_f32 *c, float h);
+/** (C5') for the fixed interval. */
+float pihyst_creep_target_f32(const pihyst_creep_f32 *c, float y_desired);
+/** (C2')-(C3') for the fixed interval: advance the lags by h, return y. */
+float pihyst_creep_step_f32(pihyst_creep_f32 *c, float h);
+/** (C5') and (C2')-(C3') for an interval dt >= 0 given with the sample. */
+float pihyst_creep_target_dt_f32(const pihyst_creep_f32 *c, float dt, float y_desired);
+float pihyst_creep_step_dt_f32(pihyst_creep_f32 *c, float dt, float h);
+/** A block (dt NULL: the fixed interval); h and y may be the same array. */
+void pihyst_creep_run_f32(pihyst_creep_f32 *c, const float *h, const float *dt, float *y,
+                          size_t n);
+/** pihyst_creep_compensator_step on the _f32 compensator (dt < 0: the fixed interval). */
+float pihyst_creep_compensator_step_f32(pihyst_creep_f32 *cr, pihyst_compensator_f32 *c,
+                                        float dt, float y_desired, float *y,
+                                        pihyst_flags *flags);
+/** A block of n samples of pihyst_creep_compensator_step_f32. */
+size_t pihyst_creep_compensator_run_f32(pihyst_creep_f32 *cr, pihyst_compensator_f32 *c,
+                                        const float *y_desired, const float *dt, float *u,
+                                        float *y, pihyst_flags *flags, size_t n);
+
 #ifdef __cplusplus
 }
 #endif

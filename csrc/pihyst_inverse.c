@@ -547,7 +547,9 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  *     than half); the segment of m then either holds the answer, solved exactly, or
  *     moves L up to its right end or H down to its left end. The bracket thus loses
  *     m's segment and at least half of itself every other probe, and stops when it holds
- *     no breakpoint.
+ *     no breakpoint. These probes (probe_active) visit only the operators with a
+ *     breakpoint inside the bracket of the moment, kept in a compact set that shrinks
+ *     with it.
  * The answer is the least p with z(p) = target, as on the lists: a flat stretch with
  * z = target is passed over to its start (H moves down across it). Cost: O(K) per probe,
  * O(1 + segments passed) probes tracking, O(log K)-like probes for a jump (measured in
@@ -664,9 +666,9 @@ typedef struct {
     real z, right, left, next, prev;
 } ramp_probe;
 
-/* One term of the probe into lane j. The nearest breakpoint above m is lo if lo > m,
- * else hi if hi > m (lo <= hi); below m likewise. Without `full` only z, the slope right
- * of m and the next breakpoint (all a probe from the left needs). */
+/* One term of a probe from the left into lane j: z, the slope right of m and the
+ * nearest breakpoint above m (lo if lo > m, else hi if hi > m; lo <= hi). A jump's
+ * probes, which also need the left side, are probe_active's. */
 #define RAMP_PROBE_TERM(i, j)                                                     \
     do {                                                                          \
         const real l_ = lo[i], h_ = hi[i], w_ = s[i];                             \
@@ -677,11 +679,6 @@ typedef struct {
         sr[j] += ((l_ <= m) & (m < h_)) ? w_ : RC(0.0);                           \
         n_ = l_ > m ? l_ : (h_ > m ? h_ : R_INF);                                 \
         nx[j] = n_ < nx[j] ? n_ : nx[j];                                          \
-        if (full) {                                                               \
-            const real b_ = h_ < m ? h_ : (l_ < m ? l_ : -R_INF);                 \
-            sl[j] += ((l_ < m) & (m <= h_)) ? w_ : RC(0.0);                       \
-            pv[j] = b_ > pv[j] ? b_ : pv[j];                                      \
-        }                                                                         \
     } while (0)
 
 /* The probe's loop over blocks of RAMP_LANES operators, on vectors of RAMP_LANES values
@@ -694,21 +691,20 @@ typedef struct {
 typedef real rvec __attribute__((vector_size(RAMP_LANES * sizeof(real))));
 #endif
 
-/* z(m) - z(q) and the rest of ramp_probe (with `full`), in RAMP_LANES partial results */
+/* z(m) - z(q), the slope right of m and the next breakpoint, in RAMP_LANES partial
+ * results (left = 0, prev = -inf) */
 static PIHYST_INLINE void probe(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
-                                const real *PIHYST_RESTRICT s, real m, real q, int full,
-                                ramp_probe *r)
+                                const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
 {
 #ifdef RAMP_VECTOR
-    rvec z, sr, sl, nx, pv;
+    rvec z, sr, nx;
 #else
-    real z[RAMP_LANES], sr[RAMP_LANES], sl[RAMP_LANES], nx[RAMP_LANES], pv[RAMP_LANES];
+    real z[RAMP_LANES], sr[RAMP_LANES], nx[RAMP_LANES];
 #endif
     size_t k = 0, j;
     for (j = 0; j < RAMP_LANES; ++j) {
-        z[j] = sr[j] = sl[j] = RC(0.0);
+        z[j] = sr[j] = RC(0.0);
         nx[j] = R_INF;
-        pv[j] = -R_INF;
     }
 #ifdef RAMP_VECTOR
     /* the last block padded with operators that cannot move (lo = hi = q, no slope), so
@@ -737,21 +733,26 @@ static PIHYST_INLINE void probe(size_t K, const real *PIHYST_RESTRICT lo, const 
     }
 #else
     /* one lane: on a scalar FPU the lanes' partial results do not fit in its registers
-     * (5 x RAMP_LANES of them), and spilling them cost more than the dependency chain
-     * (bench-m4f: a KP jump of K = 134 took 83,000 instructions in lanes, 71,000 so) */
-    for (; k < K; ++k) RAMP_PROBE_TERM(k, 0);
+     * (when this probe had five of them, bench-m4f measured a KP jump of K = 134 at
+     * 83,000 instructions in lanes, 71,000 so). An operator whose interval starts above
+     * m (q <= m) adds nothing but that start, found without the rest of the term. */
+    for (; k < K; ++k) {
+        if (lo[k] > m) {
+            nx[0] = lo[k] < nx[0] ? lo[k] : nx[0];
+            continue;
+        }
+        RAMP_PROBE_TERM(k, 0);
+    }
 #endif
     r->z = z[0];
     r->right = sr[0];
-    r->left = sl[0];
+    r->left = RC(0.0);
     r->next = nx[0];
-    r->prev = pv[0];
+    r->prev = -R_INF;
     for (j = 1; j < RAMP_LANES; ++j) {
         r->z += z[j];
         r->right += sr[j];
-        r->left += sl[j];
         r->next = nx[j] < r->next ? nx[j] : r->next;
-        r->prev = pv[j] > r->prev ? pv[j] : r->prev;
     }
 }
 #undef RAMP_PROBE_TERM
@@ -761,14 +762,68 @@ PIHYST_HOT
 static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
                               const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
 {
-    probe(K, lo, hi, s, m, q, 0, r);
+    probe(K, lo, hi, s, m, q, r);
 }
 
-PIHYST_HOT
-static void ramps_probe(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
-                        const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
+/* A jump's probes on the operators that still matter. Inside the bracket [L, H],
+ *     z(p) = zL + lin (p - L) + sum_{k in A} s_k (clamp(p, a_k, b_k) - a_k)
+ * where A holds the operators with a breakpoint strictly inside (L, H), clipped to it
+ * (a_k = max(lo_k, L), b_k = min(hi_k, H)): an operator whose clipped interval covers
+ * [L, H] adds its slope to lin, one with nothing inside (L, H) adds nothing beyond zL.
+ * Each probe first clips the set to the current bracket, folding or dropping operators,
+ * and writes what is left compactly to (a, b, w) (from lo, hi, s: the first probe reads
+ * every operator, later ones the set in place); then it finds at m z(m), the slopes just
+ * right and left of m and the nearest breakpoints above and below m (bounded by H and
+ * L), and with zH, z(H). The bracket shrinks with every probe, so the set does too: a
+ * jump costs about one pass over the operators plus passes over ever fewer, instead of a
+ * pass over all of them per probe. */
+static PIHYST_INLINE void probe_active(size_t *n, const real *lo, const real *hi,
+                                       const real *s, real *a, real *b, real *w, real L,
+                                       real H, real zL, real *lin, real m, real *zH,
+                                       ramp_probe *r)
 {
-    probe(K, lo, hi, s, m, q, 1, r);
+    size_t i, j = 0;
+    real z = RC(0.0), zh = RC(0.0), sr = RC(0.0), sl = RC(0.0), nx = H, pv = L, lin_ = *lin;
+    for (i = 0; i < *n; ++i) {
+        const real l = lo[i] > L ? lo[i] : L, h = hi[i] < H ? hi[i] : H, wi = s[i];
+        /* nothing inside (L, H); an operator without slope has lo = hi (ramps_reverse_*) */
+        if (!(l < h)) continue;
+        if (l <= L && h >= H) { /* covers the bracket: linear in it */
+            lin_ += wi;
+            continue;
+        }
+        a[j] = l;
+        b[j] = h;
+        w[j] = wi;
+        ++j;
+        if (zH) zh += wi * (h - l);
+        /* its term at m: nothing but its start above m, its whole rise and its end
+         * below m, or m on it (branches: a scalar FPU has no min/max) */
+        if (l > m) {
+            nx = l < nx ? l : nx;
+        } else if (h < m) {
+            z += wi * (h - l);
+            pv = h > pv ? h : pv;
+        } else {
+            z += wi * (m - l);
+            if (m < h) {
+                sr += wi;
+                nx = h < nx ? h : nx;
+            }
+            if (l < m) {
+                sl += wi;
+                pv = l > pv ? l : pv;
+            }
+        }
+    }
+    *n = j;
+    *lin = lin_;
+    if (zH) *zH = zL + lin_ * (H - L) + zh;
+    r->z = zL + lin_ * (m - L) + z;
+    r->right = lin_ + sr;
+    r->left = lin_ + sl;
+    r->next = nx;
+    r->prev = pv;
 }
 
 /* The model step of a ramp model, with AVX2 on x86-64 (double precision; the f32 core is
@@ -864,7 +919,9 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
     const size_t K = c->work_model.n_ops;
     const real *lo = ramp_array(c, 2, 0), *hi = lo + K, *s = ramp_array(c, !up, RAMP_SLOPE);
     const real q = up ? u_p : -u_p, end = q + span;
-    real L = q, zL = RC(0.0), H = end, zH, p, width;
+    real L = q, zL = RC(0.0), H = end, zH, p, width, lin = RC(0.0);
+    real *act = ramp_array(c, 2, 2); /* the jump's active set, 3 K (probe_active) */
+    size_t n_active = K;
     ramp_probe r;
     int i, halve = 0;
     if (c->dir != (up ? 1 : -1)) { /* a reversal */
@@ -909,9 +966,11 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
         L = nb;
         zL = zn;
     }
-    /* a jump: bracket [L, H] */
-    ramps_probe_right(K, lo, hi, s, H, q, &r);
-    zH = r.z;
+    /* a jump: bracket [L, H]. The first probe, at the midpoint (H if L and H are
+     * adjacent numbers), reads every operator and also gives z(H) */
+    p = L + RC(0.5) * (H - L);
+    if (!(p > L && p < H)) p = H;
+    probe_active(&n_active, lo, hi, s, act, act + K, act + 2 * K, L, H, zL, &lin, p, &zH, &r);
     if (zH < target) {
         *d = span;
         return 0;
@@ -919,10 +978,16 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
     width = H - L;
     for (i = 0; i < 100; ++i) {
         /* the secant point, or the midpoint if the bracket shrank by less than half */
-        real m = halve ? L + RC(0.5) * (H - L) : ramp_interpolate(L, zL, H, zH, target);
-        if (!(m > L && m < H)) m = L + RC(0.5) * (H - L);
-        if (!(m > L && m < H)) break; /* L, H adjacent numbers */
-        ramps_probe(K, lo, hi, s, m, q, &r);
+        real m = p;
+        if (i > 0) {
+            m = halve ? L + RC(0.5) * (H - L) : ramp_interpolate(L, zL, H, zH, target);
+            if (!(m > L && m < H)) m = L + RC(0.5) * (H - L);
+            if (!(m > L && m < H)) break; /* L, H adjacent numbers */
+            probe_active(&n_active, act, act + K, act + 2 * K, act, act + K, act + 2 * K, L, H,
+                         zL, &lin, m, NULL, &r);
+        } else if (!(m < H)) {
+            break;
+        }
         if (r.z < target) { /* the answer lies right of m */
             const real nb = r.next < H ? r.next : H;
             const real zn = r.z + r.right * (nb - m);

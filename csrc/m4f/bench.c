@@ -7,8 +7,8 @@
  * prints the figures in instructions, not cycles (docs/c-core.md says what that means on
  * a real part).
  *
- * For each model: the model step and the compensator step (single precision unless the
- * name says double), each
+ * For each model: the model step and the compensator step, in single precision (the
+ * model with creep: its _f32 lags too), each
  *   tracking: the mean over a 1 Hz full-range voltage sine sampled at 1 kHz (the
  *             compensator: the model's output for that sine as the desired value);
  *   worst:    the most expensive single sample of a jump to a random value every sample
@@ -117,9 +117,7 @@ static float uniform(void)
 
 /* signals */
 static float u_track[N_TRACK], u_jump[N_WORST], y_track[N_TRACK], y_jump[N_WORST];
-static double ud_track[N_TRACK], ud_jump[N_WORST], yd_track[N_TRACK], yd_jump[N_WORST];
 static volatile float sink;
-static volatile double sink_d;
 
 static void make_voltages(float lo, float hi)
 {
@@ -128,8 +126,6 @@ static void make_voltages(float lo, float hi)
         u_track[t] = 0.5f * (lo + hi) -
                      0.5f * (hi - lo) * cosf(6.2831853f * (float)t / 1000.0f);
     for (t = 0; t < N_WORST; ++t) u_jump[t] = lo + (hi - lo) * uniform();
-    for (t = 0; t < N_TRACK; ++t) ud_track[t] = u_track[t];
-    for (t = 0; t < N_WORST; ++t) ud_jump[t] = u_jump[t];
 }
 
 /* a PI model (single precision): model step and compensator, tracking and worst */
@@ -277,49 +273,68 @@ static void bench_boucwen(void)
 }
 
 #if KP_P885_HAS_CREEP
-/* the P-885 model with its creep lags, as the default fit gives it: double precision
- * (the C core's creep lags are double only; on the M4F's single-precision FPU every
- * double operation is a software routine) */
+/* the P-885 model with its creep lags, as the default fit gives it, in single precision:
+ * the hysteresis model of kp_p885.h and the lags of kp_p885_creep.h (exported in double:
+ * their time constants and gains are converted to floats once, here) on the _f32 lags
+ * (pihyst_creep_f32.c) */
 static void bench_creep(void)
 {
-    static pihyst_model m;
-    static pihyst_compensator c;
-    static pihyst_creep cr;
-    char name[48];
+    static pihyst_model_f32 m;
+    static pihyst_compensator_f32 c;
+    static float tau[KP_P885_CREEP_CREEP_LAGS], gain[KP_P885_CREEP_CREEP_LAGS];
+    static float alpha[KP_P885_CREEP_CREEP_LAGS], state[KP_P885_CREEP_CREEP_LAGS];
+    pihyst_creep_f32 cr;
+    char name[48], lags[48];
     pihyst_flags fl;
-    double r, y_lo = INFINITY, y_hi = -INFINITY;
-    size_t t;
-    if (kp_p885_creep_init(&m) != PIHYST_OK) return;
-    snprintf(name, sizeof name, "kp-P885-K%u-creep-double", (unsigned)KP_P885_CREEP_N_OPS);
-    make_voltages((float)m.u_min, (float)m.u_max);
-    kp_p885_creep_creep_init(&cr, KP_P885_CREEP_INITIAL_OUTPUT);
-    TRACK(r, N_TRACK, sink_d = pihyst_creep_step(&cr, pihyst_model_step(&m, ud_track[t_])));
-    report(name, "model-tracking", r);
-    WORST(r, N_WORST, sink_d = pihyst_creep_step(&cr, pihyst_model_step(&m, ud_jump[t_])));
-    report(name, "model-worst", r);
-    pihyst_model_reset(&m, kp_p885_creep_initial_state);
-    kp_p885_creep_creep_init(&cr, KP_P885_CREEP_INITIAL_OUTPUT);
-    for (t = 0; t < N_TRACK; ++t) {
-        yd_track[t] = pihyst_creep_step(&cr, pihyst_model_step(&m, ud_track[t]));
-        y_lo = yd_track[t] < y_lo ? yd_track[t] : y_lo;
-        y_hi = yd_track[t] > y_hi ? yd_track[t] : y_hi;
+    float y_lo = INFINITY, y_hi = -INFINITY, h0;
+    double r;
+    size_t t, i;
+    for (i = 0; i < KP_P885_CREEP_CREEP_LAGS; ++i) {
+        tau[i] = (float)kp_p885_creep_creep_tau[i];
+        gain[i] = (float)kp_p885_creep_creep_gain[i];
     }
-    for (t = 0; t < N_WORST; ++t) yd_jump[t] = y_lo + (y_hi - y_lo) * (double)uniform();
-    pihyst_model_reset(&m, kp_p885_creep_initial_state);
-    if (kp_p885_creep_compensator_init(&c, &m, NAN, NAN, INFINITY, ud_track[0]) != PIHYST_OK)
+    if (kp_p885_init(&m) != PIHYST_OK ||
+        pihyst_creep_init_f32(&cr, KP_P885_CREEP_CREEP_LAGS, tau, gain,
+                              (float)KP_P885_CREEP_CREEP_DT, alpha, state,
+                              NULL) != PIHYST_CREEP_OK) {
+        printf("m4f: creep: init failed\n");
         return;
-    kp_p885_creep_creep_init(&cr, c.y_last);
+    }
+    snprintf(name, sizeof name, "kp-P885-K%u-creep", (unsigned)KP_P885_N_OPS);
+    snprintf(lags, sizeof lags, "creep-lags-%u", (unsigned)KP_P885_CREEP_CREEP_LAGS);
+    make_voltages(m.u_min, m.u_max);
+    h0 = pihyst_model_step_f32(&m, u_track[0]);
+    pihyst_model_reset_f32(&m, kp_p885_initial_state);
+    pihyst_creep_settle_f32(&cr, h0);
+    TRACK(r, N_TRACK, sink = pihyst_creep_step_f32(&cr, pihyst_model_step_f32(&m, u_track[t_])));
+    report(name, "model-tracking", r);
+    WORST(r, N_WORST, sink = pihyst_creep_step_f32(&cr, pihyst_model_step_f32(&m, u_jump[t_])));
+    report(name, "model-worst", r);
+    pihyst_model_reset_f32(&m, kp_p885_initial_state);
+    pihyst_creep_settle_f32(&cr, h0);
+    for (t = 0; t < N_TRACK; ++t) {
+        y_track[t] = pihyst_creep_step_f32(&cr, pihyst_model_step_f32(&m, u_track[t]));
+        y_lo = y_track[t] < y_lo ? y_track[t] : y_lo;
+        y_hi = y_track[t] > y_hi ? y_track[t] : y_hi;
+    }
+    for (t = 0; t < N_WORST; ++t) y_jump[t] = y_lo + (y_hi - y_lo) * uniform();
+    pihyst_model_reset_f32(&m, kp_p885_initial_state);
+    if (pihyst_compensator_init_f32(&c, &m, NAN, NAN, INFINITY, u_track[0], kp_p885_scratch,
+                                    sizeof kp_p885_scratch / sizeof *kp_p885_scratch) !=
+        PIHYST_OK)
+        return;
+    pihyst_creep_settle_f32(&cr, c.y_last);
     TRACK(r, N_TRACK,
-          sink_d = pihyst_creep_compensator_step(&cr, &c, -1.0, yd_track[t_], NULL, &fl));
+          sink = pihyst_creep_compensator_step_f32(&cr, &c, -1.0f, y_track[t_], NULL, &fl));
     report(name, "compensator-tracking", r);
     WORST(r, N_WORST,
-          sink_d = pihyst_creep_compensator_step(&cr, &c, -1.0, yd_jump[t_], NULL, &fl));
+          sink = pihyst_creep_compensator_step_f32(&cr, &c, -1.0f, y_jump[t_], NULL, &fl));
     report(name, "compensator-worst", r);
     /* the lags alone (what the creep adds to the hysteresis model) */
-    TRACK(r, N_TRACK, sink_d = pihyst_creep_step(&cr, yd_track[t_]));
-    report("creep-lags-9-double", "model-tracking", r);
-    TRACK(r, N_TRACK, sink_d = pihyst_creep_target(&cr, yd_track[t_]));
-    report("creep-lags-9-double", "compensator-target", r);
+    TRACK(r, N_TRACK, sink = pihyst_creep_step_f32(&cr, y_track[t_]));
+    report(lags, "model-tracking", r);
+    TRACK(r, N_TRACK, sink = pihyst_creep_target_f32(&cr, y_track[t_]));
+    report(lags, "compensator-target", r);
 }
 #endif
 

@@ -3,8 +3,9 @@
 # record's columns, as docs/records.md gives them) produces for the two measured records,
 # exported as C headers for bench-m4f (bench.c):
 #   kp_p885.h        P-885.91 stack, single precision, without its creep lags (the
-#                    creep lags of the C core are double only: no --float header)
-#   kp_p885_creep.h  the same model with its creep lags, double precision (as exported)
+#                    exporter writes creep lags in double only: no --float header)
+#   kp_p885_creep.h  the same model with its creep lags, double precision (as exported;
+#                    bench.c takes its lags' constants, as floats, for the _f32 lags)
 #   kp_smart.h       SmartHysteresis 150 V 1 Hz sine, single precision
 # plus models.txt (family, operators, creep lags of each). Run on every bench-m4f, so the
 # bench measures whatever the current default fit gives. PIHYST: the pihyst command

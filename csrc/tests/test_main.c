@@ -52,6 +52,7 @@ int main(void)
 #endif
 #ifdef PIHYST_TEST_F32
     run_twin_tests();
+    run_creep_f32_tests();
 #if PIHYST_STATE_ALIGN == 0
     printf("single precision, PIHYST_STATE_ALIGN=0: %d passed, %d failed\n", test_passed,
            test_failed);

@@ -45,5 +45,6 @@ void run_bank_soa_tests(void);
 void run_kernel_tests(void);
 void run_twin_tests(void);
 void run_creep_tests(void);
+void run_creep_f32_tests(void);
 void run_bw_creep_tests(void);
 #endif
