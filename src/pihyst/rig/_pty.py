@@ -17,6 +17,24 @@ from pihyst.rig._clock import WallClock
 from pihyst.rig._emulators import Emulators
 
 
+def answer(device, data, write, bytewise=True):
+    """Hand ``data``, just read, to ``device`` (as arrived when its last byte would have,
+    at the device's baud rate) and ``write`` its replies when they would be sent: one
+    byte a character time apart from the device's ready time, or (``bytewise`` False)
+    each reply at once when its last byte would be out. ``write`` raises OSError when the
+    other side is gone."""
+    char_s = device.char_bits / device.baudrate
+    arrived = WallClock.now() + len(data) * char_s
+    for when, reply in device.receive(data, arrived):
+        chunks = ([(when + (i + 1) * char_s, reply[i:i + 1]) for i in range(len(reply))]
+                  if bytewise else [(when + len(reply) * char_s, reply)])
+        for due, chunk in chunks:
+            wait = due - WallClock.now()
+            if wait > 0:
+                time.sleep(wait)
+            write(chunk)
+
+
 class _PtyDevice:
     def __init__(self, device):
         self.device = device
@@ -30,9 +48,6 @@ class _PtyDevice:
 
     def start(self):
         self._thread.start()
-
-    def _char_s(self):
-        return self.device.char_bits / self.device.baudrate
 
     def _serve(self):
         while not self._stop.is_set():
@@ -48,17 +63,10 @@ class _PtyDevice:
                 break
             if not data:
                 continue
-            arrived = WallClock.now() + len(data) * self._char_s()
-            for when, reply in self.device.receive(data, arrived):
-                # bytes go out one character time apart, from the device's ready time
-                for i in range(len(reply)):
-                    wait = when + (i + 1) * self._char_s() - WallClock.now()
-                    if wait > 0:
-                        time.sleep(wait)
-                    try:
-                        os.write(self.master, reply[i:i + 1])
-                    except OSError:
-                        return
+            try:
+                answer(self.device, data, lambda b: os.write(self.master, b))
+            except OSError:
+                return
         self.close()
 
     def close(self):
