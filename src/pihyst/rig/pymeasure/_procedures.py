@@ -75,6 +75,18 @@ class _RigProcedure(Procedure):
 
     rig = None
     results_of_runs = None
+    #: emulated instruments only: faults to inject (:class:`~pihyst.rig.Fault`)
+    faults = ()
+    #: the rig's emulated instruments (None on a real rig), kept after the rig closes
+    emulators = None
+
+    def emit(self, topic, record):
+        """Outside a PyMeasure Worker (which replaces this), results are not sent
+        anywhere: the run's ticks are in :attr:`result` (``records``)."""
+
+    def should_stop(self):
+        """Outside a PyMeasure Worker (which replaces this), nothing asks for a stop."""
+        return False
 
     def load_config(self):
         from pihyst.rig import load_config
@@ -82,7 +94,8 @@ class _RigProcedure(Procedure):
 
     def open_rig(self, config):
         from pihyst.rig import Rig
-        self.rig = Rig(config, real_time=bool(self.real_time))
+        self.rig = Rig(config, real_time=bool(self.real_time), faults=self.faults)
+        self.emulators = self.rig.emulators
         log.info("rig: %s", self.rig.describe())
         return self.rig
 
