@@ -32,10 +32,11 @@ def record(config, output, period, cycles, u_max=0.0):
     return procedure, results
 
 
-def window(config, period, cycles):
-    """PyMeasure's ManagedWindow: the loop (displacement against voltage) plotted live."""
-    from pymeasure.display.Qt import QtWidgets
+def make_window(config, period, cycles):
+    """PyMeasure's ManagedWindow for the RecordProcedure: the loop (displacement against
+    voltage) plotted live; Queue runs one record into loop-N.csv. Needs a QApplication."""
     from pymeasure.display.windows import ManagedWindow
+    from pymeasure.experiment import Results
 
     from pihyst.rig.pymeasure import RecordProcedure
 
@@ -50,15 +51,20 @@ def window(config, period, cycles):
 
         def queue(self, procedure=None):
             procedure = procedure or self.make_procedure()
-            filename = os.path.abspath(f"loop-{len(self.manager.experiments) + 1}.csv")
+            self.runs = getattr(self, "runs", 0) + 1
+            filename = os.path.abspath(f"loop-{self.runs}.csv")
             self.manager.queue(self.new_experiment(Results(procedure, filename)))
 
-    from pymeasure.experiment import Results
+    window = RecordWindow()
+    window.set_parameters(RecordProcedure(config=config, period=period,
+                                          cycles=cycles).parameter_objects())
+    return window
+
+
+def window(config, period, cycles):
+    from pymeasure.display.Qt import QtWidgets
     app = QtWidgets.QApplication(sys.argv)
-    RecordProcedure.config.value = config
-    RecordProcedure.period.value = period
-    RecordProcedure.cycles.value = cycles
-    w = RecordWindow()
+    w = make_window(config, period, cycles)
     w.show()
     return app.exec()
 

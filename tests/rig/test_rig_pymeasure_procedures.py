@@ -188,3 +188,37 @@ def test_example_as_a_script(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "recorded 401 ticks: voltage 0 .. 150 V" in proc.stdout
     assert "stopped: end of the program; 0 V, output off" in proc.stdout
+
+
+@pytest.mark.slow
+def test_managed_window_plots_the_run_live(tmp_path, monkeypatch):
+    """The example's ManagedWindow (offscreen): Queue runs a record, and the loop's curve
+    grows while the run goes. Needs a Qt binding (not in the test extra: PyQt5 or
+    PySide6 installed by hand)."""
+    import importlib.util
+    import time
+    if not any(importlib.util.find_spec(m) for m in ("PyQt5", "PySide6", "PyQt6", "PySide2")):
+        pytest.skip("no Qt binding installed (pip install PyQt5)")
+    monkeypatch.setenv("QT_QPA_PLATFORM", "offscreen")
+    monkeypatch.chdir(tmp_path)
+    from pymeasure.display.Qt import QtWidgets
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    window = load_example().make_window(os.path.join(ROOT, "examples", "rig", "emulated.toml"),
+                                        10.0, 1)
+    window.queue()
+    sizes = []
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        app.processEvents()
+        curve = window.manager.experiments.queue[0].curve_list[0]
+        sizes.append(0 if curve.xData is None else len(curve.xData))
+        if not window.manager.is_running() and sizes[-1] > 0:
+            break
+        time.sleep(0.02)
+    experiment = window.manager.experiments.queue[0]
+    assert experiment.procedure.result.reason == "end of the program"
+    assert experiment.procedure.result.zeroed
+    assert sizes[-1] == 201 and 30 < max(curve.yData) < 50     # the whole loop, plotted
+    assert len({s for s in sizes if 0 < s < 201}) >= 2          # ... while it was recorded
+    assert (tmp_path / "loop-1.csv").exists()
+    window.close()
