@@ -16,9 +16,9 @@ pytest.importorskip("pymeasure")
 
 from pymeasure.experiment import Procedure, Results, Worker  # noqa: E402
 
+from pihyst.exceptions import InvalidArgumentError  # noqa: E402
 from pihyst.rig import COLUMNS, Fault  # noqa: E402
 from pihyst.rig.pymeasure import (  # noqa: E402
-    LearnProcedure,
     RecordProcedure,
     RunStopped,
     TrackProcedure,
@@ -125,7 +125,7 @@ def test_a_fault_fails_the_procedure_after_zeroing(tmp_path, rig_toml):
 
 def test_limits_beyond_the_rig_are_refused_before_anything_is_sent(rig_toml):
     procedure = RecordProcedure(config=rig_toml, u_max=151.0)
-    with pytest.raises(ValueError, match="within the rig's limits"):
+    with pytest.raises(InvalidArgumentError, match="within the rig's limits"):
         procedure.startup()
     assert procedure.rig is None
 
@@ -147,8 +147,9 @@ def test_track_open_loop_and_with_feedback(tmp_path, rig_toml, model_json):
     assert errors["feedback"]["rms"] < errors["open"]["rms"] / 2
 
 
-def test_learn_runs_trials_that_each_end_at_zero(tmp_path, rig_toml, model_json):
+def test_learn_example_runs_trials_that_each_end_at_zero(tmp_path, rig_toml, model_json):
     desired = desired_csv(tmp_path, 2.0)
+    LearnProcedure = load_example("pymeasure_learn").LearnProcedure
     procedure = LearnProcedure(config=rig_toml, model=model_json, desired=desired, trials=2)
     results = run_in_worker(procedure, tmp_path / "learn.csv")
     assert procedure.status == Procedure.FINISHED
@@ -159,10 +160,10 @@ def test_learn_runs_trials_that_each_end_at_zero(tmp_path, rig_toml, model_json)
     assert min(procedure.learning.rms) < procedure.learning.rms[0]
 
 
-def load_example():
+def load_example(name="pymeasure_record"):
     import importlib.util
-    path = os.path.join(ROOT, "examples", "pymeasure_record.py")
-    spec = importlib.util.spec_from_file_location("pymeasure_record", path)
+    path = os.path.join(ROOT, "examples", f"{name}.py")
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

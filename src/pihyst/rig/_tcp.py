@@ -14,6 +14,7 @@ import select
 import socket
 import threading
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.rig._clock import WallClock
 from pihyst.rig._emulators import Emulators
 from pihyst.rig._pty import answer
@@ -98,8 +99,8 @@ class TcpEmulators:
 
     def __init__(self, config, port=0, host=LOOPBACK, plant=None, faults=()):
         if not 0 <= port <= 65534:
-            raise ValueError(f"TCP port must be 0 .. 65534 (the sensor takes port + 1), got "
-                             f"{port}")
+            raise InvalidArgumentError(f"TCP port must be 0 .. 65534 (the sensor takes port "
+                                       f"+ 1), got {port}")
         self.emulators = Emulators(config, plant=plant, faults=faults, t0=WallClock.now())
         self._servers = {}
         try:

@@ -3,10 +3,12 @@
 Instrument classes that speak exactly the bytes of ``pihyst rig``'s drivers (they hold
 those drivers, on the PyMeasure adapter): :class:`KeyenceLKG5000`,
 :class:`KeyenceLKG3000`, :class:`ModbusHVSupply`, :class:`AsciiHVSupply` and
-:class:`MDT693BLikeSupply`. Procedures for ``record``, ``track`` and ``learn``
-(:class:`RecordProcedure`, :class:`TrackProcedure`, :class:`LearnProcedure`) that run
-pihyst's controller with its safety and emit every tick, so that PyMeasure's
-ManagedWindow plots a run live. See docs/rig.md and ``examples/pymeasure_record.py``.
+:class:`MDT693BLikeSupply`. Procedures for ``record`` and ``track``
+(:class:`RecordProcedure`, :class:`TrackProcedure`, on the base :class:`RigProcedure`)
+that run pihyst's controller with its safety and emit every tick, so that PyMeasure's
+ManagedWindow plots a run live; ``learn`` is built on :class:`RigProcedure` in
+``examples/pymeasure_learn.py`` (the learning sits beside the rig, not under it). See
+docs/rig.md and ``examples/pymeasure_record.py``.
 """
 
 try:
@@ -25,12 +27,12 @@ from pihyst.rig.pymeasure._instruments import (
 )
 from pihyst.rig.pymeasure._port import AdapterPort
 from pihyst.rig.pymeasure._procedures import (
-    LearnProcedure,
     RecordProcedure,
+    RigProcedure,
     RunStopped,
     TrackProcedure,
 )
 
 __all__ = ["MDT693B_DIALECT", "AdapterPort", "AsciiHVSupply", "KeyenceLKG3000",
-           "KeyenceLKG5000", "LearnProcedure", "MDT693BLikeSupply", "ModbusHVSupply",
-           "RecordProcedure", "RunStopped", "TrackProcedure"]
+           "KeyenceLKG5000", "MDT693BLikeSupply", "ModbusHVSupply", "RecordProcedure",
+           "RigProcedure", "RunStopped", "TrackProcedure"]

@@ -18,6 +18,7 @@ from pymeasure.instruments import Instrument
 from pymeasure.instruments.validators import strict_range
 from pyvisa.constants import Parity, StopBits
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.rig._config import (
     ConfigError,
     RigConfig,
@@ -144,7 +145,7 @@ class _Supply(_RigInstrument):
         self.driver = self.driver_class(self.port, section)
         max_voltage = float(max_voltage)
         if not (math.isfinite(max_voltage) and max_voltage > 0):
-            raise ValueError(f"max_voltage must be a positive number of volts, got "
+            raise InvalidArgumentError(f"max_voltage must be a positive number of volts, got "
                              f"{max_voltage}")
         self.driver.check_setpoint(max_voltage)   # the register holds it at this scale
         self.max_voltage = max_voltage

@@ -1,17 +1,18 @@
-"""PyMeasure Procedures that run ``pihyst rig record``, ``track`` and ``learn``: the rig
+"""PyMeasure Procedures that run ``pihyst rig record`` and ``track``: the rig
 of a configuration file (real instruments, or the emulated ones of ``pihystsim://``
 ports), pihyst's controller with all its safety (limits, slew, the start ramp, 0 V and
 output off on every way out), and every tick emitted as a result as it happens, so that
 PyMeasure's ManagedWindow plots the loop live and its Results file keeps it.
 
-The emitted columns are those of pihyst's run log (:data:`~pihyst.rig.COLUMNS`;
-``LearnProcedure`` adds ``trial``). PyMeasure's abort button stops the run through the
+The emitted columns are those of pihyst's run log (:data:`~pihyst.rig.COLUMNS`).
+:class:`RigProcedure` is the base for procedures of one's own: it opens the rig and runs
+a program on it, emitting every tick (examples/pymeasure_learn.py builds ``pihyst rig
+learn``'s iterative learning on it). PyMeasure's abort button stops the run through the
 controller (reason 'stop requested'): ramp to 0 V, output off. A run that stops early for
 any other reason (a fault, a sensor out of range) raises :class:`RunStopped` after that
 same shutdown, so the Worker marks the experiment failed.
 """
 
-import argparse
 import logging
 from dataclasses import asdict
 
@@ -25,13 +26,18 @@ from pymeasure.experiment import (
     Procedure,
 )
 
+from pihyst.exceptions import InvalidArgumentError
 from pihyst.rig._log import COLUMNS
 from pihyst.rig._programs import FeedbackProgram, FeedforwardProgram, VoltageProgram
+from pihyst.rig.pymeasure._inputs import (
+    SIGNALS,
+    desired_per_tick,
+    model_at_tick,
+    signal_voltages,
+)
 
 log = logging.getLogger(__name__)
 log.addHandler(logging.NullHandler())
-
-SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
 
 class RunStopped(RuntimeError):
@@ -65,8 +71,12 @@ class _EmitLog:
         log.info(text)
 
 
-class _RigProcedure(Procedure):
-    """What the three procedures share: the configuration, the rig, one safe run."""
+class RigProcedure(Procedure):
+    """The base of the rig's procedures: the configuration file, the rig it opens in
+    :meth:`open_rig`, and :meth:`run_program`, one safe run of a program (a
+    :class:`~pihyst.rig.VoltageProgram`, ...) with every tick emitted. A subclass
+    builds its program(s) in ``startup`` (then calls ``open_rig``) and runs them in
+    ``execute``; :meth:`shutdown` closes the rig."""
 
     config = Parameter("Rig configuration (TOML file)", default="examples/rig/emulated.toml")
     real_time = BooleanParameter("Wall-clock time for emulated instruments", default=False)
@@ -137,7 +147,7 @@ class _RigProcedure(Procedure):
             self.rig = None
 
 
-class RecordProcedure(_RigProcedure):
+class RecordProcedure(RigProcedure):
     """``pihyst rig record``: drive a voltage signal, one sample per tick (default the
     paper's 0-150-0 V, 300 s triangle; ``u_max`` 0 takes ``[rig] u_max``)."""
 
@@ -149,17 +159,14 @@ class RecordProcedure(_RigProcedure):
     cycles = IntegerParameter("Cycles", minimum=1, default=1)
 
     def voltages(self, config):
-        from pihyst.cli.simulate import make_signal
         r = config.rig
         u_max = self.u_max or r.u_max
         if not r.u_min <= self.u_min < u_max <= r.u_max:
-            raise ValueError(f"voltages {self.u_min:g}..{u_max:g} V must lie within the "
-                             f"rig's limits [{r.u_min:g}, {r.u_max:g}] V with min < max")
-        options = argparse.Namespace(signal=self.signal, u_min=self.u_min, dt=1.0 / r.rate_hz,
-                                     period=self.period, cycles=self.cycles, triangles=5,
-                                     ratio=0.7, ramps=20, rate=None, seed=0, steps=10,
-                                     step_time=10.0)
-        _, u = make_signal(options, u_max)
+            raise InvalidArgumentError(f"voltages {self.u_min:g}..{u_max:g} V must lie within "
+                                       f"the rig's limits [{r.u_min:g}, {r.u_max:g}] V with "
+                                       "min < max")
+        u = signal_voltages(self.signal, self.u_min, u_max, self.period, self.cycles,
+                            1.0 / r.rate_hz)
         return VoltageProgram(u, f"{self.signal} {self.u_min:g}-{u_max:g} V, period "
                                  f"{self.period:g} s, {self.cycles} cycle(s)")
 
@@ -172,12 +179,7 @@ class RecordProcedure(_RigProcedure):
         self.run_program(self.program)
 
 
-def _desired(path, rate_hz):
-    from pihyst.cli.rig import _resample
-    return _resample(path, "displacement_um", rate_hz, "desired")
-
-
-class TrackProcedure(_RigProcedure):
+class TrackProcedure(RigProcedure):
     """``pihyst rig track``: the desired displacement of a CSV (``time_s``,
     ``displacement_um``, resampled at the tick rate, in the model's frame) through the
     exact inverse of the model; with a gain above 0, PID feedback on the measured
@@ -190,12 +192,10 @@ class TrackProcedure(_RigProcedure):
     kd = FloatParameter("Feedback KD", units="V*s/um", minimum=0.0, default=0.0)
 
     def startup(self):
-        from pihyst.cli.model_inputs import delay_for_run
-        from pihyst.io import load_model
         config = self.load_config()
         r = config.rig
-        model = delay_for_run(load_model(self.model), self.config, period=1.0 / r.rate_hz)
-        desired = _desired(self.desired, r.rate_hz)
+        model = model_at_tick(self.model, r.rate_hz)
+        desired = desired_per_tick(self.desired, r.rate_hz)
         max_step = None if r.slew_V_per_s is None else r.slew_V_per_s / r.rate_hz
         if self.kp or self.ki or self.kd:
             self.program = FeedbackProgram(model, desired, r.u_min, r.u_max, 1.0 / r.rate_hz,
@@ -216,65 +216,3 @@ class TrackProcedure(_RigProcedure):
         ref = self.result.column("reference", phase="run")
         ok = np.isfinite(y)
         return metrics.error_summary(ref[ok], y[ok], float(np.ptp(ref)))
-
-
-class LearnProcedure(_RigProcedure):
-    """``pihyst rig learn``: iterative learning of one period of voltages for the
-    periodic desired displacement of a CSV (one period), starting from the model's
-    inverse. Each trial is one rig run (0 V to 0 V) that plays the period ``periods``
-    times and measures the last one; the results carry a ``trial`` column."""
-
-    model = Parameter("Model (JSON)", default="model.json")
-    desired = Parameter("Desired period (CSV)", default="desired_period.csv")
-    periods = IntegerParameter("Periods per trial", minimum=2, maximum=1000, default=2)
-    trials = IntegerParameter("Learning trials", minimum=1, maximum=1000, default=5)
-
-    DATA_COLUMNS = list(COLUMNS) + ["trial"]
-
-    def startup(self):
-        from pihyst.cli.learn import desired_period
-        from pihyst.cli.model_inputs import delay_for_run
-        from pihyst.io import load_model
-        config = self.load_config()
-        r = config.rig
-        self.settings = r
-        self.model_ = delay_for_run(load_model(self.model), self.config,
-                                    period=1.0 / r.rate_hz)
-        self.desired_ = desired_period(self.desired, r.rate_hz)
-        self.learning = None
-        self.open_rig(config)
-
-    def execute(self):
-        from pihyst.learn import learn_periodic
-        r, n = self.settings, self.trials + 1
-
-        def run_period(u):
-            trial = len(self.results_of_runs or [])
-            if self.should_stop():
-                raise _Aborted()
-            program = VoltageProgram(np.tile(u, self.periods),
-                                     f"learning trial {trial}: {self.periods} periods")
-            result = self.run_program(program, {"trial": trial},
-                                      (100.0 * trial / n, 100.0 * (trial + 1) / n))
-            if not result.completed:
-                raise _Aborted()
-            y = result.column("displacement_um", phase="run")[-u.size:]
-            if y.size != u.size or not np.all(np.isfinite(y)):
-                raise RunStopped(f"learning trial {trial}: no valid reading on some tick of "
-                                 "the measured period; 0 V, output off")
-            return y
-
-        try:
-            self.learning = learn_periodic(run_period, self.desired_, 1.0 / r.rate_hz,
-                                           model=self.model_, u_min=r.u_min, u_max=r.u_max,
-                                           slew_rate=r.slew_V_per_s, trials=self.trials,
-                                           keep_trials=True)
-        except _Aborted:
-            log.info("learning aborted after %d trial(s)", len(self.results_of_runs or []))
-            return
-        rms = ", ".join(f"{e:.4g}" for e in self.learning.rms)
-        log.info("learning: RMS error per trial %s um", rms)
-
-
-class _Aborted(Exception):
-    """The abort button during learning (the trial's run has zeroed the supply)."""

@@ -12,13 +12,15 @@ True
 
 from importlib.resources import files
 
+from pihyst.exceptions import InvalidArgumentError
+
 FILES = ("keyence.yaml", "supplies.yaml")
 
 
 def path(name):
     """The file ``name`` (one of :data:`FILES`) of this package."""
     if name not in FILES:
-        raise ValueError(f"no pyvisa-sim file {name!r}; there are {', '.join(FILES)}")
+        raise InvalidArgumentError(f"no pyvisa-sim file {name!r}; there are {', '.join(FILES)}")
     return str(files(__name__) / name)
 
 
