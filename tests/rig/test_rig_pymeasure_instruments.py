@@ -161,3 +161,21 @@ def test_mdt693b_like_error_message_before_the_prompt_raises():
     with expected_protocol(MDT693BLikeSupply, pairs) as supply:
         with pytest.raises(OSError, match="CMD_NOT_DEFINED"):
             supply.voltage_setpoint = 24.8
+
+
+def test_shutdown_switches_the_output_off_even_when_0_V_is_not_answered():
+    pairs = [(rtu("01 10 000A 0002 04 0000 0000"), rtu("01 90 04")),       # device failure
+             (rtu("01 06 0009 0000"), rtu("01 06 0009 0000"))]              # output off
+    with pytest.raises(OSError):
+        with expected_protocol(ModbusHVSupply, pairs, config={"output_register": 9}) as s:
+            s.shutdown()
+    assert s.output_enabled is False and s.isShutdown
+
+
+def test_leaving_with_brings_the_supply_to_0_V():
+    pairs = [(b"xvoltage=30.00\r", b"xvoltage=30.00\r*"),
+             (b"xvoltage=0.00\r", b"xvoltage=0.00\r*")]
+    with expected_protocol(MDT693BLikeSupply, pairs) as supply:
+        with supply:
+            supply.voltage_setpoint = 30.0
+        assert supply.voltage_setpoint == 0.0

@@ -17,7 +17,7 @@ import threading
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.rig._clock import WallClock
 from pihyst.rig._emulators import Emulators
-from pihyst.rig._pty import answer
+from pihyst.rig._serve import answer
 
 LOOPBACK = "127.0.0.1"
 

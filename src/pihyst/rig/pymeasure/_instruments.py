@@ -183,10 +183,18 @@ class _Supply(_RigInstrument):
         self._output = on
 
     def shutdown(self):
-        """0 V, then output off (PyMeasure calls this when an experiment ends)."""
-        self.voltage_setpoint = 0.0
-        self.output_enabled = False
+        """0 V, then output off, the second tried even when the first fails (PyMeasure
+        calls this when an experiment ends, and ``with`` on leaving the block); the first
+        communication error is raised after both."""
+        errors = []
+        for name, value in (("voltage_setpoint", 0.0), ("output_enabled", False)):
+            try:
+                setattr(self, name, value)
+            except OSError as err:
+                errors.append(err)
         super().shutdown()
+        if errors:
+            raise errors[0]
 
 
 class ModbusHVSupply(_Supply):
