@@ -223,3 +223,17 @@ def test_managed_window_plots_the_run_live(tmp_path, monkeypatch):
     assert len({s for s in sizes if 0 < s < 201}) >= 2          # ... while it was recorded
     assert (tmp_path / "loop-1.csv").exists()
     window.close()
+
+
+def test_a_procedure_that_fails_outside_a_run_still_ends_at_zero(tmp_path, rig_toml):
+    class Broken(RecordProcedure):
+        def execute(self):                      # a procedure of one's own with a bug
+            self.rig.supply.output_on()
+            self.rig.supply.set_voltage(20.0)
+            raise RuntimeError("a bug between opening the rig and running")
+
+    procedure = Broken(config=rig_toml, period=10.0)
+    run_in_worker(procedure, tmp_path / "broken.csv")
+    assert procedure.status == Procedure.FAILED
+    st = procedure.emulators.supply_state
+    assert st.last_setpoint_V == 0.0 and not st.output_on and procedure.rig is None

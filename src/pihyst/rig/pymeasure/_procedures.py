@@ -138,10 +138,12 @@ class RigProcedure(Procedure):
         if self.rig is None:
             return
         try:
-            self.rig.supply.set_voltage(0.0)
-            self.rig.supply.output_off()
-        except OSError as err:
-            log.warning("shutdown: could not send 0 V and output off: %s", err)
+            for what, send in (("0 V", lambda: self.rig.supply.set_voltage(0.0)),
+                               ("output off", self.rig.supply.output_off)):
+                try:
+                    send()
+                except OSError as err:
+                    log.warning("shutdown: could not send %s: %s", what, err)
         finally:
             self.rig.close()
             self.rig = None
