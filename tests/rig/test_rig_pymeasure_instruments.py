@@ -179,3 +179,18 @@ def test_leaving_with_brings_the_supply_to_0_V():
         with supply:
             supply.voltage_setpoint = 30.0
         assert supply.voltage_setpoint == 0.0
+
+
+def test_a_configuration_of_another_protocol_is_refused(tmp_path):
+    from pihyst.rig import ConfigError
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text('[supply]\nprotocol = "ascii"\n[sensor]\nprotocol = "keyence-lk-g3000"\n')
+    with pytest.raises(ConfigError, match="protocol is 'ascii'; this instrument speaks "
+                                          "'modbus-rtu'"):
+        ModbusHVSupply(None, config=str(cfg))
+    with pytest.raises(ConfigError, match="protocol is 'keyence-lk-g3000'"):
+        KeyenceLKG5000(None, config=str(cfg))
+    with pytest.raises(ConfigError, match=r"\[supply\] setpoint_format: unknown key|must be"):
+        ModbusHVSupply(None, config={"setpoint_format": 16})
+    with expected_protocol(KeyenceLKG3000, [], config=str(cfg)) as sensor:
+        assert sensor.driver.command == "M1"

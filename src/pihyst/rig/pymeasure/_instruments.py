@@ -10,7 +10,6 @@ timeout are passed to PyVISA unless given), or an Adapter (``SerialAdapter("COM3
 ``SerialAdapter(serial.serial_for_url("socket://127.0.0.1:5020"))``).
 """
 
-import dataclasses
 import math
 import os
 
@@ -36,12 +35,13 @@ _PARITY = {"N": Parity.none, "E": Parity.even, "O": Parity.odd}
 _STOPBITS = {1: StopBits.one, 2: StopBits.two}
 
 
-def section_of(config, name, cls, **fixed):
-    """The ``[name]`` section (a ``cls``) of ``config``: None (the defaults), a
-    :class:`~pihyst.rig.RigConfig`, a rig TOML file, a ``cls`` or a dict of the section's
-    keys (checked as in a file); ``fixed`` keys override it."""
+def section_of(config, name, cls, protocol):
+    """The ``[name]`` section (a ``cls``) of ``config`` for an instrument that speaks
+    ``protocol``: None (the defaults), a :class:`~pihyst.rig.RigConfig`, a rig TOML file,
+    a ``cls`` or a dict of the section's keys (checked as in a file; ``protocol`` unless
+    it says one). A section of another protocol is a ConfigError."""
     if config is None:
-        section = cls()
+        section = cls(protocol=protocol)
     elif isinstance(config, (str, os.PathLike)):
         section = getattr(load_config(config), name)
     elif isinstance(config, RigConfig):
@@ -49,12 +49,16 @@ def section_of(config, name, cls, **fixed):
     elif isinstance(config, cls):
         section = config
     elif isinstance(config, dict):
-        section = _section(_Checker("config", ""), {name: config}, name, cls)
+        section = _section(_Checker("config", ""), {name: {"protocol": protocol, **config}},
+                           name, cls)
     else:
         raise ConfigError(f"config: expected a rig configuration, a TOML file, a "
                           f"{cls.__name__} or a dict of [{name}] keys, got "
                           f"{type(config).__name__}")
-    return dataclasses.replace(section, **fixed)
+    if section.protocol != protocol:
+        raise ConfigError(f"config: [{name}] protocol is {section.protocol!r}; this "
+                          f"instrument speaks {protocol!r}")
+    return section
 
 
 def _visa_settings(kwargs, section):
@@ -81,7 +85,7 @@ class _KeyenceLK(_RigInstrument):
     protocol = None
 
     def __init__(self, adapter, name=None, config=None, **kwargs):
-        section = section_of(config, "sensor", SensorConfig, protocol=self.protocol)
+        section = section_of(config, "sensor", SensorConfig, self.protocol)
         super().__init__(adapter, name or f"KEYENCE {self.protocol[8:].upper()}", section,
                          **kwargs)
         self.driver = KeyenceSensor(self.port, section)
@@ -231,7 +235,7 @@ class ModbusHVSupply(_Supply):
 
     def __init__(self, adapter, name="Modbus RTU HV supply", config=None, max_voltage=None,
                  **kwargs):
-        section = section_of(config, "supply", SupplyConfig, protocol="modbus-rtu")
+        section = section_of(config, "supply", SupplyConfig, "modbus-rtu")
         super().__init__(adapter, name, section, _max_voltage(config, max_voltage), **kwargs)
 
 
@@ -244,7 +248,7 @@ class AsciiHVSupply(_Supply):
 
     def __init__(self, adapter, name="ASCII HV supply", config=None, max_voltage=None,
                  **kwargs):
-        section = section_of(config, "supply", SupplyConfig, protocol="ascii")
+        section = section_of(config, "supply", SupplyConfig, "ascii")
         super().__init__(adapter, name, section, _max_voltage(config, max_voltage), **kwargs)
 
 
