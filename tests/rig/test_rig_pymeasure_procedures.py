@@ -160,6 +160,17 @@ def test_learn_example_runs_trials_that_each_end_at_zero(tmp_path, rig_toml, mod
     assert min(procedure.learning.rms) < procedure.learning.rms[0]
 
 
+def test_learn_example_script(tmp_path, rig_toml, model_json, capsys):
+    desired = desired_csv(tmp_path, 2.0)
+    out = tmp_path / "learn.csv"
+    main = load_example("pymeasure_learn").main
+    assert main([model_json, desired, "--config", rig_toml, "--trials", "1", "-o",
+                 str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "RMS error per trial (um): " in text
+    assert "2 trials, every one ended at 0 V, output off" in text and out.exists()
+
+
 def load_example(name="pymeasure_record"):
     import importlib.util
     path = os.path.join(ROOT, "examples", f"{name}.py")
