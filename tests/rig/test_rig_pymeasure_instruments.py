@@ -194,3 +194,38 @@ def test_a_configuration_of_another_protocol_is_refused(tmp_path):
         ModbusHVSupply(None, config={"setpoint_format": 16})
     with expected_protocol(KeyenceLKG3000, [], config=str(cfg)) as sensor:
         assert sensor.driver.command == "M1"
+
+
+def test_visa_errors_are_oserrors_the_loop_counts():
+    """A VISA connection that fails (a closed socket, a timeout) raises an OSError from
+    the drivers, which the controller counts as a communication error."""
+    import pyvisa
+    from pymeasure.adapters import VISAAdapter
+
+    from pihyst.rig.pymeasure import AdapterPort
+
+    class Broken(VISAAdapter):
+        def __init__(self, error):
+            import logging
+            self.error, self.log = error, logging.getLogger("test")
+
+        def _write_bytes(self, content, **kwargs):
+            pass
+
+        def _read_bytes(self, count, break_on_termchar=False, **kwargs):
+            raise pyvisa.errors.VisaIOError(self.error)
+
+        def flush_read_buffer(self):
+            if self.error != pyvisa.constants.StatusCode.error_timeout:
+                raise pyvisa.errors.VisaIOError(self.error)
+
+        def close(self):
+            pass
+
+    timeout = KeyenceLKG5000(Broken(pyvisa.constants.StatusCode.error_timeout))
+    with pytest.raises(OSError, match="no reply within 0.1 s"):
+        _ = timeout.reading
+    closed = KeyenceLKG5000(Broken(pyvisa.constants.StatusCode.error_connection_lost))
+    with pytest.raises(OSError):
+        _ = closed.reading
+    assert isinstance(timeout.port, AdapterPort) and timeout.port._bytewise

@@ -73,7 +73,10 @@ class AdapterPort:
         self.is_open = True
 
     def reset_input_buffer(self):
-        self.adapter.flush_read_buffer()
+        try:
+            self.adapter.flush_read_buffer()
+        except pyvisa.errors.VisaIOError as err:
+            raise RigError(f"{self.port}: {err}") from None
 
     def reset_output_buffer(self):
         pass
