@@ -104,3 +104,15 @@ def test_mdt693b_like_query_dialogue(manager):
     assert md.read() == "*[  24.8]"
     md.write("xvoltage=150.10")               # beyond the MDT693B's 150 V
     assert md.read() == "CMD_ARG_INVALID*"
+
+
+def test_the_socket_resources_speak_the_same(manager):
+    lk = manager("keyence.yaml").open_resource("TCPIP::localhost::9002::SOCKET",
+                                               read_termination="\r", write_termination="\r")
+    assert lk.query("M1") == "M1,+01.2345"
+    md = manager("supplies.yaml").open_resource("TCPIP::localhost::9012::SOCKET",
+                                                read_termination="\r", write_termination="\r")
+    md.write("xvoltage=12.50")
+    assert md.read() == "*"
+    md.write("xvoltage?")
+    assert (md.read(), md.read()) == ("xvoltage?", "*[  12.5]")
