@@ -119,11 +119,16 @@ def register(sub):
     le.set_defaults(run=run_learn)
 
     e = rig_sub.add_parser(
-        "emulate", help="emulated instruments on pseudo-terminals",
+        "emulate", help="emulated instruments on pseudo-terminals or TCP ports",
         description="Start the emulated supply and sensor of the configuration on "
-                    "pseudo-terminals and print their device paths; any program can then "
-                    "talk to them as to the real instruments. Runs until Ctrl-C.")
+                    "pseudo-terminals (or, with --tcp, on TCP ports of 127.0.0.1) and print "
+                    "their device paths (or URLs); any program can then talk to them as to "
+                    "the real instruments. Runs until Ctrl-C.")
     e.add_argument("--config", metavar="RIG.toml", required=True)
+    e.add_argument("--tcp", type=_tcp_port, default=None, metavar="PORT",
+                   help="serve on TCP instead: the supply on 127.0.0.1:PORT, the sensor on "
+                        "PORT+1 (0: two free ports), for pyserial's socket://127.0.0.1:PORT "
+                        "and PyVISA's TCPIP::127.0.0.1::PORT::SOCKET")
     e.add_argument("--plant", default=None, metavar="NAME", help="the simulated beam")
     _fault_option(e)
     e.add_argument("--duration", type=_duration, default=None, metavar="S",
@@ -140,6 +145,11 @@ def _duration(text):
         raise argparse.ArgumentTypeError(f"must be at most {threading.TIMEOUT_MAX:g} s, got "
                                          f"{text!r}")
     return seconds
+
+
+def _tcp_port(text):
+    """--tcp: 0 (free ports) or a port whose successor is a port too."""
+    return count(0, 65534)(text)
 
 
 def _periods(text):
@@ -412,18 +422,34 @@ def run_emulate(args):
     import signal
     import threading
 
-    from pihyst.rig._pty import PtyEmulators
     config = _config(args)
+    if args.tcp is None:
+        from pihyst.rig._pty import PtyEmulators
+
+        def start():
+            return PtyEmulators(config, plant=args.plant, faults=_faults(args))
+    else:
+        from pihyst.rig._tcp import TcpEmulators
+
+        def start():
+            try:
+                return TcpEmulators(config, port=args.tcp, plant=args.plant,
+                                    faults=_faults(args))
+            except OSError as err:
+                why = (err.strerror or str(err)).split(" (while attempting")[0]
+                raise UsageError(f"--tcp {args.tcp}: cannot listen on 127.0.0.1: {why}") \
+                    from None
     stop = threading.Event()
 
     def _stop(signum, frame):
         stop.set()
     old = signal.signal(signal.SIGTERM, _stop)
     try:
-        with PtyEmulators(config, plant=args.plant, faults=_faults(args)) as emu:
+        with start() as emu:
             for what, path in emu.paths.items():
                 c = getattr(config, what)
-                print(f"{what}: {path}  ({c.protocol}, {c.baudrate} baud)", flush=True)
+                visa = f"{emu.visa[what]}; " if args.tcp is not None else ""
+                print(f"{what}: {path}  ({visa}{c.protocol}, {c.baudrate} baud)", flush=True)
             print(f"simulated beam: {emu.emulators.plant.name}; Ctrl-C to stop", flush=True)
             try:
                 stop.wait(args.duration)

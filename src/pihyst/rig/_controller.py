@@ -78,16 +78,20 @@ class Controller:
         a stall has no meaning).
     handle_signals : bool
         Turn SIGINT and SIGTERM into a safe stop (main thread only).
+    stop_requested : callable, optional
+        Asked after every tick; True stops the run safely (reason 'stop requested'), as a
+        GUI's abort button does (``pihyst.rig.pymeasure``).
     """
 
     def __init__(self, supply, sensor, settings, *, log=None, clock=WallClock, watchdog=None,
-                 handle_signals=True):
+                 handle_signals=True, stop_requested=None):
         self.supply, self.sensor, self.settings = supply, sensor, settings
         self.log = log
         self.clock = clock
         self.use_watchdog = (not getattr(clock, "virtual", False)) if watchdog is None \
             else watchdog
         self.handle_signals = handle_signals
+        self.stop_requested = stop_requested
         self._supply_lock = threading.RLock()
         self._log_error = None          # why the log failed; it is not written to after
 
@@ -232,6 +236,8 @@ class Controller:
 
     def _check(self, r):
         s = self.settings
+        if self.stop_requested is not None and self.stop_requested():
+            raise StopRun("stop requested")
         if self._log_error is not None:
             raise StopRun(f"the log could not be written ({self._log_error})")
         if self._comm_errors >= s.max_comm_errors:

@@ -64,8 +64,12 @@ def port_errors(what):
 
 def close_port(port):
     """Close ``port``; for a ``spy://`` port also the file its log goes to (pyserial
-    leaves it open)."""
+    leaves it open), and for a ``socket://`` port its socket (pyserial does not close it
+    when the other side has gone: its shutdown() fails first)."""
+    sock = getattr(port, "_socket", None)
     port.close()
+    if sock is not None:
+        sock.close()
     output = getattr(getattr(port, "formatter", None), "output", None)
     if output is not None and hasattr(output, "close") and output not in (sys.stdout,
                                                                           sys.stderr):

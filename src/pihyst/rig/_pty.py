@@ -10,11 +10,11 @@ pseudo-terminal, as an unplugged USB adapter does.
 import os
 import select
 import threading
-import time
 import tty
 
 from pihyst.rig._clock import WallClock
 from pihyst.rig._emulators import Emulators
+from pihyst.rig._serve import answer
 
 
 class _PtyDevice:
@@ -31,9 +31,6 @@ class _PtyDevice:
     def start(self):
         self._thread.start()
 
-    def _char_s(self):
-        return self.device.char_bits / self.device.baudrate
-
     def _serve(self):
         while not self._stop.is_set():
             if self.device.vanished(WallClock.now()):
@@ -48,17 +45,10 @@ class _PtyDevice:
                 break
             if not data:
                 continue
-            arrived = WallClock.now() + len(data) * self._char_s()
-            for when, reply in self.device.receive(data, arrived):
-                # bytes go out one character time apart, from the device's ready time
-                for i in range(len(reply)):
-                    wait = when + (i + 1) * self._char_s() - WallClock.now()
-                    if wait > 0:
-                        time.sleep(wait)
-                    try:
-                        os.write(self.master, reply[i:i + 1])
-                    except OSError:
-                        return
+            try:
+                answer(self.device, data, lambda b: os.write(self.master, b))
+            except OSError:
+                return
         self.close()
 
     def close(self):

@@ -1,0 +1,67 @@
+"""What the Procedures read from files, per tick of the rig: the model (its delay in
+ticks) and a desired displacement resampled at the tick rate; and the record signals.
+The same rules as ``pihyst rig track`` and ``record`` (docs/rig.md, Commands), from the
+layers below the rig (the command line's own helpers sit above it)."""
+
+import math
+
+import numpy as np
+
+from pihyst.exceptions import CSVError, InvalidArgumentError, ResourceLimitError
+from pihyst.io import column_number, load_model, read_columns
+from pihyst.sim import signals
+from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
+
+SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
+
+
+def model_at_tick(path, rate_hz):
+    """The model of ``path`` with its input delay in ticks of ``rate_hz`` (converted when
+    exact; InvalidArgumentError naming the file otherwise)."""
+    model = load_model(path)
+    if not model.delay or model.sample_period is None:
+        return model
+    period = 1.0 / rate_hz
+    try:
+        delay = model.delay_at(period)
+    except InvalidArgumentError as err:
+        raise InvalidArgumentError(f"{path}: {err}") from None
+    return model.replace(delay=delay, sample_period=period)
+
+
+def desired_per_tick(path, rate_hz):
+    """The ``displacement_um`` column of ``path``, one value per tick: resampled at the
+    tick rate when the file has ``time_s`` (which must increase), else as it is."""
+    columns, lines = read_columns(path, ["displacement_um"], optional=["time_s"])
+    y = columns["displacement_um"]
+    if "time_s" not in columns:
+        return y
+    t = columns["time_s"]
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        i = back[0] + 1
+        raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
+                       f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g})")
+    n = math.floor((t[-1] - t[0]) * rate_hz + 1e-9) + 1
+    if n > MAX_TICKS:
+        raise ResourceLimitError(f"{path}: time_s spans {t[-1] - t[0]:g} s, {n:,} ticks at "
+                                 f"{rate_hz:g} Hz: more than the {MAX_TICKS:,} ticks of a run")
+    return np.interp(t[0] + np.arange(n) / rate_hz, t, y)
+
+
+def signal_voltages(kind, u_min, u_max, period_s, cycles, dt):
+    """One voltage per tick of the record signal ``kind`` (one of :data:`SIGNALS`), with
+    ``pihyst rig record``'s defaults for the options it does not take."""
+    common = {"u_min": u_min, "u_max": u_max, "dt": dt}
+    if kind == "triangle":
+        return signals.triangle(period_s=period_s, n_cycles=cycles, **common)[1]
+    if kind == "sine":
+        return signals.sine(period_s=period_s, n_cycles=cycles, **common)[1]
+    if kind == "decaying-triangles":
+        return signals.decaying_triangles(period_s=period_s, n_triangles=5, ratio=0.7,
+                                          **common)[1]
+    if kind == "random-ramps":
+        return signals.random_ramps(n_ramps=20, rate=None, seed=0, **common)[1]
+    if kind == "staircase":
+        return signals.staircase(n_steps=10, step_s=10.0, **common)[1]
+    raise InvalidArgumentError(f"signal {kind!r} is not one of {', '.join(SIGNALS)}")
