@@ -14,8 +14,8 @@ import numpy as np
 from pihyst.cli.errors import UsageError, count, number, positive_number
 from pihyst.cli.frames import add_frame_options, check_reach, frame
 from pihyst.cli.model_inputs import delay_for_run
-from pihyst.exceptions import CSVError
-from pihyst.io import column_number, load_model, read_columns
+from pihyst.io import load_model
+from pihyst.rig._per_tick import column_per_tick
 from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
@@ -247,27 +247,6 @@ def _report(result, args, rig):
         raise SystemExit(1)
 
 
-def _resample(path, column, rate_hz, what):
-    """(values per tick, tick times) from a CSV column, resampled at the tick rate when the
-    file has time_s."""
-    columns, lines = read_columns(path, [column], optional=["time_s"])
-    v = columns[column]
-    if "time_s" not in columns:
-        return v
-    t = columns["time_s"]
-    back = np.flatnonzero(np.diff(t) <= 0)
-    if back.size:
-        i = back[0] + 1
-        raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
-                       f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g})")
-    n = math.floor((t[-1] - t[0]) * rate_hz + 1e-9) + 1
-    if n > MAX_TICKS:
-        raise UsageError(f"{path}: time_s spans {t[-1] - t[0]:g} s, {n:,} ticks at "
-                         f"{rate_hz:g} Hz: more than the {MAX_TICKS:,} ticks of a run")
-    ticks = t[0] + np.arange(n) / rate_hz
-    return np.interp(ticks, t, v)
-
-
 # ----------------------------------------------------------------------------- actions
 def run_check(args):
     config = _config(args)
@@ -302,7 +281,7 @@ def run_record(args):
         raise UsageError(f"--min/--max {u_min:g}..{u_max:g} V must lie within the rig's "
                          f"limits [{r.u_min:g}, {r.u_max:g}] V with min < max")
     if args.voltages:
-        u = _resample(args.voltages, "voltage_V", r.rate_hz, "voltages")
+        u = column_per_tick(args.voltages, "voltage_V", r.rate_hz)
         bad = np.flatnonzero((u < r.u_min) | (u > r.u_max))
         if bad.size:
             raise UsageError(f"{args.voltages}: voltage {u[bad[0]]:g} V (tick {bad[0]}) is "
@@ -357,7 +336,7 @@ def run_track(args):
     # the delay in the rig's ticks: converted when exact, else a one-line error
     model = delay_for_run(model, args.config, period=1.0 / r.rate_hz)
     gains = _gains(args.feedback) if args.feedback is not None else None
-    desired = _resample(args.desired, "displacement_um", r.rate_hz, "desired")
+    desired = column_per_tick(args.desired, "displacement_um", r.rate_hz)
     # in the model's frame (the sensor's, which the model was fitted on): --relative
     # targets are from the model's rest point at its lowest voltage
     offset, frame_line = frame(args, model)

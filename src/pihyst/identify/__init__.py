@@ -21,6 +21,7 @@ table of decisions):
   (``FitOptions``), checked once; ``_record_fit``: the steps in order for one record
   (``fit_record``); ``_decisions``: what each step decided, as frozen values;
   ``_constants``: every number that decides something, with the evidence for it;
+  ``_responses``: what the record's input alone determines, computed once per fit;
   ``_progress``: each step's end, for the command line;
 - ``_sufficiency``: whether the record can be fitted at all, and whether the fit explains it;
 - ``_family_fit``: the record in the fitting frame (``FramedRecord``) and one family's fit

@@ -3,14 +3,12 @@ ticks) and a desired displacement resampled at the tick rate; and the record sig
 The same rules as ``pihyst rig track`` and ``record`` (docs/rig.md, Commands), from the
 layers below the rig (the command line's own helpers sit above it)."""
 
-import math
 
-import numpy as np
 
-from pihyst.exceptions import CSVError, InvalidArgumentError, ResourceLimitError
-from pihyst.io import column_number, load_model, read_columns
+from pihyst.exceptions import InvalidArgumentError
+from pihyst.io import load_model
+from pihyst.rig._per_tick import column_per_tick
 from pihyst.sim import signals
-from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
@@ -32,21 +30,7 @@ def model_at_tick(path, rate_hz):
 def desired_per_tick(path, rate_hz):
     """The ``displacement_um`` column of ``path``, one value per tick: resampled at the
     tick rate when the file has ``time_s`` (which must increase), else as it is."""
-    columns, lines = read_columns(path, ["displacement_um"], optional=["time_s"])
-    y = columns["displacement_um"]
-    if "time_s" not in columns:
-        return y
-    t = columns["time_s"]
-    back = np.flatnonzero(np.diff(t) <= 0)
-    if back.size:
-        i = back[0] + 1
-        raise CSVError(path, int(lines[i]), column_number(path, "time_s"),
-                       f"time_s = {t[i]:g} does not increase (previous {t[i - 1]:g})")
-    n = math.floor((t[-1] - t[0]) * rate_hz + 1e-9) + 1
-    if n > MAX_TICKS:
-        raise ResourceLimitError(f"{path}: time_s spans {t[-1] - t[0]:g} s, {n:,} ticks at "
-                                 f"{rate_hz:g} Hz: more than the {MAX_TICKS:,} ticks of a run")
-    return np.interp(t[0] + np.arange(n) / rate_hz, t, y)
+    return column_per_tick(path, "displacement_um", rate_hz)
 
 
 def signal_voltages(kind, u_min, u_max, period_s, cycles, dt):
