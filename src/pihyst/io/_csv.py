@@ -66,8 +66,8 @@ class ColumnWriter:
     folder (nothing is left if the process is killed), put in place by :meth:`close`;
     :meth:`abort`, or an exception inside ``with ColumnWriter(...)``, gives it up.
 
-    Values are written as the shortest decimal that reads back exactly (pyarrow's
-    writer when installed, else Python's ``repr``).
+    Values are written as the shortest decimal that reads back exactly, as Python's
+    ``repr`` writes them (:func:`format_rows`).
 
     The file is plain CSV: one header line, then numbers, so that NumPy's and pandas'
     default readers open it (``np.genfromtxt(names=True, delimiter=",")``,
@@ -119,21 +119,24 @@ class ColumnWriter:
 
 def format_rows(columns, engine=None):
     """CSV bytes of equal-length float columns, no header, each value the shortest
-    decimal that reads back exactly: with pyarrow's writer when installed (or
-    ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
-    try:
-        if engine == "numpy":
-            raise ImportError
+    decimal that reads back exactly, as Python's ``repr`` writes it: with pihyst's C
+    writer (:mod:`pihyst.io._fastcsv`, built with the package), else (or with
+    ``engine="numpy"``, its plain twin) ``repr`` itself; ``engine="pyarrow"`` uses
+    pyarrow's writer (the same numbers, written ``1`` rather than ``1.0``)."""
+    if engine == "pyarrow":
         import pyarrow as pa
         import pyarrow.csv as pcsv
-    except ImportError:
-        line = ",".join(["%r"] * len(columns)) + "\n"
-        flat = np.column_stack(columns).ravel().tolist()
-        return ((line * len(columns[0])) % tuple(flat)).encode("ascii")
-    out = _io.BytesIO()
-    table = pa.table({f"c{j}": c for j, c in enumerate(columns)})
-    pcsv.write_csv(table, out, pcsv.WriteOptions(include_header=False))
-    return out.getvalue()
+        out = _io.BytesIO()
+        table = pa.table({f"c{j}": c for j, c in enumerate(columns)})
+        pcsv.write_csv(table, out, pcsv.WriteOptions(include_header=False))
+        return out.getvalue()
+    from pihyst.io._text_engines import _fast
+    fast = _fast() if engine != "numpy" else None
+    if fast is not None:
+        return fast.format_rows(columns)
+    line = ",".join(["%r"] * len(columns)) + "\n"
+    flat = np.column_stack(columns).ravel().tolist()
+    return ((line * len(columns[0])) % tuple(flat)).encode("ascii")
 
 
 def write_columns(path, columns, comments=(), metadata=None):
