@@ -222,7 +222,7 @@ def test_streamed_predict_and_compensate_equal_in_memory_bit_for_bit(tmp_path, m
         assert run("compensate", name, out, "-o", comp, "--slew-rate", 20000) == 0
         cols, _ = read_columns(comp, ["voltage_V", "displacement_um", "saturated"])
         step = 20000 * np.diff(predicted.time).min()   # V/s x the smallest time step
-        whole = pihyst.compensate(model, model.predict(u), slew_rate=step)
+        whole = pihyst.compensate(model, model.predict(u), slew_rate=step, sample_period=1.0)
         np.testing.assert_array_equal(cols["voltage_V"], whole.voltage)
         np.testing.assert_array_equal(cols["displacement_um"], whole.displacement)
 
