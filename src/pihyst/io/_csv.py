@@ -14,6 +14,12 @@ import numpy as np
 
 from pihyst._atomic import AtomicFile
 from pihyst.exceptions import CSVError
+from pihyst.io._column_sinks import (
+    SIDECAR_FORMAT,
+    SINKS,
+    check_output_format,
+    output_format,
+)
 from pihyst.io._text_check import data_line_of
 from pihyst.io._text_source import TextSource
 
@@ -69,6 +75,9 @@ class ColumnWriter:
     Values are written as the shortest decimal that reads back exactly, as Python's
     ``repr`` writes them (:func:`format_rows`).
 
+    An output named ``.parquet``, ``.h5`` or ``.hdf5`` is written in that format instead
+    (:mod:`pihyst.io._column_sinks`; pyarrow, h5py), its metadata inside the file.
+
     The file is plain CSV: one header line, then numbers, so that NumPy's and pandas'
     default readers open it (``np.genfromtxt(names=True, delimiter=",")``,
     ``np.loadtxt(skiprows=1, delimiter=",")``, ``pandas.read_csv``). What used to be
@@ -82,6 +91,15 @@ class ColumnWriter:
         self.names = list(names)
         self.comments = [str(c) for c in comments]
         self.metadata = dict(metadata or {})
+        self.rows = 0
+        self.format = output_format(self.path)
+        if self.format != "csv":
+            # Parquet or HDF5: the metadata inside the file, no sidecar
+            check_output_format(self.path)
+            self._sink = SINKS[self.format](self.path, self.names, self._described())
+            self._file = None
+            return
+        self._sink = None
         self._file = AtomicFile(self.path)
         head = ",".join(self.names) + "\n"
         try:
@@ -89,23 +107,35 @@ class ColumnWriter:
         except BaseException:
             self._file.abort()        # no caller holds this writer yet to abort it
             raise
-        self.rows = 0
 
     def write(self, columns):
         """Append rows: a dict name -> array with every name of the header."""
         data = [np.ascontiguousarray(columns[n], dtype=np.float64) for n in self.names]
         n = len(data[0])
+        if self._sink is not None:
+            self._sink.write(data)
+            self.rows += n
+            return
         for start in range(0, n, WRITE_ROWS):
             self._file.write(format_rows([a[start:start + WRITE_ROWS] for a in data],
                                          self.engine))
         self.rows += n
 
+    def _described(self):
+        return described(self.path, self.names, self.rows, self.comments, self.metadata)
+
     def close(self):
+        if self._sink is not None:
+            self._sink.commit(self._described())
+            return
         self._file.commit()
         write_sidecar(self.path, self.names, self.rows, self.comments, self.metadata)
 
     def abort(self):
-        self._file.abort()
+        if self._sink is not None:
+            self._sink.abort()
+        else:
+            self._file.abort()
 
     def __enter__(self):
         return self
@@ -146,7 +176,6 @@ def write_columns(path, columns, comments=(), metadata=None):
         w.write(columns)
 
 
-SIDECAR_FORMAT = "pihyst CSV metadata"
 
 
 def sidecar_path(path):
@@ -166,11 +195,17 @@ def write_sidecar(path, names, rows, comments=(), metadata=None):
     except OSError:
         return
     from pihyst._atomic import write_atomically
-    from pihyst._version import __version__
-    data = {"format": SIDECAR_FORMAT, "pihyst_version": __version__,
-            "file": os.path.basename(path), "columns": list(names), "rows": int(rows),
-            "comments": list(comments), **(metadata or {})}
+    data = described(path, names, rows, comments, metadata)
     write_atomically(sidecar_path(path), json.dumps(data, indent=1, default=str) + "\n")
+
+
+def described(path, names, rows, comments=(), metadata=None):
+    """The metadata pihyst keeps with a record it writes (in a CSV's sidecar, a Parquet
+    schema's or an HDF5 file's ``pihyst`` key): what wrote it, its columns and rows."""
+    from pihyst._version import __version__
+    return {"format": SIDECAR_FORMAT, "pihyst_version": __version__,
+            "file": os.path.basename(os.fspath(path)), "columns": list(names),
+            "rows": int(rows), "comments": list(comments), **(metadata or {})}
 
 
 def read_sidecar(path):

@@ -423,6 +423,7 @@ class RecordReader:
                                       if not k.startswith("_")}}
         if isinstance(self.source, TextSource) and self._sidecar() is not None:
             meta["sidecar"] = self._sidecar()
+            meta["pihyst_metadata"] = self._sidecar()   # as for Parquet and HDF5
         meta["columns"] = dict(self.labels)
         if self.why:
             meta["columns_why"] = dict(self.why)
@@ -477,6 +478,9 @@ class RecordReader:
                          "skipped (see sensor_status, supply_status)")
         if isinstance(self.source, TextSource) and self._sidecar() is not None:
             notes.append(f"metadata from {os.path.basename(self._sidecar_name)}")
+        elif isinstance(self.source, ArraySource) and "pihyst_metadata" in self.source.extra:
+            where = "key-value metadata" if self.source.kind == "parquet" else "attributes"
+            notes.append(f"metadata from its {where} (written by pihyst)")
         if self.lag:
             notes.append(f"displacement {self.lag} sample(s) later")
         if self.skip_until is not None:
