@@ -67,15 +67,19 @@ cdef bint DOUBLE_EXACT = FLT_EVAL_METHOD == 0
 
 
 cdef bint _long_double_has_64_bits(double one):
-    """Whether long double arithmetic keeps 64 significant bits at run time (the x87's
-    precision control can be set lower than the type's)."""
+    """Whether long double is an IEEE-style binary type of at least 64 significant bits
+    (x87's 64, or a 113-bit quad) that keeps them at run time (the x87's precision
+    control can be set lower than the type's); not the double-double of some PowerPC
+    systems."""
     cdef long double a = one
-    return LDBL_MANT_DIG >= 64 and (a + 1.0842021724855044e-19) - a != 0   # 1 + 2^-63
+    return (LDBL_MANT_DIG == 64 or LDBL_MANT_DIG == 113) and \
+        (a + 1.0842021724855044e-19) - a != 0                                # 1 + 2^-63
 
 
 cdef bint LONG_EXACT = DOUBLE_EXACT and _long_double_has_64_bits(float("1"))
 cdef long double TWO_M63 = 1.0842021724855044e-19    # 2^-63
-cdef long double TWO_63 = 9223372036854775808.0
+# adding this rounds a long double below half of it to an integer (2^63 on x87)
+cdef long double ROUNDER = ldexpl(1.0, LDBL_MANT_DIG - 1)
 cdef uint64_t MANTISSA = 0xFFFFFFFFFFFFF
 cdef uint64_t TWO_53 = 9007199254740992
 
@@ -340,7 +344,7 @@ cdef int _shortest_digits(double x, uint64_t *digits, int *decpt) noexcept nogil
         else:
             q = _scaled(x, k)
         # round to the nearest integer: q + 2^63 has no fraction bits left (q < 2^62)
-        r = (q + TWO_63) - TWO_63
+        r = (q + ROUNDER) - ROUNDER
         d = q - r                        # exactly; in [-1/2, 1/2]
         margin = q * TWO_M63
         if 0.5 - fabsl(d) <= margin:
