@@ -26,7 +26,7 @@ import numpy as np
 from cpython.bytes cimport PyBytes_FromStringAndSize
 from cpython.mem cimport PyMem_Free
 from cpython.ref cimport PyObject
-from libc.math cimport fabsl, floor, floorl, frexp, isfinite, isnan, log10, nextafter
+from libc.math cimport fabsl, isfinite, signbit
 from libc.stdint cimport uint64_t
 from libc.stdlib cimport free, malloc
 from libc.string cimport memcpy
@@ -394,7 +394,7 @@ cdef Py_ssize_t _format_repr(double x, char *out) except -1:
         n = 0
     if n == 0:
         if x == 0.0:
-            if frexp(x, &e) == 0.0 and (1.0 / x) < 0:
+            if signbit(x):
                 memcpy(out, b"-0.0", 4)
                 return 4
             memcpy(out, b"0.0", 3)
