@@ -224,3 +224,25 @@ def test_manifest_gives_options_per_file(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith(f"pihyst: error: --manifest {manifest}: a.dat: argument --lag")
     assert err.count("\n") == 1
+
+
+def test_manifest_says_which_files_have_a_units_row(tmp_path, capsys):
+    folder = tmp_path / "raw"
+    folder.mkdir()
+    for name, units in (("a.csv", "Volt,micron"), ("b.csv", None)):
+        u, y = actuator_record(0 if units else 1)
+        (folder / name).write_text("voltage_V,displacement_um\n"
+                                   + (units + "\n" if units else "")
+                                   + "".join(f"{a!r},{b!r}\n"
+                                             for a, b in zip(u.tolist(), y.tolist())))
+    manifest = tmp_path / "m.json"
+    manifest.write_text(json.dumps({"a.csv": {"units_row": True},
+                                    "b.csv": {"units_row": False}}))
+    out = tmp_path / "models"
+    assert main(["fit-many", str(folder), "-o", str(out), "--model", "classical",
+                 "--manifest", str(manifest)]) == 0
+    assert "fitted 2 of 2 records" in capsys.readouterr().out
+    assert pihyst.load_model(out / "a.json") == _fit_alone(
+        tmp_path, folder / "a.csv", "--units-row", "--model", "classical")
+    assert pihyst.load_model(out / "b.json") == _fit_alone(
+        tmp_path, folder / "b.csv", "--no-units-row", "--model", "classical")

@@ -222,7 +222,7 @@ def test_streamed_predict_and_compensate_equal_in_memory_bit_for_bit(tmp_path, m
         assert run("compensate", name, out, "-o", comp, "--slew-rate", 20000) == 0
         cols, _ = read_columns(comp, ["voltage_V", "displacement_um", "saturated"])
         step = 20000 * np.diff(predicted.time).min()   # V/s x the smallest time step
-        whole = pihyst.compensate(model, model.predict(u), slew_rate=step)
+        whole = pihyst.compensate(model, model.predict(u), slew_rate=step, sample_period=1.0)
         np.testing.assert_array_equal(cols["voltage_V"], whole.voltage)
         np.testing.assert_array_equal(cols["displacement_um"], whole.displacement)
 
@@ -424,3 +424,51 @@ def test_progress_bar_on_a_terminal(monkeypatch):
         bar(50, 100)
         bar(100, 100)
     assert "reading big.csv" in term.getvalue() and "100" in term.getvalue()
+
+
+# ------------------------------------------------------------------ units rows
+def loop_rows(n=200):
+    u = 75 + 75 * np.sin(np.linspace(0, 6 * np.pi, n))
+    y = pihyst.load_model(CLASSICAL).predict(u)
+    return "".join(f"{k * 0.01!r},{a!r},{b!r}\n" for k, (a, b) in enumerate(zip(u.tolist(),
+                                                                           y.tolist())))
+
+
+@pytest.mark.parametrize("units,option,ok", [
+    ("s,V,um", None, True), ("s,V,um", "--units-row", True),
+    ("s,V,um", "--no-units-row", False),
+    ("sec,Volt,micron", None, False), ("sec,Volt,micron", "--units-row", True)])
+def test_units_row_detected_forced_or_refused(tmp_path, capsys, units, option, ok):
+    path = tmp_path / "loop.csv"
+    path.write_text("time_s,voltage_V,displacement_um\n" + units + "\n" + loop_rows())
+    code = run("predict", CLASSICAL, path, "-o", tmp_path / "out.csv",
+               *([option] if option else []))
+    out, err = capsys.readouterr()
+    if ok:
+        assert code == 0 and "units on line 2" in out
+        assert read_columns(tmp_path / "out.csv", ["voltage_V"])[0]["voltage_V"].size == 200
+    else:
+        assert code == 2 and f"{path}:2:" in err and "is not a number" in err
+        assert ("pass --units-row" in err) == (option is None)
+        assert not (tmp_path / "out.csv").exists()
+
+
+def test_units_row_forced_where_there_is_none_to_take(tmp_path, capsys):
+    path = tmp_path / "bare.csv"
+    path.write_text(loop_rows(30))
+    assert run("predict", CLASSICAL, path, "-o", tmp_path / "o.csv", "--voltage", 2,
+               "--units-row") == 2
+    assert "no header line for a units row" in capsys.readouterr().err
+    npy = tmp_path / "u.npy"
+    np.save(npy, np.linspace(0, 150, 30))
+    assert run("predict", CLASSICAL, npy, "-o", tmp_path / "o.csv", "--no-units-row") == 2
+    assert "for delimited text files" in capsys.readouterr().err
+
+
+def test_fit_says_its_time_column_in_the_read_line(tmp_path, capsys):
+    path = tmp_path / "loop.csv"
+    path.write_text("time_s,voltage_V,displacement_um\n" + loop_rows(400))
+    assert run("fit", path, "--model", "classical", "-o", tmp_path / "m.json") == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith(f"read {path}") and "time column 1 'time_s'" in first
+    assert first.endswith("time used for creep")

@@ -62,10 +62,10 @@ def test_compensator_system_is_compensate(family, limits):
     lo, hi = model.predict([0.0])[0], model.predict([150.0])[0]
     t = np.linspace(0, 1, 400)
     desired = lo + (hi - lo) * (0.5 + 0.6 * np.sin(2 * np.pi * 3 * t) * (1 - 0.7 * t))
-    system = compensator_system(model, **limits)
+    system = compensator_system(model, dt=1.0, **limits)   # slew_rate in V/s at dt = 1 s
     assert system.state_labels[-1] == "u_last" and system.nstates == model.n_operators + 1
     x0 = compensator_state(model, u_min=limits.get("u_min"), u_max=limits.get("u_max"))
-    ref = pihyst.compensate(model, desired, **limits)
+    ref = pihyst.compensate(model, desired, sample_period=1.0, **limits)
     out = _respond(system, desired, x0)
     np.testing.assert_array_equal(out, ref.voltage)   # the same C steps, bit for bit
     assert ref.n_saturated > 0

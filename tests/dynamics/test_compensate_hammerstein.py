@@ -54,7 +54,7 @@ def test_limits_and_slew_hold_whatever_the_trajectory(desired, slew, lo, width):
     model = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.5, 0.9]]) *
                                                            a.sum() / 1.4,))
     u, _, res = compensate_hammerstein(model, desired, u_min=lo, u_max=lo + width,
-                                       slew_rate=slew)
+                                       slew_rate=slew, sample_period=1.0)
     assert np.all((u >= lo) & (u <= lo + width))
     if slew is not None:
         assert np.all(np.abs(np.diff(np.r_[res.initial_voltage, u])) <= slew)

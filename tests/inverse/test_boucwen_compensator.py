@@ -64,7 +64,7 @@ def test_inverse_of_model_output_reproduces_the_output(model, seed):
 def test_limits_and_slew_hold_whatever_the_input(model, desired, slew, margin):
     lo, hi = model.input_range
     u_min, u_max = lo + margin * (hi - lo) / 2, hi - margin * (hi - lo) / 2
-    res = compensate(model, desired, u_min=u_min, u_max=u_max, slew_rate=slew)
+    res = compensate(model, desired, u_min=u_min, u_max=u_max, slew_rate=slew, sample_period=1.0)
     assert np.all((res.voltage >= u_min) & (res.voltage <= u_max))
     if slew is not None:
         steps = np.abs(np.diff(np.r_[res.initial_voltage, res.voltage]))
@@ -79,7 +79,7 @@ def test_saturation_and_slew_flags():
     assert res.saturated_high[0] and res.voltage[0] == 150.0
     assert res.saturated_low[1] and res.voltage[1] == 0.0
     assert res.flags[2] == 0 and abs(res.displacement[2] - 20.0) < 1e-12
-    res = compensate(m, [20.0, 20.0], slew_rate=5.0)
+    res = compensate(m, [20.0, 20.0], slew_rate=5.0, sample_period=1.0)
     assert res.slew_limited[0] and res.voltage[0] == 5.0
 
 

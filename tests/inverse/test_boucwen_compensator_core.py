@@ -55,6 +55,7 @@ def options(model, draw_limits, draw_slew):
         out["u_min"], out["u_max"] = lo + 0.1 * (hi - lo), hi - 0.2 * (hi - lo)
     if draw_slew:
         out["slew_rate"] = 0.07 * (hi - lo)
+        out["sample_period"] = 1.0
     return out
 
 
@@ -102,7 +103,7 @@ def test_c_compensator_equals_the_twin(model, seed, limits, slew):
 @given(model=monotone_models(), seed=st.integers(0, 2**16))
 def test_step_equals_run_and_reset_restarts(model, seed):
     yd = desired(model, seed, n=60)
-    comp = BoucWenCompensator(model, slew_rate=0.1 * np.ptp(model.input_range))
+    comp = BoucWenCompensator(model, slew_rate=0.1 * np.ptp(model.input_range), sample_period=1.0)
     stepped = [comp.step(v) for v in yd]
     flags_last = comp.last_flags
     comp.reset()

@@ -74,6 +74,7 @@ def test_c_compensator_equals_the_twin(model, seed, irregular, limits, slew):
         kw.update(u_min=lo + 0.1 * (hi - lo), u_max=hi - 0.2 * (hi - lo))
     if slew:
         kw["slew_rate"] = 0.07 * (hi - lo)
+        kw["sample_period"] = 1.0
     c = BoucWenCompensator(model, **kw).run(y, t=t)
     twin = BoucWenCompensatorTwin(model, **kw).run(y, t=t)
     scale = scale_of(model, np.where(np.isfinite(y), y, 0.0))

@@ -135,7 +135,8 @@ def test_limits_and_slew_hold_for_any_input(desired, lo, width, slew, start, mod
     hi = min(lo + width, 150.0)
     u0 = lo + start * (hi - lo)
     y_d = np.array(desired)
-    result = compensate(model, y_d, u_min=lo, u_max=hi, slew_rate=slew, initial_voltage=u0)
+    result = compensate(model, y_d, u_min=lo, u_max=hi, slew_rate=slew,
+                        sample_period=1.0, initial_voltage=u0)
     u = result.voltage
     assert np.all((u >= lo) & (u <= hi))
     if slew is not None:
@@ -169,7 +170,7 @@ def test_limits_and_slew_hold_for_any_input(desired, lo, width, slew, start, mod
        st.one_of(st.none(), st.floats(0.5, 20)), st.data())
 def test_step_equals_run_and_chunked_equals_whole(model, desired, slew, data):
     y_d = np.array(desired)
-    comp = Compensator(model, slew_rate=slew)
+    comp = Compensator(model, slew_rate=slew, sample_period=1.0)
     whole = comp.run(y_d)
     comp.reset()
     stepped = []
@@ -188,7 +189,8 @@ def test_step_equals_run_and_chunked_equals_whole(model, desired, slew, data):
     np.testing.assert_array_equal(second.final_state, whole.final_state)
     # a new compensator from the explicit state (operator state, last voltage): the same
     # to rounding (the running one keeps its sorted breakpoints and slope sum)
-    restarted = compensate(model, y_d[k:], slew_rate=slew, initial_state=first.final_state,
+    restarted = compensate(model, y_d[k:], slew_rate=slew,
+                           sample_period=1.0, initial_state=first.final_state,
                            initial_voltage=first.final_voltage)
     np.testing.assert_allclose(restarted.voltage, whole.voltage[k:], rtol=0, atol=1e-9)
     np.testing.assert_array_equal(restarted.flags, whole.flags[k:])
@@ -234,7 +236,7 @@ def test_saturation_is_counted_and_flagged():
 
 
 def test_slew_limit_flags():
-    result = compensate(PAPER_CLASSICAL, [30.0] * 20, slew_rate=10.0)
+    result = compensate(PAPER_CLASSICAL, [30.0] * 20, slew_rate=10.0, sample_period=1.0)
     assert np.all(np.diff(np.r_[0.0, result.voltage]) <= 10.0)
     assert result.slew_limited[0] and not result.slew_limited[-1]
     assert result.flags[0] == FLAG_SLEW
@@ -246,9 +248,9 @@ def test_reset_to_a_state_alone_continues_from_the_voltage_it_pins():
     # ran (slew-limited, so its last voltage is not the last target's) goes on with the
     # same voltages, NaN holds and slew steps included
     model = pihyst.ClassicalPI([0, 10, 30], [0.3, 0.2, 0.1])
-    ran = Compensator(model, slew_rate=3.0)
+    ran = Compensator(model, slew_rate=3.0, sample_period=1.0)
     ran.run(model.predict(np.r_[np.linspace(0, 100, 30), np.linspace(100, 60, 10)]))
-    reset = Compensator(model, slew_rate=3.0)
+    reset = Compensator(model, slew_rate=3.0, sample_period=1.0)
     reset.step(5.0)
     reset.reset(ran.state)
     assert reset.voltage == ran.voltage and reset.displacement == ran.displacement
@@ -368,14 +370,14 @@ def test_empty_and_zero_weight_models():
 def test_out_of_reach_is_flagged_when_the_slew_limit_cuts_the_sample_short(model):
     lo_y, hi_y = (float(v) for v in model.simulate([0.0, 150.0]).output)  # from the start
     desired = [lo_y, hi_y + 5, 1e308, np.inf, (lo_y + hi_y) / 2, lo_y - 5, -1e308]
-    result = compensate(model, desired, slew_rate=2.0)
+    result = compensate(model, desired, slew_rate=2.0, sample_period=1.0)
     assert np.all(np.abs(np.diff(np.r_[0.0, result.voltage])) <= 2.0)
     np.testing.assert_array_equal(result.slew_limited, [0, 1, 1, 1, 1, 1, 1])
     np.testing.assert_array_equal(result.saturated_high, [0, 1, 1, 1, 0, 0, 0])
     np.testing.assert_array_equal(result.saturated_low, [0, 0, 0, 0, 0, 1, 1])
     assert result.n_saturated == 5 and result.flags[1] == FLAG_SATURATED_HIGH | FLAG_SLEW
-    comp = Compensator(model, slew_rate=2.0) if model.family != "bouc-wen" else \
-        pihyst.BoucWenCompensator(model, slew_rate=2.0)
+    comp = Compensator(model, slew_rate=2.0, sample_period=1.0) if model.family != "bouc-wen" else \
+        pihyst.BoucWenCompensator(model, slew_rate=2.0, sample_period=1.0)
     assert comp.step(hi_y + 5) == 2.0 and comp.last_flags == FLAG_SATURATED_HIGH | FLAG_SLEW
     assert comp.step(lo_y - 1) == 0.0 and comp.last_flags == FLAG_SATURATED_LOW
 
@@ -386,13 +388,14 @@ def test_out_of_reach_is_flagged_when_the_slew_limit_cuts_the_sample_short(model
                                                        linear=30.0)], ids=lambda m: m.family)
 def test_a_state_at_rest_at_the_top_starts_there(model):
     top = model.simulate([0.0, 150.0, 0.0, 150.0]).final_state
-    comp = pihyst.inverse.compensator_for(model, initial_state=top, slew_rate=5.0)
+    comp = pihyst.inverse.compensator_for(model, initial_state=top, slew_rate=5.0,
+                                          sample_period=1.0)
     assert comp.voltage == 150.0
     np.testing.assert_array_equal(comp.state, top)
     y_top = float(model.simulate([150.0], initial_state=top).output[0])
     assert comp.displacement == pytest.approx(y_top, abs=1e-12)
     mid = float(model.simulate([75.0], initial_state=top).output[-1])
-    result = compensate(model, [mid] * 40, initial_state=top, slew_rate=5.0)
+    result = compensate(model, [mid] * 40, initial_state=top, slew_rate=5.0, sample_period=1.0)
     assert result.initial_voltage == 150.0 and result.voltage[0] == 145.0
     assert result.voltage[-1] == pytest.approx(75.0, abs=1e-9)    # the falling branch
     free = compensate(model, [mid], initial_state=top, initial_voltage=0.0)

@@ -70,7 +70,8 @@ def test_round_trip_on_samples_d_onwards(model, u, d):
        DELAYS, st.floats(1.0, 50.0), st.one_of(st.none(), st.floats(0.5, 20.0)))
 def test_limits_and_slew_hold_for_any_input(model, desired, d, lo, slew):
     hi = lo + 60.0
-    result = compensate(model.replace(delay=d), desired, u_min=lo, u_max=hi, slew_rate=slew)
+    result = compensate(model.replace(delay=d), desired, u_min=lo, u_max=hi, slew_rate=slew,
+                        sample_period=1.0)
     v = result.voltage
     assert np.all((v >= lo) & (v <= hi))
     if slew is not None:

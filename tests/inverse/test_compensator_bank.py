@@ -38,10 +38,11 @@ def test_bank_equals_separate_compensators(channels, seed, n_ticks):
     desired[kind < 0.03] = np.nan
     desired[kind < 0.02] = np.inf
     desired[kind < 0.01] = -1e300
-    bank = CompensatorBank(models, u_min=u_min, u_max=u_max, slew_rate=slew)
+    bank = CompensatorBank(models, u_min=u_min, u_max=u_max, slew_rate=slew, sample_period=1.0)
     u, y, flags = bank.run(desired)
     for i, m in enumerate(models):
-        one = pihyst.Compensator(m, u_min=u_min[i], u_max=u_max[i], slew_rate=slew[i])
+        one = pihyst.Compensator(m, u_min=u_min[i], u_max=u_max[i], slew_rate=slew[i],
+                                 sample_period=1.0)
         r = one.run(desired[:, i])
         assert np.array_equal(u[:, i], r.voltage)
         assert np.array_equal(y[:, i], r.displacement)
@@ -63,7 +64,8 @@ def test_bank_equals_separate_compensators(channels, seed, n_ticks):
 
 def test_bank_per_channel_options_and_checks():
     m = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
-    bank = CompensatorBank([m, m], slew_rate=[5.0, None], initial_voltage=[0.0, 10.0])
+    bank = CompensatorBank([m, m], slew_rate=[5.0, None],
+                           sample_period=1.0, initial_voltage=[0.0, 10.0])
     u = bank.step([1.0, 50.0])
     assert u[0] == 5.0 and u[1] == 150.0
     assert list(bank.last_flags) == [FLAG_SLEW, FLAG_SATURATED_HIGH]
@@ -72,6 +74,6 @@ def test_bank_per_channel_options_and_checks():
     with pytest.raises(ValueError, match="shape"):
         bank.run(np.zeros((3, 3)))
     with pytest.raises(ValueError, match="slew_rate"):
-        CompensatorBank([m, m], slew_rate=[1.0])
+        CompensatorBank([m, m], slew_rate=[1.0], sample_period=1.0)
     with pytest.raises(pihyst.InvalidModelError):
         CompensatorBank([m, pihyst.ClassicalPI([0, 1], [1.0, -0.5])])

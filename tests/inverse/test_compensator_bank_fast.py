@@ -65,10 +65,12 @@ def assert_same_flags(flags, expected, u, limits):
 
 
 def check_against_separate(models, u_min, u_max, slew, desired):
-    bank = CompensatorBank(models, u_min=u_min, u_max=u_max, slew_rate=slew, fast=True)
+    bank = CompensatorBank(models, u_min=u_min, u_max=u_max, slew_rate=slew,
+                           sample_period=1.0, fast=True)
     u, y, flags = bank.run(desired)
     for i, m in enumerate(models):
-        one = pihyst.Compensator(m, u_min=u_min[i], u_max=u_max[i], slew_rate=slew[i])
+        one = pihyst.Compensator(m, u_min=u_min[i], u_max=u_max[i], slew_rate=slew[i],
+                                 sample_period=1.0)
         r = one.run(desired[:, i])
         lo, hi = one.limits
         np.testing.assert_allclose(u[:, i], r.voltage, rtol=0, atol=1e-9 * (hi - lo))
@@ -146,7 +148,7 @@ def test_fast_path_selection_and_state_joining():
 
 def test_fast_bank_holds_and_flags():
     m = pihyst.ClassicalPI([0, 10, 30, 60], [0.2, 0.05, 0.04, 0.03])
-    bank = CompensatorBank([m, m, m], slew_rate=[5.0, None, None], fast=True)
+    bank = CompensatorBank([m, m, m], slew_rate=[5.0, None, None], sample_period=1.0, fast=True)
     u = bank.step([1.5, np.nan, 50.0])
     assert u[0] == 5.0 and u[1] == 0.0 and u[2] == 150.0
     assert list(bank.last_flags) == [8, FLAG_NAN, 2]

@@ -151,7 +151,7 @@ def test_compensator_with_creep_is_exact_and_within_limits(model, creep, seed, i
                                rtol=0, atol=1e-9 * scale)
     # garbage in: the voltage never leaves the limits or the slew limit
     wild = rng.choice([np.nan, np.inf, -np.inf, 1e300, -1e300, 0.0, scale, -scale], 100)
-    out = pihyst.compensate(m, wild, u_min=5.0, u_max=140.0, slew_rate=7.0,
+    out = pihyst.compensate(m, wild, u_min=5.0, u_max=140.0, slew_rate=7.0, sample_period=1.0,
                             initial_voltage=5.0, t=None if t is None else t[:100])
     assert np.all((out.voltage >= 5.0) & (out.voltage <= 140.0))
     assert np.all(np.abs(np.diff(np.r_[5.0, out.voltage])) <= 7.0)

@@ -148,7 +148,8 @@ def test_track_runs_a_models_creep_at_the_tick_period(tmp_path, capsys, cfg):
     sent = np.array([float(r[4]) for r in text_rows])        # command_V
     ref = np.array([float(r[3]) for r in text_rows])
     expected = pihyst.compensate(model, ref, t=0.05 * np.arange(ref.size), u_min=0.0,
-                                 u_max=150.0, slew_rate=10.0, initial_voltage=sent[0])
+                                 u_max=150.0, slew_rate=10.0, sample_period=1.0,
+                                 initial_voltage=sent[0])
     np.testing.assert_allclose(sent, expected.voltage, rtol=0, atol=1e-6)
 
 

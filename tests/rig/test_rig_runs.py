@@ -379,6 +379,7 @@ def test_a_creep_model_runs_its_lags_at_the_rigs_tick(tmp_path):
     assert result.completed
     sent, ref = result.column("command_V", "run"), result.column("reference", "run")
     expected = pihyst.compensate(model, ref, t=0.05 * np.arange(ref.size), u_min=0.0,
-                                 u_max=150.0, slew_rate=10.0, initial_voltage=sent[0])
+                                 u_max=150.0, slew_rate=10.0, sample_period=1.0,
+                                 initial_voltage=sent[0])
     np.testing.assert_allclose(sent, expected.voltage, rtol=0, atol=1e-6)
     assert program.model.creep.dt == pytest.approx(0.05)

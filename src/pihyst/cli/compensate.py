@@ -140,11 +140,12 @@ def run(args):
     check_limits(args.u_min, args.u_max, model, args.model)
     with open_from_args(args, args.desired, need=("displacement",)) as reader, \
             progress_bar(f"compensate {args.desired}") as bar:
-        max_step = None
+        max_step = period = None
         if args.slew_rate is not None:
             check_slew_rate(args.slew_rate, args.desired)
-            max_step = args.slew_rate * smallest_step(reader.chunks(), args.desired)
-            max_step = max_step if np.isfinite(max_step) else None
+            period = smallest_step(reader.chunks(), args.desired)
+            period = period if np.isfinite(period) else None
+            max_step = None if period is None else args.slew_rate * period
         if model.delay:
             # the delay at the record's sample period (its first block's, as predict):
             # converted or refused
@@ -156,7 +157,8 @@ def run(args):
         state = initial_state(model, args.initial_state)
         try:
             compensator = compensator_for(model, u_min=args.u_min, u_max=args.u_max,
-                                          slew_rate=max_step, initial_state=state,
+                                          slew_rate=None if period is None else args.slew_rate,
+                                          sample_period=period, initial_state=state,
                                           initial_voltage=_rest_voltage(args, model))
         except ValueError as err:
             raise UsageError(f"{args.model}: {err}") from None
@@ -267,7 +269,8 @@ def _open_writer(args, rec, max_step, lo, hi, y_lo, y_hi, unit, frame_line):
     return ColumnWriter(args.output, names, comments=[
         f"pihyst {__version__} compensate {args.model} {args.desired}",
         f"voltage limits [{lo:g}, {hi:g}] V"
-        + ("" if max_step is None else f", slew limit {max_step:g} V per sample"),
+        + ("" if max_step is None else f", slew limit {args.slew_rate:g} V/s "
+           f"({max_step:g} V per sample of {max_step / args.slew_rate:g} s)"),
         f"reachable displacement [{y_lo:.6g}, {y_hi:.6g}] {unit}", frame_line, *note])
 
 

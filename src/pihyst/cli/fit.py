@@ -11,7 +11,13 @@ import numpy as np
 from pihyst._arguments import MAX_CANDIDATES
 from pihyst._version import __version__
 from pihyst.cli.errors import UsageError, check_output, count, positive_number, step_printer
-from pihyst.cli.record_options import add_record_options, options_text, read_from_args
+from pihyst.cli.record_options import (
+    add_record_options,
+    open_from_args,
+    options_text,
+    progress_bar,
+    read_from_args,
+)
 from pihyst.exceptions import FitError, InvalidModelError, PihystWarning, RecordError
 from pihyst.identify import FAMILY_NAMES, INITIAL_STATES, fit
 from pihyst.io import save_model
@@ -252,45 +258,49 @@ def read_for_fit(args, path, say=True):
     """(record, times, note): what ``pihyst fit`` (and ``fit-many``, for each file)
     fits: the record read with the record options of ``args``, its times for creep
     (None without a usable time column, or with --no-creep) and the warning to print
-    once the fit succeeds when the time column is unusable."""
-    record = read_from_args(args, path, need=("voltage", "displacement"), say=say,
-                            optional=())
+    once the fit succeeds when the time column is unusable. With ``say``, prints the one
+    line saying what was read, the time column included."""
+    record, line = _read_described(args, path, optional=(), warn=say)
     # an unusable time column is said after the fit: a fit that fails says one line
-    t, note = (None, None) if getattr(args, "no_creep", False) else \
+    t, note, timed_line = (None, None, None) if getattr(args, "no_creep", False) else \
         _times_for_creep(args, path, say)
+    if say:
+        print(timed_line or line, flush=True)
     return record, t, note
 
 
+def _read_described(args, path, optional, warn):
+    """(record, the line describing what was read) of ``path`` with the options of
+    ``args``."""
+    with open_from_args(args, path, ("voltage", "displacement"), optional,
+                        say_warnings=warn) as reader, \
+            progress_bar(f"reading {path}") as bar:
+        return reader.read(progress=bar), reader.describe()
+
+
 def _times_for_creep(args, path=None, say=False):
-    """(times, note): the record's sample times for creep="auto", or None: a record
-    without a time column is fitted without creep, and so is one whose time column is
-    unusable (the note, a warning to print once the fit succeeds, says where; the fit
-    itself needs no time)."""
+    """(times, note, line): the record's sample times for creep="auto", or None: a
+    record without a time column is fitted without creep, and so is one whose time
+    column is unusable (the note, a warning to print once the fit succeeds, says where;
+    the fit itself needs no time); ``line`` describes the read, time column included
+    (None when the time could not be read)."""
     path = args.data if path is None else path
     try:
         # (the time is optional here: a record without one is fitted without creep)
-        times = read_from_args(args, path, need=("voltage", "displacement"), say=False,
-                               optional=("time",), warn=say)
+        times, line = _read_described(args, path, optional=("time",), warn=say)
     except UsageError:
-        return None, None
+        return None, None, None
     except RecordError as err:
-        return None, _unused_time(err)
+        return None, _unused_time(err), None
     t = times.time
     if t is None:
-        return None, None
+        return None, None, line
     bad = np.flatnonzero(~np.isfinite(t) | np.r_[False, np.diff(t) < 0])
     if bad.size:
         k = int(bad[0])
         what = "is not finite" if not np.isfinite(t[k]) else "runs backwards"
-        return None, _unused_time(times.error(k, "time", f"time {what} at sample {k}"))
-    if say:
-        meta = times.metadata
-        label = (meta["columns"]["time"] if "time" in meta["columns"] else
-                 f"k / {meta['rate_hz']:g} Hz" if "rate_hz" in meta else "?")
-        why = meta.get("columns_why", {}).get("time")
-        print(f"  the time for creep from {label}" + (f" ({why})" if why else ""),
-              flush=True)
-    return t, None
+        return None, _unused_time(times.error(k, "time", f"time {what} at sample {k}")), line
+    return t, None, line + "; time used for creep"
 
 
 def _unused_time(err):

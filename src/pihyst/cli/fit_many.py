@@ -160,7 +160,7 @@ class _ManifestParser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
-_RECORD_DESTS = {name for name, _ in OPTIONS} | {"decimal_comma"}
+_RECORD_DESTS = {name for name, _ in OPTIONS} | {"decimal_comma", "units_row"}
 
 
 def _manifest(path, args, names):
@@ -192,6 +192,8 @@ def _manifest(path, args, names):
             if isinstance(value, bool):
                 if value:
                     argv.append(flag)
+                elif dest == "units_row":        # "units_row": false, there is none
+                    argv.append("--no-units-row")
             elif value is not None:
                 argv.append(f"{flag}={value}")
         parser = _ManifestParser(prog=f"--manifest {path}: {name}", add_help=False)

@@ -54,6 +54,11 @@ def add_record_options(p, what="the record", unused=None):
                         "(default: found from the file)")
     add("--decimal-comma", action="store_true", default=None,
                    help="numbers are written 1,5 (default: found from the file)")
+    add("--units-row", dest="units_row", action="store_true", default=None,
+        help="the line under the header holds the columns' units (default: found from the "
+             "file when every field of that line is a unit)")
+    add("--no-units-row", dest="units_row", action="store_false",
+        help="the line under the header is data, not units")
     add("--sheet", metavar="NAME|N",
                    help="the sheet of an Excel workbook, by name or 1-based number "
                         "(default: the first)")
@@ -77,6 +82,8 @@ def options_text(args):
              if (value := getattr(args, name)) is not None and value != 0]
     if args.decimal_comma:
         words.append("--decimal-comma")
+    if getattr(args, "units_row", None) is not None:
+        words.append("--units-row" if args.units_row else "--no-units-row")
     return " ".join(words)
 
 
@@ -130,7 +137,8 @@ def record_kwargs(args):
                 rate=args.rate, displacement_unit=args.displacement_unit,
                 voltage_gain=args.voltage_gain, lag=args.lag, skip_until=args.skip_until,
                 separator=args.separator, decimal_comma=args.decimal_comma,
-                sheet=getattr(args, "sheet", None), reader=args.reader)
+                sheet=getattr(args, "sheet", None), reader=args.reader,
+                units_row=getattr(args, "units_row", None))
 
 
 def read_from_args(args, path, need, say=True, optional=("time",), warn=None):

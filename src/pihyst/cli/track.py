@@ -81,15 +81,18 @@ def run(args):
                         f"{t[i - 1]:g})")
     plant = plant_from_options(args)
     u_min, u_max = _limits(args, model, plant)
-    max_step = None
+    max_step = period = None
     if args.slew_rate is not None:
         check_slew_rate(args.slew_rate, args.desired)
-        max_step = args.slew_rate * smallest_step([rec], args.desired)
-        max_step = max_step if np.isfinite(max_step) else None
+        period = smallest_step([rec], args.desired)
+        period = period if np.isfinite(period) else None
+        max_step = None if period is None else args.slew_rate * period
     # a delayed model: its delay at the record's sample period, converted or refused
     model = delay_for_run(model, args.desired, t=t)
     try:
-        compensator = compensator_for(model, u_min=u_min, u_max=u_max, slew_rate=max_step)
+        compensator = compensator_for(model, u_min=u_min, u_max=u_max,
+                                      slew_rate=None if period is None else args.slew_rate,
+                                      sample_period=period)
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     # a delayed model: with preview, as pihyst.compensate

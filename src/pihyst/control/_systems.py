@@ -189,7 +189,8 @@ def compensator_system(model, dt=True, *, u_min=None, u_max=None, slew_rate=None
         Sampling period (True: unspecified).
     u_min, u_max, slew_rate
         As for :class:`pihyst.Compensator`: voltage limits inside the model's input
-        range, and the largest voltage change per **sample**.
+        range, and the largest rate of voltage change in V/s (converted at ``dt`` when it
+        is a number, else at the model's sample period).
     name, inputs, outputs : str, optional
         System and signal names (``desired`` and ``voltage`` by default).
 
@@ -214,7 +215,9 @@ def compensator_system(model, dt=True, *, u_min=None, u_max=None, slew_rate=None
     True
     """
     _check(model)
-    comp = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate)
+    period = None if dt is True or dt is None else dt
+    comp = Compensator(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+                       sample_period=period if slew_rate is not None else None)
     step = _CompensatorStep(comp)
     k = model.n_operators
     return ct.NonlinearIOSystem(step.update, step.output, inputs=inputs, outputs=outputs,

@@ -48,9 +48,11 @@ def zpetc(a, b, r, settle=None):
     return h[pre + lead:pre + lead + r.size]
 
 
-def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None):
+def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None,
+                           sample_period=None):
     """Voltages that make a SISO :class:`HammersteinModel` follow ``desired``: the
-    ZPETC prefilter, then the hysteresis inverse from the model's zero operator state.
+    ZPETC prefilter, then the hysteresis inverse from the model's zero operator state
+    (``slew_rate`` in V/s at ``sample_period`` s, as for :func:`pihyst.compensate`).
     Returns (voltage, h_desired, result of :func:`pihyst.compensate`)."""
     if model.n_inputs != 1 or model.n_outputs != 1:
         raise InvalidArgumentError(f"compensate_hammerstein needs a single-input "
@@ -59,5 +61,5 @@ def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=
     H = model.hysteresis[0]
     h_d = zpetc(model.a[0], model.b[0][0], desired)
     res = compensate(H, h_d, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                     initial_state=np.zeros(H.n_operators))
+                     sample_period=sample_period, initial_state=np.zeros(H.n_operators))
     return res.voltage, h_d, res

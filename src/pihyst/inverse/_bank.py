@@ -36,9 +36,10 @@ class CompensatorBank:
     models : sequence of PIModel
         One model (non-negative weights) per channel, without an input delay (a
         delayed model is refused: each channel would need its own preview).
-    u_min, u_max, slew_rate, initial_voltage, initial_state
-        As for :class:`Compensator`: one value for every channel, or a sequence of N
-        (None entries: that channel's default).
+    u_min, u_max, slew_rate, initial_voltage, initial_state, sample_period
+        As for :class:`Compensator` (``slew_rate`` in V/s, ``sample_period`` in s): one
+        value for every channel, or a sequence of N (None entries: that channel's
+        default).
     fast : bool
         Run classical channels by their analytic inverse (see above): 3-7 times as fast
         at 1000 channels of K = 16, equal to the exact compensator to rounding rather
@@ -54,7 +55,7 @@ class CompensatorBank:
     >>> import numpy as np, pihyst
     >>> from pihyst.inverse import CompensatorBank
     >>> m = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
-    >>> bank = CompensatorBank([m, m, m], slew_rate=[5.0, None, None])
+    >>> bank = CompensatorBank([m, m, m], slew_rate=[5e4, None, None], sample_period=1e-4)
     >>> u = bank.step([1.0, 1.0, 50.0])        # 50 um is out of reach
     >>> [round(float(v), 6) for v in u], [int(f) for f in bank.last_flags]
     ([5.0, 6.377551, 150.0], [8, 0, 2])
@@ -70,7 +71,7 @@ class CompensatorBank:
     """
 
     def __init__(self, models, *, u_min=None, u_max=None, slew_rate=None,
-                 initial_voltage=None, initial_state=None, fast=False):
+                 initial_voltage=None, initial_state=None, fast=False, sample_period=None):
         models = tuple(models)
         refuse_delayed(models)
         n = len(models)
@@ -78,10 +79,12 @@ class CompensatorBank:
                    _per_channel(slew_rate, n, "slew_rate"),
                    _per_channel(initial_voltage, n, "initial_voltage"),
                    [None] * n if initial_state is None else
-                   _per_channel(list(initial_state), n, "initial_state"), strict=True)
+                   _per_channel(list(initial_state), n, "initial_state"),
+                   _per_channel(sample_period, n, "sample_period"), strict=True)
         self._channels = tuple(
-            Compensator(m, u_min=lo, u_max=hi, slew_rate=s, initial_voltage=v, initial_state=f)
-            for m, lo, hi, s, v, f in args)
+            Compensator(m, u_min=lo, u_max=hi, slew_rate=s, initial_voltage=v, initial_state=f,
+                        sample_period=T)
+            for m, lo, hi, s, v, f, T in args)
         cores = [c._core for c in self._channels]
         self._array = _core.CompensatorSoA(cores) if fast else _core.CompensatorArray(cores)
         self._stale = False

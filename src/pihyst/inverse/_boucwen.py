@@ -46,6 +46,7 @@ from pihyst.inverse._compensator import (
     _desired,
     _number,
     run_result,
+    slew_per_sample,
 )
 from pihyst.model import InvalidModelError
 from pihyst.model._boucwen import BoucWenModel, advance, slope
@@ -68,8 +69,8 @@ class BoucWenCompensatorTwin:
     --------
     >>> from pihyst.model import BoucWenModel
     >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
-    >>> comp = BoucWenCompensatorTwin(m, slew_rate=10.0)
-    >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
+    >>> comp = BoucWenCompensatorTwin(m, slew_rate=1e5, sample_period=1e-4)
+    >>> u = comp.step(20.0)            # 10 V per sample is all 100 kV/s allows
     >>> u, comp.last_flags == comp.FLAG_SLEW
     (10.0, True)
     >>> u = comp.step(5.0)             # within reach: exact
@@ -83,7 +84,7 @@ class BoucWenCompensatorTwin:
     FLAG_SLEW = FLAG_SLEW
 
     def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None, creep_state=None):
+                 initial_state=None, creep_state=None, sample_period=None):
         if not isinstance(model, BoucWenModel):
             raise InvalidArgumentError(f"model must be a BoucWenModel, not {type(model).__name__}")
         if not model.is_monotone:
@@ -98,12 +99,8 @@ class BoucWenCompensatorTwin:
             raise InvalidArgumentError(f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min "
                                        f"< u_max inside the model's input range [{lo:g}, {hi:g}]")
         self.limits = (u_min, u_max)
-        if slew_rate is not None:
-            slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
-            if not slew_rate > 0:
-                raise InvalidArgumentError(f"slew_rate must be > 0 volts per sample, got "
-                                           f"{slew_rate:g}")
-        self.slew_rate = slew_rate
+        self.slew_rate, self.sample_period, self.max_step = slew_per_sample(
+            slew_rate, model, sample_period)
         u0, z0 = model._state(initial_state)
         if initial_voltage is None:
             # a state given is at rest at its own voltage: 0 V applied would move it
@@ -243,7 +240,7 @@ class BoucWenCompensatorTwin:
         up = self._u
         yp = m.output(up, self._z)
         lo, hi = self.limits
-        slew = math.inf if self.slew_rate is None else self.slew_rate
+        slew = math.inf if self.max_step is None else self.max_step
         if yd == yp:
             self._flags = 0
             return up
@@ -342,7 +339,8 @@ class BoucWenCompensatorTwin:
         return u, y, flags
 
     def __repr__(self):
-        slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
+        slew = "" if self.slew_rate is None else \
+            f", slew_rate={self.slew_rate:g} V/s at {self.sample_period:g} s"
         return (f"{type(self).__name__}(limits=[{self.limits[0]:g}, {self.limits[1]:g}]"
                 f"{slew}, voltage={self.voltage:g})")
 
@@ -356,8 +354,8 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
     --------
     >>> from pihyst.model import BoucWenModel
     >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
-    >>> comp = BoucWenCompensator(m, slew_rate=10.0)
-    >>> u = comp.step(20.0)            # 10 V is all the slew limit allows
+    >>> comp = BoucWenCompensator(m, slew_rate=1e5, sample_period=1e-4)
+    >>> u = comp.step(20.0)            # 10 V per sample is all 100 kV/s allows
     >>> u, comp.last_flags == comp.FLAG_SLEW
     (10.0, True)
     >>> u = comp.step(5.0)             # within reach: exact
@@ -398,7 +396,7 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
                 raise InvalidArgumentError(f"voltage {voltage:g} is outside the limits [{lo:g}, "
                                            f"{hi:g}]")
         if not hasattr(self, "_core"):
-            slew = math.inf if self.slew_rate is None else self.slew_rate
+            slew = math.inf if self.max_step is None else self.max_step
             self._core_model = self.model._core(self._start)
             self._core = _boucwen_core.BoucWenCompensator(
                 self._core_model, *self.limits, slew, self._start[0])

@@ -7,7 +7,8 @@ from pihyst.inverse._compensator import OTHER_COMPENSATORS, Compensator
 
 def compensator_for(model, *, creep_state=None, **options):
     """A compensator of ``model``; ``options`` as for :class:`pihyst.Compensator`
-    (``u_min``, ``u_max``, ``slew_rate``, ``initial_voltage``, ``initial_state``);
+    (``u_min``, ``u_max``, ``slew_rate`` in V/s, ``sample_period``, ``initial_voltage``,
+    ``initial_state``);
     ``creep_state`` for a model with creep.
 
     Examples

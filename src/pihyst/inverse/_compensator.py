@@ -85,7 +85,9 @@ class CompensationResult:
     limits : (float, float)
         The voltage limits.
     slew_rate : float or None
-        The slew limit in volts per sample.
+        The slew limit, V/s.
+    max_step : float or None
+        The slew limit as the largest voltage step per sample, V.
     """
 
     desired: np.ndarray
@@ -103,6 +105,7 @@ class CompensationResult:
     final_voltage: float
     limits: tuple
     slew_rate: float = None
+    max_step: float = None
     initial_creep_state: np.ndarray = None
     final_creep_state: np.ndarray = None
 
@@ -137,8 +140,12 @@ class Compensator:
     u_min, u_max : float, optional
         Voltage limits, inside the model's input range (default: that range).
     slew_rate : float, optional
-        Largest voltage change per sample, |u[t] - u[t-1]| (volts per sample); default
-        none.
+        Largest rate of voltage change, V/s (default none): the voltage changes by at most
+        ``slew_rate * sample_period`` per sample (:attr:`max_step`).
+    sample_period : float, optional
+        The period (s) the slew limit is converted at; default the model's
+        ``sample_period``, else its creep lags' ``dt`` (a slew limit with neither is
+        refused).
     initial_voltage : float, optional
         The voltage before the first sample (default 0 V, or the nearer limit if 0 V
         is outside the limits; with ``initial_state`` given, the voltage within the limits
@@ -161,8 +168,8 @@ class Compensator:
     --------
     >>> import pihyst
     >>> model = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
-    >>> comp = pihyst.Compensator(model, slew_rate=5.0)
-    >>> u = comp.step(1.0)           # the slew limit allows 5 V from 0 V
+    >>> comp = pihyst.Compensator(model, slew_rate=5e4, sample_period=1e-4)
+    >>> u = comp.step(1.0)           # 50 kV/s allows 5 V per 100 us sample from 0 V
     >>> u, comp.last_flags == pihyst.Compensator.FLAG_SLEW
     (5.0, True)
     >>> u = comp.step(1.0)
@@ -176,7 +183,7 @@ class Compensator:
     FLAG_SLEW = FLAG_SLEW
 
     def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None, creep_state=None):
+                 initial_state=None, creep_state=None, sample_period=None):
         if not isinstance(model, PIModel):
             raise InvalidArgumentError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
                             f"PiecewiseLinearPI), not {type(model).__name__}")
@@ -196,12 +203,8 @@ class Compensator:
                 f"voltage limits [{u_min:g}, {u_max:g}] must satisfy u_min < u_max inside the "
                 f"model's input range [{lo:g}, {hi:g}]")
         self.limits = (u_min, u_max)
-        if slew_rate is not None:
-            slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
-            if not slew_rate > 0:
-                raise InvalidArgumentError(f"slew_rate must be > 0 volts per sample, got "
-                                           f"{slew_rate:g}")
-        self.slew_rate = slew_rate
+        self.slew_rate, self.sample_period, self.max_step = slew_per_sample(
+            slew_rate, model, sample_period)
         state = (model.initial_state if initial_state is None else
                  _finite_vector(initial_state, "initial_state", model.n_operators))
         if initial_voltage is None:
@@ -216,7 +219,7 @@ class Compensator:
                                        f"voltage limits [{u_min:g}, {u_max:g}]")
         self._start = (np.array(state), initial_voltage, creep_state)
         self._core = _core.Compensator(model._new_bank(state), u_min, u_max,
-                                       np.inf if slew_rate is None else slew_rate,
+                                       np.inf if self.max_step is None else self.max_step,
                                        initial_voltage)
         self._lags = None
         self._start_lags(creep_state)
@@ -351,7 +354,8 @@ class Compensator:
                           final_creep_state=self.creep_state)
 
     def __repr__(self):
-        slew = "" if self.slew_rate is None else f", slew_rate={self.slew_rate:g}"
+        slew = "" if self.slew_rate is None else \
+            f", slew_rate={self.slew_rate:g} V/s at {self.sample_period:g} s"
         return (f"Compensator({type(self.model).__name__}, limits=[{self.limits[0]:g}, "
                 f"{self.limits[1]:g}]{slew}, voltage={self.voltage:g})")
 
@@ -395,7 +399,8 @@ def rest_interval(model, state, lo, hi):
 
 
 def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
-               initial_voltage=None, initial_state=None, t=None, creep_state=None):
+               initial_voltage=None, initial_state=None, t=None, creep_state=None,
+               sample_period=None):
     """Voltages that make ``model`` follow the desired displacements ``y_desired``.
 
     Exact inverse sample by sample (see the module notes), within the voltage limits
@@ -420,10 +425,13 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     y_desired : array_like
         Desired displacements, one per sample.
     u_min, u_max, slew_rate, initial_voltage, initial_state, creep_state
-        As for :class:`Compensator`.
+        As for :class:`Compensator` (``slew_rate`` in V/s).
     t : array_like, optional
         Sample times (s) for a model with creep (default: every ``model.creep.dt``);
-        ignored without creep.
+        without creep only the slew limit's sample period comes from them.
+    sample_period : float, optional
+        The period (s) a slew limit is converted at; default the smallest interval of
+        ``t``, else the model's (:class:`Compensator`).
 
     Returns
     -------
@@ -443,9 +451,11 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
     (1, 150.0)
     """
     cls = OTHER_COMPENSATORS.get(getattr(model, "family", None), Compensator)
+    if slew_rate is not None and sample_period is None:
+        sample_period = slew_per_sample(slew_rate, model, None, t, takes_times=True)[1]
     comp = cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
                initial_voltage=initial_voltage, initial_state=initial_state,
-               creep_state=creep_state)
+               creep_state=creep_state, sample_period=sample_period)
     run = comp.run
     d = model.delay_at(t=t)
     if d == 0:
@@ -529,7 +539,7 @@ def run_result(comp, desired, voltage, displacement, flags, initial_state, initi
         saturated=None, saturated_low=None, saturated_high=None, slew_limited=None,
         nan_held=None, initial_state=initial_state, initial_voltage=initial_voltage,
         final_state=comp.state, final_voltage=comp.voltage, limits=comp.limits,
-        slew_rate=comp.slew_rate, **creep_states))
+        slew_rate=comp.slew_rate, max_step=comp.max_step, **creep_states))
 
 
 def _with_flag_arrays(result):
@@ -539,6 +549,49 @@ def _with_flag_arrays(result):
     high = (flags & FLAG_SATURATED_HIGH) != 0
     return replace(result, saturated=low | high, saturated_low=low, saturated_high=high,
                    slew_limited=(flags & FLAG_SLEW) != 0, nan_held=(flags & FLAG_NAN) != 0)
+
+
+def slew_per_sample(slew_rate, model, sample_period=None, t=None, takes_times=False):
+    """``(slew_rate, sample_period, max_step)`` of a compensator: the slew limit in V/s
+    (None: none), the sample period it is converted at (s) and the largest voltage step
+    per sample (V),
+
+        max_step = slew_rate * sample_period.
+
+    The period is ``sample_period`` when given, else the smallest interval of the sample
+    times ``t``, else the model's (``model.sample_period``, else its creep lags' ``dt``);
+    a slew limit with none of these is refused (the package's one unit convention: slew
+    in V/s, time in s, docs/interfaces.md); ``takes_times``: the caller takes ``t`` (the
+    message says so)."""
+    if slew_rate is None:
+        return None, _period_or_none(sample_period), None
+    slew_rate = _number(slew_rate, "slew_rate", allow_inf=True)
+    if not slew_rate > 0:
+        raise InvalidArgumentError(f"slew_rate must be > 0 V/s, got {slew_rate:g}")
+    period = _period_or_none(sample_period)
+    if period is None and t is not None:
+        steps = np.diff(np.asarray(t, dtype=np.float64))
+        steps = steps[np.isfinite(steps) & (steps > 0)]
+        period = float(steps.min()) if steps.size else None
+    if period is None:
+        period = getattr(model, "sample_period", None)
+    if period is None and getattr(model, "creep", None) is not None:
+        period = float(model.creep.dt)
+    if period is None:
+        raise InvalidArgumentError(
+            f"slew_rate is in V/s and the model has no sample period to convert it to a step "
+            f"per sample: give sample_period= (s){' or sample times t' if takes_times else ''}")
+    return slew_rate, period, slew_rate * period
+
+
+def _period_or_none(period):
+    if period is None:
+        return None
+    period = _number(period, "sample_period")
+    if not (np.isfinite(period) and period > 0):
+        raise InvalidArgumentError(f"sample_period must be a positive number of seconds, got "
+                                   f"{period:g}")
+    return period
 
 
 def _number(value, name, allow_inf=False, allow_nan=False):

@@ -16,6 +16,7 @@ import zlib
 import numpy as np
 
 from pihyst.exceptions import RecordError
+from pihyst.io._column_sinks import METADATA_KEY, SIDECAR_FORMAT, read_embedded_metadata
 
 MAT_V73_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -293,7 +294,19 @@ def _open_hdf5(path, transpose, kind="hdf5"):
             else:
                 variables[name] = _Transposed(obj) if transpose and obj.ndim == 2 else obj
     f.visititems(visit)
-    return ArraySource(path, kind, variables, {"_close": f.close})
+    extra = {"_close": f.close}
+    written = _embedded(f.attrs.get(METADATA_KEY))
+    if written is not None:      # an HDF5 file pihyst wrote: its metadata attribute
+        extra["pihyst_metadata"] = written
+    return ArraySource(path, kind, variables, extra)
+
+
+def _embedded(text):
+    """The metadata pihyst wrote into a file (a JSON string), or None."""
+    if text is None:
+        return None
+    data = read_embedded_metadata(text)
+    return data if data is not None and data.get("format") == SIDECAR_FORMAT else None
 
 
 class _Flat:
@@ -327,7 +340,11 @@ def _open_parquet(path):
     table = pq.read_table(path)
     variables = {name: table.column(name).to_numpy() for name in table.column_names
                  if table.schema.field(name).type.num_fields == 0}
-    return ArraySource(path, "parquet", variables)
+    # a Parquet file pihyst wrote: its metadata in the file's key-value metadata
+    meta = pq.ParquetFile(path).metadata.metadata or {}
+    written = _embedded(meta.get(METADATA_KEY.encode()))
+    return ArraySource(path, "parquet", variables,
+                       None if written is None else {"pihyst_metadata": written})
 
 
 def function_source(name, result):

@@ -14,6 +14,12 @@ import numpy as np
 
 from pihyst._atomic import AtomicFile
 from pihyst.exceptions import CSVError
+from pihyst.io._column_sinks import (
+    SIDECAR_FORMAT,
+    SINKS,
+    check_output_format,
+    output_format,
+)
 from pihyst.io._text_check import data_line_of
 from pihyst.io._text_source import TextSource
 
@@ -66,8 +72,11 @@ class ColumnWriter:
     folder (nothing is left if the process is killed), put in place by :meth:`close`;
     :meth:`abort`, or an exception inside ``with ColumnWriter(...)``, gives it up.
 
-    Values are written as the shortest decimal that reads back exactly (pyarrow's
-    writer when installed, else Python's ``repr``).
+    Values are written as the shortest decimal that reads back exactly, as Python's
+    ``repr`` writes them (:func:`format_rows`).
+
+    An output named ``.parquet``, ``.h5`` or ``.hdf5`` is written in that format instead
+    (:mod:`pihyst.io._column_sinks`; pyarrow, h5py), its metadata inside the file.
 
     The file is plain CSV: one header line, then numbers, so that NumPy's and pandas'
     default readers open it (``np.genfromtxt(names=True, delimiter=",")``,
@@ -82,6 +91,15 @@ class ColumnWriter:
         self.names = list(names)
         self.comments = [str(c) for c in comments]
         self.metadata = dict(metadata or {})
+        self.rows = 0
+        self.format = output_format(self.path)
+        if self.format != "csv":
+            # Parquet or HDF5: the metadata inside the file, no sidecar
+            check_output_format(self.path)
+            self._sink = SINKS[self.format](self.path, self.names, self._described())
+            self._file = None
+            return
+        self._sink = None
         self._file = AtomicFile(self.path)
         head = ",".join(self.names) + "\n"
         try:
@@ -89,23 +107,35 @@ class ColumnWriter:
         except BaseException:
             self._file.abort()        # no caller holds this writer yet to abort it
             raise
-        self.rows = 0
 
     def write(self, columns):
         """Append rows: a dict name -> array with every name of the header."""
         data = [np.ascontiguousarray(columns[n], dtype=np.float64) for n in self.names]
         n = len(data[0])
+        if self._sink is not None:
+            self._sink.write(data)
+            self.rows += n
+            return
         for start in range(0, n, WRITE_ROWS):
             self._file.write(format_rows([a[start:start + WRITE_ROWS] for a in data],
                                          self.engine))
         self.rows += n
 
+    def _described(self):
+        return described(self.path, self.names, self.rows, self.comments, self.metadata)
+
     def close(self):
+        if self._sink is not None:
+            self._sink.commit(self._described())
+            return
         self._file.commit()
         write_sidecar(self.path, self.names, self.rows, self.comments, self.metadata)
 
     def abort(self):
-        self._file.abort()
+        if self._sink is not None:
+            self._sink.abort()
+        else:
+            self._file.abort()
 
     def __enter__(self):
         return self
@@ -119,21 +149,24 @@ class ColumnWriter:
 
 def format_rows(columns, engine=None):
     """CSV bytes of equal-length float columns, no header, each value the shortest
-    decimal that reads back exactly: with pyarrow's writer when installed (or
-    ``engine="pyarrow"``), else (``engine="numpy"``) Python's ``repr``."""
-    try:
-        if engine == "numpy":
-            raise ImportError
+    decimal that reads back exactly, as Python's ``repr`` writes it: with pihyst's C
+    writer (:mod:`pihyst.io._fastcsv`, built with the package), else (or with
+    ``engine="numpy"``, its plain twin) ``repr`` itself; ``engine="pyarrow"`` uses
+    pyarrow's writer (the same numbers, written ``1`` rather than ``1.0``)."""
+    if engine == "pyarrow":
         import pyarrow as pa
         import pyarrow.csv as pcsv
-    except ImportError:
-        line = ",".join(["%r"] * len(columns)) + "\n"
-        flat = np.column_stack(columns).ravel().tolist()
-        return ((line * len(columns[0])) % tuple(flat)).encode("ascii")
-    out = _io.BytesIO()
-    table = pa.table({f"c{j}": c for j, c in enumerate(columns)})
-    pcsv.write_csv(table, out, pcsv.WriteOptions(include_header=False))
-    return out.getvalue()
+        out = _io.BytesIO()
+        table = pa.table({f"c{j}": c for j, c in enumerate(columns)})
+        pcsv.write_csv(table, out, pcsv.WriteOptions(include_header=False))
+        return out.getvalue()
+    from pihyst.io._text_engines import _fast
+    fast = _fast() if engine != "numpy" else None
+    if fast is not None:
+        return fast.format_rows(columns)
+    line = ",".join(["%r"] * len(columns)) + "\n"
+    flat = np.column_stack(columns).ravel().tolist()
+    return ((line * len(columns[0])) % tuple(flat)).encode("ascii")
 
 
 def write_columns(path, columns, comments=(), metadata=None):
@@ -143,7 +176,6 @@ def write_columns(path, columns, comments=(), metadata=None):
         w.write(columns)
 
 
-SIDECAR_FORMAT = "pihyst CSV metadata"
 
 
 def sidecar_path(path):
@@ -163,11 +195,17 @@ def write_sidecar(path, names, rows, comments=(), metadata=None):
     except OSError:
         return
     from pihyst._atomic import write_atomically
-    from pihyst._version import __version__
-    data = {"format": SIDECAR_FORMAT, "pihyst_version": __version__,
-            "file": os.path.basename(path), "columns": list(names), "rows": int(rows),
-            "comments": list(comments), **(metadata or {})}
+    data = described(path, names, rows, comments, metadata)
     write_atomically(sidecar_path(path), json.dumps(data, indent=1, default=str) + "\n")
+
+
+def described(path, names, rows, comments=(), metadata=None):
+    """The metadata pihyst keeps with a record it writes (in a CSV's sidecar, a Parquet
+    schema's or an HDF5 file's ``pihyst`` key): what wrote it, its columns and rows."""
+    from pihyst._version import __version__
+    return {"format": SIDECAR_FORMAT, "pihyst_version": __version__,
+            "file": os.path.basename(os.fspath(path)), "columns": list(names),
+            "rows": int(rows), "comments": list(comments), **(metadata or {})}
 
 
 def read_sidecar(path):

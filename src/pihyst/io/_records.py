@@ -80,7 +80,7 @@ class RecordReader:
     def __init__(self, path, *, voltage=None, displacement=None, time=None, rate=None,
                  displacement_unit=None, voltage_gain=None, lag=0, skip_until=None,
                  separator=None, decimal_comma=None, reader=None, sheet=None,
-                 need=("voltage", "displacement"), optional=("time",)):
+                 units_row=None, need=("voltage", "displacement"), optional=("time",)):
         self.path = os.fspath(path)
         # one quantity may be named alone (need="time"), not spelt out letter by letter
         self.need = (need,) if isinstance(need, str) else tuple(need)
@@ -89,7 +89,8 @@ class RecordReader:
         unknown = set(self.need) - set(QUANTITIES)
         if unknown:
             raise InvalidArgumentError(f"unknown quantities {sorted(unknown)}")
-        self.source = _open_source(self.path, reader, separator, decimal_comma, sheet)
+        self.source = _open_source(self.path, reader, separator, decimal_comma, sheet,
+                                   units_row)
         found = dict(self.source.extra.get("found", {}) if isinstance(self.source, ArraySource)
                      else getattr(self.source, "found", {}))
         self.rate_why = "--rate" if rate is not None else found.pop(
@@ -422,6 +423,7 @@ class RecordReader:
                                       if not k.startswith("_")}}
         if isinstance(self.source, TextSource) and self._sidecar() is not None:
             meta["sidecar"] = self._sidecar()
+            meta["pihyst_metadata"] = self._sidecar()   # as for Parquet and HDF5
         meta["columns"] = dict(self.labels)
         if self.why:
             meta["columns_why"] = dict(self.why)
@@ -476,6 +478,9 @@ class RecordReader:
                          "skipped (see sensor_status, supply_status)")
         if isinstance(self.source, TextSource) and self._sidecar() is not None:
             notes.append(f"metadata from {os.path.basename(self._sidecar_name)}")
+        elif isinstance(self.source, ArraySource) and "pihyst_metadata" in self.source.extra:
+            where = "key-value metadata" if self.source.kind == "parquet" else "attributes"
+            notes.append(f"metadata from its {where} (written by pihyst)")
         if self.lag:
             notes.append(f"displacement {self.lag} sample(s) later")
         if self.skip_until is not None:
@@ -622,7 +627,12 @@ def _text_column(src, quantity, spec, needed):
     return hits[0]
 
 
-def _open_source(path, reader, separator, decimal_comma, sheet=None):
+def _open_source(path, reader, separator, decimal_comma, sheet=None, units_row=None):
+    if units_row is not None and (reader is not None or
+                                  EXTENSIONS.get(os.path.splitext(path)[1].lower()) or
+                                  os.path.splitext(path)[1].lower() in LAB_EXTENSIONS):
+        raise InvalidArgumentError("--units-row and --no-units-row are for delimited text "
+                                   "files")
     if reader is not None:
         return function_source(path, _call_reader(reader, path))
     kind = kind_of(path)
@@ -639,7 +649,8 @@ def _open_source(path, reader, separator, decimal_comma, sheet=None):
                                        f"files, not {LAB_EXTENSIONS[ext]}")
         return open_lab_source(path, LAB_EXTENSIONS[ext], sheet)
     if kind is None:
-        return TextSource(path, separator=separator, decimal_comma=decimal_comma)
+        return TextSource(path, separator=separator, decimal_comma=decimal_comma,
+                          units_row=units_row)
     if separator is not None or decimal_comma is not None:
         raise InvalidArgumentError(f"--separator and --decimal-comma are for text files, not "
                                    f"{kind}")
@@ -738,9 +749,11 @@ def read_record(path, **options):
     column times this is the actuator's voltage); ``lag`` (the sensor answers this many
     samples late: displacement[k + lag] goes with voltage[k]); ``skip_until`` (seconds:
     drop the samples before); ``separator``, ``decimal_comma`` (text, when not found
-    right); ``reader`` (a function, ``module:function`` or ``file.py:function`` called
-    with ``path``, returning a dict of arrays ``voltage``, ``displacement``, ``time`` and
-    ``metadata``); ``need`` (the quantities that must be there).
+    right); ``units_row`` (text: True, the line under the header holds the units; False,
+    there is none; default: detected when every field of that line is a unit); ``reader``
+    (a function, ``module:function`` or ``file.py:function`` called with ``path``,
+    returning a dict of arrays ``voltage``, ``displacement``, ``time`` and ``metadata``);
+    ``need`` (the quantities that must be there).
 
     Returns a :class:`Record`. Bad data raise :class:`RecordError` (:class:`CSVError` for
     text, with file, line and column); bad options :class:`InvalidArgumentError`.

@@ -35,7 +35,8 @@ class TextSource:
 
     kind = "text"
 
-    def __init__(self, path, *, separator=None, decimal_comma=None, block_bytes=None):
+    def __init__(self, path, *, separator=None, decimal_comma=None, block_bytes=None,
+                 units_row=None):
         self.path = os.fspath(path)
         self.block_bytes = block_bytes or BLOCK_BYTES
         if separator is not None and separator not in SEPARATOR_NAMES:
@@ -81,8 +82,12 @@ class TextSource:
         # a pihyst rig run log: its ticks without a valid reading are skipped, and counted
         self.rig_log = self.columns == RIG_LOG_COLUMNS
         self.skipped_ticks = None
-        if self.columns:
-            self._units_row(head, at_eof)
+        self._units_row_option = units_row
+        if units_row and not self.columns:
+            raise CSVError(self.path, self.dialect.first_line, 0, "--units-row: the file has "
+                           "no header line for a units row to be under")
+        if self.columns and units_row is not False:
+            self._units_row(head, at_eof, forced=bool(units_row))
         elif self.gcs is not None:
             self._gcs_columns()
 
@@ -132,28 +137,48 @@ class TextSource:
                            f"end and its last number {end!r} is cut short: the file was cut "
                            "off (truncated)?")
 
-    def _units_row(self, head, at_eof):
+    def _units_row(self, head, at_eof, forced=False):
         """A line of units under the header (``s, V, um``): its units are the columns',
-        and the data start below it."""
+        and the data start below it. Detected when every field looks like a unit; with
+        ``forced`` (``--units-row``) the line under the header is one, whatever it holds
+        (a field that is not a unit pihyst knows is kept as written, and named where the
+        unit is used)."""
         from pihyst.io._lab_formats import looks_unit
         d = self.dialect
         _, lines = head_lines(head, at_eof)
         below = [(n, end, t) for n, end, t in lines if n > d.header_line and not is_skipped(t)]
         if not below:
+            if forced:
+                raise CSVError(self.path, d.header_line + 1, 0, "--units-row: no line under "
+                               "the header")
             return
         number, end, text = below[0]
         try:
             fields = split_fields(text, d.separator)
-        except FieldError:
+        except FieldError as err:
+            if forced:
+                raise CSVError(self.path, number, 0, f"--units-row: {err}") from None
             return
-        if len(fields) != d.n_fields or not any(f.strip() for f in fields):
+        if forced and len(fields) != d.n_fields:
+            raise CSVError(self.path, number, 0, f"--units-row: the line under the header "
+                           f"has {len(fields)} fields, the header {d.n_fields}")
+        if not forced and (len(fields) != d.n_fields or not any(f.strip() for f in fields)):
             return
-        if not all(not f.strip() or looks_unit(f) for f in fields):
+        if not forced and not all(not f.strip() or looks_unit(f) for f in fields):
             return
         self.units = {i: f.strip().strip("[]()").strip() for i, f in enumerate(fields)
                       if f.strip()}
         self.units_line = number
         self.dialect = dataclasses.replace(d, data_offset=end, data_line=number + 1)
+
+    def _units_hint(self, err):
+        """``err`` with a hint when it is a word in the line under the header that was
+        not taken for a units row (a unit pihyst does not know, a name...)."""
+        if (self._units_row_option is None and not self.units_line and self.columns
+                and err.line == self.dialect.data_line and "is not a number" in err.message):
+            return CSVError(self.path, err.line, err.column, err.message + " (the line "
+                            "under the header: if it holds units, pass --units-row)")
+        return err
 
     def _gcs_columns(self):
         """Column names from a GCSArray header's NAME0, NAME1, ...; the sample period
@@ -239,8 +264,11 @@ class TextSource:
                 raise CSVError(self.path, first_line + k, 0, NUL_MESSAGE)
             values = read_block(block, self.dialect, wanted)
             if values is None:
-                values = check_block(self.path, block, first_line, self.dialect, wanted,
-                                     labels)
+                try:
+                    values = check_block(self.path, block, first_line, self.dialect, wanted,
+                                         labels)
+                except CSVError as err:
+                    raise self._units_hint(err) from None
             rows += len(values)
             if self.rig_log:
                 self.skipped_ticks = self._dropped

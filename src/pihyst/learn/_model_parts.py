@@ -125,10 +125,11 @@ def periodic_inverse(parts, h_target, lo, hi, max_step):
     if parts.creep is not None:
         # the lags' start: the creep-free inverse's mean hysteresis output
         plain = compensate(_without_creep(static), h_target,
-                           u_min=lo, u_max=hi, slew_rate=max_step)
+                           u_min=lo, u_max=hi, slew_rate=max_step, sample_period=1.0)
         options = parts._run_options(p, n, plain.displacement)
     else:
         options = {}
+    # max_step is volts per sample: a slew rate of max_step V/s at a 1 s sample
     run = compensate(static, np.tile(h_target, p), u_min=lo, u_max=hi, slew_rate=max_step,
-                     initial_state=static.initial_state, **options)
+                     sample_period=1.0, initial_state=static.initial_state, **options)
     return run.voltage[-n:]

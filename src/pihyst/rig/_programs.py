@@ -87,8 +87,9 @@ class FeedforwardProgram:
             raise InvalidArgumentError(f"the model's input range [{lo:g}, {hi:g}] V and the "
                                        f"rig's limits [{u_min:g}, {u_max:g}] V do not overlap")
         self.max_step = max_step
+        # max_step is volts per tick: a slew rate of max_step V/s at a 1 s "tick"
         self.compensator = compensator_for(model, u_min=self.limits[0], u_max=self.limits[1],
-                                           slew_rate=max_step)
+                                           slew_rate=max_step, sample_period=1.0)
         self.n_ticks = self.desired.size
         self.description = description
         self._start = None
@@ -102,7 +103,8 @@ class FeedforwardProgram:
         if model is not self.model:
             self.model = model
             self.compensator = compensator_for(model, u_min=self.limits[0],
-                                               u_max=self.limits[1], slew_rate=self.max_step)
+                                               u_max=self.limits[1], slew_rate=self.max_step,
+                                               sample_period=1.0)
 
     def initial_voltage(self):
         # the voltage for the first desired value, reached by a monotone ramp from 0 V
