@@ -65,12 +65,12 @@ class RecordOutcome:
 
     record: str
     status: str
-    error: str = None
-    result: FitResult = None
+    error: str | None = None
+    result: FitResult | None = None
     warnings: tuple = ()
     seconds: float = 0.0
-    source: str = None
-    traceback: str = None
+    source: str | None = None
+    traceback: str | None = None
 
     @property
     def ok(self):
@@ -117,7 +117,7 @@ class FleetResult:
     outcomes: tuple
     seconds: float = 0.0
     scheduler: str = "serial"
-    _index: dict = field(default=None, repr=False, compare=False)
+    _index: dict | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "_index", {o.record: o for o in self.outcomes})

@@ -31,6 +31,7 @@ streaming :class:`Compensator` takes, at each tick, the target d samples ahead.
 """
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -46,7 +47,7 @@ __all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLA
 
 #: Compensators of the models that are not PI models (family -> class), registered by
 #: their modules (inverse/_boucwen.py); compensate() dispatches to them
-OTHER_COMPENSATORS = {}
+OTHER_COMPENSATORS: dict[str, Any] = {}
 
 #: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
 #: Out of reach means beyond what the model gives at the voltage limit, whatever the slew
@@ -102,9 +103,9 @@ class CompensationResult:
     final_state: np.ndarray
     final_voltage: float
     limits: tuple
-    slew_rate: float = None
-    initial_creep_state: np.ndarray = None
-    final_creep_state: np.ndarray = None
+    slew_rate: float | None = None
+    initial_creep_state: np.ndarray | None = None
+    final_creep_state: np.ndarray | None = None
 
     @property
     def n_saturated(self):

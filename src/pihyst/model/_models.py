@@ -20,8 +20,10 @@ import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Any, ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pihyst import _core, paper
 from pihyst._arguments import real_array
@@ -46,7 +48,7 @@ SCHEMA_VERSION = 1
 _SHORT_VECTOR = 6   # repr shows at most this many values of a vector
 #: Model classes that are not PI models (family -> class with from_dict), registered by
 #: their modules; PIModel.from_dict dispatches to them
-OTHER_FAMILIES = {}
+OTHER_FAMILIES: dict[str, Any] = {}
 #: the JSON keys of the delay (docs/interfaces.md), omitted at their defaults
 DELAY_KEYS = ("delay_samples", "sample_period_s")
 
@@ -59,10 +61,10 @@ class Response:
     output: np.ndarray
     final_state: np.ndarray
     #: with creep: the lag states z_i after the last sample (None without creep)
-    final_creep_state: np.ndarray = None
+    final_creep_state: NDArray[np.float64] | None = None
     #: with a delay of d samples: the last d inputs, not yet seen at the output (the
     #: ``pending_input`` of a following chunk); None without a delay
-    pending_input: np.ndarray = None
+    pending_input: NDArray[np.float64] | None = None
 
 
 def _finite_vector(values, name, length=None):
@@ -226,8 +228,8 @@ class PIModel(Immutable, ABC):
     through ``_own_params`` and their JSON keys through ``_own_dict``/``_own_from_dict``.
     """
 
-    family = None
-    _registry = {}
+    family: ClassVar[str | None] = None
+    _registry: ClassVar[dict[str, type["PIModel"]]] = {}
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -485,8 +487,8 @@ class PIModel(Immutable, ABC):
     _COMMON_KEYS = frozenset({"family", "weights", "offset", "input_range", "initial_state",
                               "units", "metadata", "schema_version", "creep",
                               *DELAY_KEYS})
-    _OWN_KEYS = frozenset()
-    _REQUIRED_KEYS = ("weights",)
+    _OWN_KEYS: ClassVar[frozenset[str]] = frozenset()
+    _REQUIRED_KEYS: ClassVar[tuple[str, ...]] = ("weights",)
 
     @classmethod
     def from_dict(cls, d, source="model"):
@@ -650,6 +652,7 @@ class ClassicalPI(PIModel):
     Examples
     --------
     >>> import numpy as np
+from numpy.typing import NDArray
     >>> m = ClassicalPI([0, 10, 30, 150], [0.008, 0.252, 0.019, 0.582])
     >>> u = np.r_[np.arange(0, 151), np.arange(149, -1, -1)]
     >>> y = m.predict(u)
@@ -695,6 +698,7 @@ class MultislopePI(PIModel):
     Examples
     --------
     >>> import numpy as np
+from numpy.typing import NDArray
     >>> m = MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
     >>> u = np.r_[np.arange(0, 151), np.arange(149, -1, -1)]
     >>> y = m.predict(u)

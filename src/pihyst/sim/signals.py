@@ -19,6 +19,9 @@ from pihyst import paper
 from pihyst.exceptions import InvalidArgumentError, ResourceLimitError
 from pihyst.sim._runs import checked_seed
 
+__all__ = ["DEFAULT_DT", "MAX_SAMPLES", "band_limited_triangle", "decaying_triangles",
+           "growing_sine", "random_ramps", "sine", "staircase", "triangle"]
+
 PAPER_PERIOD_S = paper.DRIVE_PERIOD_S
 PAPER_U_MAX = paper.DRIVE_U_MAX_V
 DEFAULT_DT = 0.1

@@ -63,7 +63,7 @@ class FittedModel:
     key: str
     label: str
     model: object
-    requested_thresholds: list = None
+    requested_thresholds: list | None = None
     notes: list = field(default_factory=list)
     fit_report: object = None
 
