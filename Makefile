@@ -27,9 +27,12 @@ ctest:
 lint: install
 	$(BIN)/ruff check src tests benchmarks
 
-# mypy on the package (configuration: pyproject.toml [tool.mypy])
+# mypy on the package (configuration: pyproject.toml [tool.mypy]); stubtest checks the
+# stubs of the compiled extensions against the extensions themselves
 typecheck: install
 	$(BIN)/mypy
+	$(BIN)/python -m mypy.stubtest --allowlist tests/stubtest_allowlist.txt \
+		pihyst._core pihyst._boucwen_core pihyst.io._fastcsv
 
 pytest: install
 	$(BIN)/python -m pytest
