@@ -652,7 +652,6 @@ class ClassicalPI(PIModel):
     Examples
     --------
     >>> import numpy as np
-from numpy.typing import NDArray
     >>> m = ClassicalPI([0, 10, 30, 150], [0.008, 0.252, 0.019, 0.582])
     >>> u = np.r_[np.arange(0, 151), np.arange(149, -1, -1)]
     >>> y = m.predict(u)
@@ -698,7 +697,6 @@ class MultislopePI(PIModel):
     Examples
     --------
     >>> import numpy as np
-from numpy.typing import NDArray
     >>> m = MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
     >>> u = np.r_[np.arange(0, 151), np.arange(149, -1, -1)]
     >>> y = m.predict(u)
