@@ -84,9 +84,26 @@ class ModelBank:
         """The running operator state of every channel (a list of copies)."""
         return [s.state for s in self.channels]
 
-    def reset(self, states=None):
-        """Every channel back to its initial state, or to ``states`` (one per channel,
-        None entries: the channel's initial state)."""
+    def reset(self, states=None) -> None:
+        """Every channel back to its initial state, or to ``states``.
+
+        Parameters
+        ----------
+        states : sequence, optional
+            One operator state per channel (None entries: the channel's initial state).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``states`` does not have one entry per channel.
+
+        Examples
+        --------
+        >>> from pihyst.model import ClassicalPI
+        >>> bank = ModelBank([ClassicalPI([0], [1.0])])
+        >>> _ = bank.step([5.0]); bank.reset(); bank.states[0].tolist()
+        [0.0]
+        """
         states = [None] * len(self) if states is None else list(states)
         if len(states) != len(self):
             raise InvalidArgumentError(f"states must have {len(self)} entries, got {len(states)}")
@@ -108,7 +125,31 @@ class ModelBank:
         return u
 
     def step(self, u):
-        """One tick: advance channel i by the input u[i]; returns the N outputs."""
+        """One tick: advance channel i by the input u[i].
+
+        Parameters
+        ----------
+        u : array_like
+            One input per channel (V), shape (N,).
+
+        Returns
+        -------
+        numpy.ndarray
+            The N outputs.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` does not have N values.
+        InputRangeError
+            If an input is outside its channel's input range.
+
+        Examples
+        --------
+        >>> from pihyst.model import ClassicalPI
+        >>> ModelBank([ClassicalPI([0], [1.0]), ClassicalPI([0], [2.0])]).step([1, 1]).tolist()
+        [1.0, 2.0]
+        """
         u = np.asarray(u, dtype=np.float64)
         if u.shape != (len(self),):
             raise InvalidArgumentError(f"input must have {len(self)} values, got shape {u.shape}")
@@ -117,7 +158,31 @@ class ModelBank:
         return y
 
     def run(self, u):
-        """T ticks: u has shape (T, N), row t one tick; returns the outputs (T, N)."""
+        """T ticks, row t of ``u`` one tick.
+
+        Parameters
+        ----------
+        u : array_like
+            Inputs of shape (T, N) (V).
+
+        Returns
+        -------
+        numpy.ndarray
+            The outputs, shape (T, N).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` does not have shape (T, N).
+        InputRangeError
+            If an input is outside its channel's input range.
+
+        Examples
+        --------
+        >>> from pihyst.model import ClassicalPI
+        >>> ModelBank([ClassicalPI([0], [1.0])]).run([[1.0], [3.0]]).tolist()
+        [[1.0], [3.0]]
+        """
         y = self._array.run(self._checked(u))
         self._stale = self.fast
         return y

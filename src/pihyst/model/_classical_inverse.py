@@ -38,6 +38,16 @@ def reachable_output_range(model):
     R_k(u_max))]: it can only be pushed down by F_k and up by R_k. The output bound is
     the weighted sum of those ends (by the sign of each weight).
 
+    Parameters
+    ----------
+    model : PIModel
+        Any PI model.
+
+    Returns
+    -------
+    (float, float)
+        The lowest and highest output it can reach (µm).
+
     Examples
     --------
     >>> from pihyst.model import ClassicalPI
