@@ -16,6 +16,7 @@ sample, and the exact inverse stays exact (each sample solves for H[t], then the
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pihyst import _core
 from pihyst._frozen import frozen_array
@@ -59,6 +60,9 @@ class Creep:
     """
 
     __slots__ = ("tau", "gain", "dt")
+    tau: NDArray[np.float64]
+    gain: NDArray[np.float64]
+    dt: float
 
     def __init__(self, tau, gain, dt):
         set_ = object.__setattr__
