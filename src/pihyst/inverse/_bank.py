@@ -44,6 +44,15 @@ class CompensatorBank:
         at 1000 channels of K = 16, equal to the exact compensator to rounding rather
         than bit for bit.
 
+    Raises
+    ------
+    InvalidArgumentError
+        If a model is delayed or an argument does not have one value per channel.
+    InvalidModelError
+        If a model cannot be inverted (a negative weight).
+
+    Notes
+    -----
     ``channels`` holds the N :class:`Compensator` objects; the bank steps their states,
     so ``channels[i].voltage`` and ``.state`` are current when read through
     ``bank.channels`` (a fast bank writes its state back to them when they are read).
@@ -134,7 +143,30 @@ class CompensatorBank:
         self._stale = False
 
     def step(self, y_desired):
-        """One tick: the N voltages for N desired displacements (any values)."""
+        """One tick: the N voltages for N desired displacements (any values).
+
+        Parameters
+        ----------
+        y_desired : array_like
+            One desired displacement per channel (µm), shape (N,).
+
+        Returns
+        -------
+        numpy.ndarray
+            The N voltages; :attr:`last_flags` says which were not reached.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` does not have N values.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> bank = CompensatorBank([pihyst.ClassicalPI([0], [2.0])] * 2)
+        >>> bank.step([2.0, 4.0]).tolist()
+        [1.0, 2.0]
+        """
         y_desired = np.ascontiguousarray(y_desired, dtype=np.float64)
         if y_desired.shape != (len(self),):
             raise InvalidArgumentError(f"y_desired must have {len(self)} values, got shape "
@@ -144,8 +176,31 @@ class CompensatorBank:
         return self._u.copy()
 
     def run(self, y_desired):
-        """T ticks: y_desired has shape (T, N). Returns (voltage, displacement, flags),
-        each (T, N)."""
+        """T ticks, row t of ``y_desired`` one tick.
+
+        Parameters
+        ----------
+        y_desired : array_like
+            Desired displacements (µm), shape (T, N).
+
+        Returns
+        -------
+        voltage, displacement, flags : numpy.ndarray
+            Each of shape (T, N).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` does not have shape (T, N).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> bank = CompensatorBank([pihyst.ClassicalPI([0], [2.0])])
+        >>> u, y, flags = bank.run([[2.0], [400.0]])
+        >>> u.tolist(), flags.tolist()
+        ([[1.0], [150.0]], [[0], [2]])
+        """
         y_desired = np.ascontiguousarray(y_desired, dtype=np.float64)
         if y_desired.ndim != 2 or y_desired.shape[1] != len(self):
             raise InvalidArgumentError(f"y_desired must have shape (T, {len(self)}), got "

@@ -5,10 +5,28 @@ the same options, so that callers (the CLI, the rig, control) need not know the 
 from pihyst.inverse._compensator import OTHER_COMPENSATORS, Compensator
 
 
-def compensator_for(model, *, creep_state=None, **options):
-    """A compensator of ``model``; ``options`` as for :class:`pihyst.Compensator`
-    (``u_min``, ``u_max``, ``slew_rate``, ``initial_voltage``, ``initial_state``);
-    ``creep_state`` for a model with creep.
+def compensator_for(model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
+                    initial_state=None, creep_state=None):
+    """A compensator of ``model``, of the class its family needs.
+
+    Parameters
+    ----------
+    model : PIModel or BoucWenModel
+        The model to invert.
+    u_min, u_max, slew_rate, initial_voltage, initial_state, creep_state
+        As for :class:`pihyst.Compensator`.
+
+    Returns
+    -------
+    Compensator or BoucWenCompensator
+        The compensator, at its initial state.
+
+    Raises
+    ------
+    InvalidModelError
+        If the model cannot be inverted.
+    InvalidArgumentError
+        If an argument is not valid.
 
     Examples
     --------
@@ -19,4 +37,6 @@ def compensator_for(model, *, creep_state=None, **options):
     ('BoucWenCompensator', (0.0, 100.0))
     """
     cls = OTHER_COMPENSATORS.get(getattr(model, "family", None), Compensator)
-    return cls(model, creep_state=creep_state, **options)
+    return cls(model, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
+               initial_voltage=initial_voltage, initial_state=initial_state,
+               creep_state=creep_state)

@@ -63,7 +63,7 @@ FLAG_SLEW = _core.FLAG_SLEW                      # slew limit reached before the
 class CompensationResult:
     """Result of :func:`compensate` and :meth:`Compensator.run`.
 
-    Attributes
+    Parameters
     ----------
     desired : ndarray
         The desired displacements, as given.
@@ -87,6 +87,15 @@ class CompensationResult:
         The voltage limits.
     slew_rate : float or None
         The slew limit in volts per sample.
+    initial_creep_state, final_creep_state : ndarray or None
+        With creep: the lag states before the first and after the last sample.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> r = pihyst.compensate(pihyst.ClassicalPI([0], [1.0]), [1.0, 200.0])
+    >>> r.voltage.tolist(), r.saturated_high.tolist(), r.final_voltage
+    ([1.0, 150.0], [False, True], 150.0)
     """
 
     desired: np.ndarray
@@ -153,6 +162,15 @@ class Compensator:
         For a model with creep: the lag states before the first sample (default:
         settled at the model's output at the initial voltage).
 
+    Raises
+    ------
+    InvalidModelError
+        If a weight is negative (the model is not monotone, so not invertible).
+    InvalidArgumentError
+        If the model is not a PI model, or a limit or the initial voltage is not valid.
+
+    Notes
+    -----
     A model with a delay of d samples (:attr:`delay`) makes the voltage of tick k act
     at tick k + d: ``step`` and ``run`` take the target d samples ahead (y_d[k + d] at
     tick k; :func:`compensate` shifts a whole trajectory so), and their displacement is
@@ -275,7 +293,30 @@ class Compensator:
         inside the play of every operator, or a model without a zero threshold) it does
         not say which voltage was last, and the slew limit and a NaN target depend on
         it: an :class:`InvalidArgumentError` asks for ``voltage``, as it does for a state
-        at rest nowhere within the limits (no run within them reaches it)."""
+        at rest nowhere within the limits (no run within them reaches it).
+
+        Parameters
+        ----------
+        state : array_like, optional
+            The operator state to go to (default: the initial state).
+        voltage : float, optional
+            The voltage to apply to it, within the limits (default: see above).
+        creep_state : array_like, optional
+            With creep: the lag states (default: settled at the output).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If the voltage is outside the limits, or is needed and not given.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> m = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+        >>> comp = pihyst.Compensator(m)
+        >>> _ = comp.step(10.0); comp.reset(); comp.voltage
+        0.0
+        """
         start_state, start_voltage, start_creep = self._start
         if state is None and voltage is None and creep_state is None:
             creep_state = start_creep
@@ -312,9 +353,34 @@ class Compensator:
 
     # ---------------------------------------------------------------- compensation
     def step(self, y_desired, dt=None):
-        """The voltage for one desired displacement (applied to the state). With creep,
-        ``dt`` is the time since the previous sample (default ``model.creep.dt``). With a
-        delay of d samples, ``y_desired`` is the target d samples ahead."""
+        """The voltage for one desired displacement (applied to the state).
+
+        Parameters
+        ----------
+        y_desired : float
+            The desired displacement (µm; any value: out of reach saturates, NaN holds
+            the last voltage; :attr:`last_flags` says which). With a delay of d samples,
+            the target d samples ahead.
+        dt : float, optional
+            With creep: the time (s) since the previous sample (default
+            ``model.creep.dt``).
+
+        Returns
+        -------
+        float
+            The voltage, within the limits and the slew limit.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` or ``dt`` is not a number (``dt`` >= 0).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> pihyst.Compensator(pihyst.ClassicalPI([0], [2.0])).step(10.0)
+        5.0
+        """
         y_desired = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
         if self._lags is None:
             return self._core.step(y_desired)
@@ -333,7 +399,32 @@ class Compensator:
         the first one ``creep.dt`` after the previous sample, or at ``t[0] - t_previous``
         when the previous sample's time is given).
 
-        Returns a :class:`CompensationResult`."""
+        Parameters
+        ----------
+        y_desired : array_like
+            Desired displacements (µm), one per sample (any values, as for :meth:`step`).
+        t : array_like, optional
+            With creep: the sample times (s).
+        t_previous : float, optional
+            With creep: the time (s) of the sample before the block.
+
+        Returns
+        -------
+        CompensationResult
+            Voltages, displacements, flags, and the states before and after.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` is not a vector of numbers (or ``t`` does not fit it).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> comp = pihyst.Compensator(pihyst.ClassicalPI([0], [2.0]))
+        >>> comp.run([10.0, 20.0]).voltage.tolist()
+        [5.0, 10.0]
+        """
         y_desired = _desired(y_desired)
         initial_state, initial_voltage = self.state, self.voltage
         initial_creep = self.creep_state
@@ -432,6 +523,14 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
         ``voltage``, ``displacement`` (the model's prediction for those voltages),
         ``saturated`` per sample, the other flags and counts, and the final state.
 
+    Raises
+    ------
+    InvalidModelError
+        If the model cannot be inverted (a negative weight, a Bouc-Wen model that is
+        not monotone).
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+
     Examples
     --------
     >>> import numpy as np, pihyst
@@ -467,7 +566,26 @@ class PreviewRun:
     the last d, whose voltage holds. Sample k gets ``voltage[k]`` aiming at
     ``desired[k + d]``, the displacement the model has at k (the compensator's at
     ``desired[k]``; before sample d the one at the initial voltage, which the actuator
-    held before the run) and the flags of ``desired[k]`` (none before sample d)."""
+    held before the run) and the flags of ``desired[k]`` (none before sample d).
+
+    Parameters
+    ----------
+    compensator : Compensator or BoucWenCompensator
+        The compensator of the delayed model, at the state the run starts from.
+    delay : int
+        The model's delay d in samples.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> from pihyst.inverse import PreviewRun
+    >>> m = pihyst.ClassicalPI([0], [2.0], delay=1)
+    >>> run = PreviewRun(pihyst.Compensator(m), m.delay)
+    >>> run.feed([2.0, 4.0]).voltage.tolist()      # sample 0 aims at desired[1]
+    [2.0]
+    >>> run.feed([6.0], last=True).voltage.tolist()
+    [3.0, 3.0]
+    """
 
     def __init__(self, compensator, delay):
         self.comp, self.d = compensator, int(delay)
@@ -484,9 +602,36 @@ class PreviewRun:
         return self.comp.run(y, t=t, t_previous=t_previous)
 
     def feed(self, y_desired, t=None, *, last=False):
-        """The samples completed by the targets ``y_desired`` (sample times ``t`` for
-        a model with creep), as a :class:`CompensationResult`; with ``last``, every
-        remaining sample."""
+        """The samples completed by the targets ``y_desired``.
+
+        Parameters
+        ----------
+        y_desired : array_like
+            The next desired displacements (µm).
+        t : array_like, optional
+            Their sample times (s), for a model with creep.
+        last : bool, default False
+            The trajectory ends here: return every remaining sample (the last d hold
+            the last voltage).
+
+        Returns
+        -------
+        CompensationResult
+            The samples whose voltage is now known, in order, continuing the previous
+            results.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` is not a vector of numbers.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> m = pihyst.ClassicalPI([0], [2.0], delay=1)
+        >>> PreviewRun(pihyst.Compensator(m), 1).feed([2.0, 4.0], last=True).voltage.tolist()
+        [2.0, 2.0]
+        """
         y = _desired(y_desired)
         if self._start is None:
             self._start = (self.comp.state, self.comp.voltage, self.comp.displacement,
