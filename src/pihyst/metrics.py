@@ -25,6 +25,23 @@ def _residual(y_true, y_pred):
 def mean_abs_error(y_true, y_pred):
     """Mean absolute error, mean_t |y_pred[t] - y_true[t]|.
 
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+
+    Returns
+    -------
+    float
+        The mean absolute error, in the output's unit.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
+
     Examples
     --------
     >>> float(mean_abs_error([0, 1], [1, 1]))
@@ -35,6 +52,23 @@ def mean_abs_error(y_true, y_pred):
 
 def max_abs_error(y_true, y_pred):
     """Largest absolute error, max_t |y_pred[t] - y_true[t]|.
+
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+
+    Returns
+    -------
+    float
+        The largest absolute error, in the output's unit.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
 
     Examples
     --------
@@ -47,6 +81,23 @@ def max_abs_error(y_true, y_pred):
 def rms_error(y_true, y_pred):
     """Root-mean-square error, sqrt(mean_t (y_pred[t] - y_true[t])^2).
 
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+
+    Returns
+    -------
+    float
+        The RMS error, in the output's unit.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
+
     Examples
     --------
     >>> float(rms_error([0, 0], [3, 4]))
@@ -58,6 +109,26 @@ def rms_error(y_true, y_pred):
 def error_summary(y_true, y_pred, measured_range):
     """Mean absolute, max absolute and RMS error, each in the output's unit and in % of
     ``measured_range`` (the peak-to-peak of the measured output).
+
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+    measured_range : float
+        The peak-to-peak of the measured output, for the percentages.
+
+    Returns
+    -------
+    dict
+        ``mean_abs``, ``max_abs``, ``rms`` and each with ``_pct`` (None when
+        ``measured_range`` is not > 0).
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
 
     Examples
     --------

@@ -77,6 +77,13 @@ class Plant:
         Seed of the noise generator.
     summary : str
         What the variant stands for (used by :meth:`describe`).
+
+    Examples
+    --------
+    >>> from pihyst.sim import make_plant
+    >>> plant = make_plant("paper-beam")
+    >>> plant.name, plant.u_max
+    ('paper-beam', 150.0)
     """
 
     def __init__(self, name, hysteresis, *, creep_per_decade=0.0, noise_um=0.0, quantum_V=0.0,
@@ -98,7 +105,16 @@ class Plant:
 
     def reset(self):
         """Back to the initial rest state (0 V after a full cycle, creep settled, noise
-        generator re-seeded): the same calls then give the same output again."""
+        generator re-seeded): the same calls then give the same output again.
+
+        Examples
+        --------
+        >>> from pihyst.sim import make_plant
+        >>> plant = make_plant("paper-beam")
+        >>> a = plant.run([50.0], [1.0]); plant.reset()
+        >>> bool(plant.run([50.0], [1.0]) == a)
+        True
+        """
         self.hysteresis.reset()
         h_rest = float(self.hysteresis.run(np.array([0.0]))[0])
         self.hysteresis.reset()
@@ -118,10 +134,35 @@ class Plant:
         return self._rest_output
 
     def run(self, u, t):
-        """Measured displacement (um) for the voltages ``u`` (V) at times ``t`` (s).
+        """Measured displacement (µm) for the voltages ``u`` (V) at times ``t`` (s).
 
         Continues from the current state: ``t`` must not go backwards, also across
         calls. Voltages must lie in [u_min, u_max] (after supply quantisation).
+
+        Parameters
+        ----------
+        u : array_like
+            Voltages (V).
+        t : array_like
+            Their times (s), of the same length, not decreasing.
+
+        Returns
+        -------
+        numpy.ndarray
+            The measured displacement at each sample (µm).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` and ``t`` are not vectors of one length, not finite, a voltage is
+            outside the drive range or the time goes backwards.
+
+        Examples
+        --------
+        >>> from pihyst.sim import make_plant
+        >>> y = make_plant("paper-beam").run([0.0, 150.0], [0.0, 150.0])
+        >>> bool(40 < y[-1] < 50)
+        True
         """
         u = np.asarray(u, dtype=float)
         t = np.asarray(t, dtype=float)
@@ -158,7 +199,19 @@ class Plant:
         return y
 
     def describe(self):
-        """One paragraph for reports: what the beam is and what it adds."""
+        """One paragraph for reports: what the beam is and what it adds.
+
+        Returns
+        -------
+        str
+            The paragraph.
+
+        Examples
+        --------
+        >>> from pihyst.sim import make_plant
+        >>> make_plant("paper-beam").describe().startswith("Simulated beam 'paper-beam'")
+        True
+        """
         parts = [f"Simulated beam '{self.name}': {self.summary}"]
         parts.append(f"Drive range {self.u_min:g}-{self.u_max:g} V")
         parts.append(f"supply quantisation {self.quantum_V * 1000:g} mV" if self.quantum_V

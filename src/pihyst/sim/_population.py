@@ -116,6 +116,20 @@ def random_plant(seed, *, dynamics=False):
     :class:`~pihyst.sim.Stage` (module notes), whose description adds ``modes``,
     ``delay_samples`` and ``slew_V_per_s`` and whose ``rate_hz`` is its clock.
 
+    Parameters
+    ----------
+    seed : int
+        The seed: the same seed gives the same actuator.
+    dynamics : bool, default False
+        Draw a stage with modes, a converter delay and a slew limit.
+
+    Returns
+    -------
+    plant : Plant or Stage
+        The actuator.
+    description : dict
+        What was drawn.
+
     Examples
     --------
     >>> plant, desc = random_plant(3)

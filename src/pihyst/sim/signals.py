@@ -102,6 +102,29 @@ def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
 
     The peaks are sampled exactly when period_s / 2 is a multiple of dt.
 
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_cycles : int
+        Number of periods.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
+
     Examples
     --------
     >>> t, u = triangle(dt=1.0)
@@ -122,6 +145,29 @@ def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
 def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=DEFAULT_DT):
     """Sine between u_min and u_max starting at its minimum:
     u = (u_min + u_max)/2 - (u_max - u_min)/2 cos(2 pi t / P).
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_cycles : int
+        Number of periods.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -144,6 +190,31 @@ def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_
     decay geometrically: peak_k = u_min + (u_max - u_min) ratio^k, k = 0..n_triangles-1
     (minor loops inside the major one). All ramps have the full triangle's slope
     2 (u_max - u_min) / period_s; each turning point lies on the dt grid.
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_triangles : int
+        Number of triangles, the full one included.
+    ratio : float
+        Ratio of each peak's height to the one before, 0 < ratio < 1.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -180,6 +251,31 @@ def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT
     2 (u_max - u_min) / 300 s. Each ramp's duration is rounded up to whole samples, so
     every level is sampled exactly.
 
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    n_ramps : int
+        Number of ramps.
+    rate : float, optional
+        Ramp rate (V/s); default the paper's triangle slope.
+    dt : float
+        Sample interval (s); default 0.1 s.
+    seed : int
+        Seed of the random levels.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
+
     Examples
     --------
     >>> t, u = random_ramps(n_ramps=4, seed=3)
@@ -208,6 +304,31 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     """Steps of (u_max - u_min) / n_steps from u_min up to u_max (and back down if
     ``down``), each level held for ``step_s`` seconds (rounded to whole samples; at
     least ``dt``): creep shows within each step.
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    n_steps : int
+        Number of steps from u_min to u_max.
+    step_s : float
+        How long each level is held (s).
+    down : bool
+        Step back down to u_min too.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -243,6 +364,29 @@ def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles
         u(t) = u_min + (u_max - u_min) min(t / T_p, 1) (1 - cos(2 pi t / period_s)) / 2,
         T_p = (n_cycles - 1/2) period_s   (the last peak)
 
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_cycles : int
+        Number of periods.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
+
     Examples
     --------
     >>> t, u = growing_sine(n_cycles=2, period_s=4.0, dt=1.0)
@@ -268,6 +412,35 @@ def band_limited_triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S,
 
     scaled so that its lowest value is ``u_min`` (at t = 0) and its highest ``u_max``;
     ``max_hz`` None keeps every harmonic below the Nyquist frequency 1 / (2 dt).
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    max_hz : float, optional
+        The highest frequency kept (Hz); default the Nyquist frequency.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
+
+    Examples
+    --------
+    >>> t, u = band_limited_triangle(period_s=10.0, max_hz=0.5, dt=1.0)
+    >>> float(u[0]), float(u.max()), u.size
+    (0.0, 150.0, 10)
     """
     _check_common(u_min, u_max, dt)
     _positive(period_s, "period_s")
