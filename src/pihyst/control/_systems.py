@@ -225,7 +225,34 @@ def compensator_state(model, *, u_min=None, u_max=None, initial_voltage=None,
                       initial_state=None):
     """The initial state of :func:`compensator_system`: the operator state (default the
     model's own) with the initial voltage applied (default 0 V, or the nearer limit),
-    then that voltage; as :class:`pihyst.Compensator` starts."""
+    then that voltage; as :class:`pihyst.Compensator` starts.
+
+    Parameters
+    ----------
+    model : PIModel
+        The model the compensator inverts (non-negative weights).
+    u_min, u_max, initial_voltage, initial_state
+        As for :class:`pihyst.Compensator`.
+
+    Returns
+    -------
+    numpy.ndarray
+        The K operator states, then the voltage.
+
+    Raises
+    ------
+    InvalidModelError
+        If the model cannot be inverted.
+    InvalidArgumentError
+        If the model is not a PI model or an argument is not valid.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> from pihyst.control import compensator_state
+    >>> compensator_state(pihyst.ClassicalPI([0, 10], [1.0, 0.5]), u_min=20.0).tolist()
+    [20.0, 10.0, 20.0]
+    """
     _check(model)
     comp = Compensator(model, u_min=u_min, u_max=u_max, initial_voltage=initial_voltage,
                        initial_state=initial_state)

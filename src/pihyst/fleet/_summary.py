@@ -25,7 +25,34 @@ def _rows(result, model_files):
 
 def summary_json(result, path, *, model_files=None, **extra):
     """Write the fleet's summary as JSON: ``extra`` keys, the counts, then one object per
-    record (the CSV's columns and the warnings)."""
+    record (the CSV's columns and the warnings).
+
+    Parameters
+    ----------
+    result : FleetResult
+        What :func:`pihyst.fit_many` returned.
+    path : str or os.PathLike
+        The file to write (it appears only once complete).
+    model_files : dict, optional
+        Record name -> the model file written for it.
+    **extra
+        Keys written first (e.g. the command and its options).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from pihyst.fleet import FleetResult, RecordOutcome
+    >>> result = FleetResult((RecordOutcome("a.csv", "failed", error="unreadable"),))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> summary_json(result, folder / "summary.json", command="fit-many")
+    >>> import json; json.loads((folder / "summary.json").read_text())["failed"]
+    1
+    """
     rows = list(_rows(result, model_files or {}))
     data = {**extra, "records": len(rows), "fitted": len(result.fitted),
             "failed": len(result.failed), "scheduler": result.scheduler,
@@ -36,7 +63,34 @@ def summary_json(result, path, *, model_files=None, **extra):
 def summary_csv(result, path, *, model_files=None, comments=()):
     """Write the fleet's summary as plain CSV (:data:`SUMMARY_COLUMNS`; ``comments`` in
     its sidecar ``PATH.json``); numbers with 17 significant digits, empty fields where a
-    value does not apply."""
+    value does not apply.
+
+    Parameters
+    ----------
+    result : FleetResult
+        What :func:`pihyst.fit_many` returned.
+    path : str or os.PathLike
+        The file to write (it appears only once complete).
+    model_files : dict, optional
+        Record name -> the model file written for it.
+    comments : sequence of str
+        Lines for the sidecar's comments.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from pihyst.fleet import FleetResult, RecordOutcome
+    >>> result = FleetResult((RecordOutcome("a.csv", "failed", error="unreadable"),))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> summary_csv(result, folder / "summary.csv")
+    >>> (folder / "summary.csv").read_text().splitlines()[1]
+    'a.csv,failed,unreadable,,,,0,'
+    """
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(SUMMARY_COLUMNS)
