@@ -43,7 +43,28 @@ PAPER = paper.published()
 
 @dataclass
 class Recording:
-    """A measured (or simulated) record."""
+    """A measured (or simulated) record.
+
+    Parameters
+    ----------
+    name : str
+        The record's name in the report.
+    t : numpy.ndarray
+        Sample times (s).
+    u : numpy.ndarray
+        Voltages (V).
+    y : numpy.ndarray
+        Displacements (µm).
+    description : str
+        Where it comes from, for the report.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rec = Recording("loop", np.arange(3.0), np.array([0.0, 150, 0]), np.array([0.0, 40, 2]))
+    >>> rec.span_y
+    40.0
+    """
 
     name: str
     t: np.ndarray
@@ -53,12 +74,36 @@ class Recording:
 
     @property
     def span_y(self):
+        """The peak-to-peak of the displacement (µm)."""
         return float(np.ptp(self.y))
 
 
 @dataclass
 class FittedModel:
-    """One identified model and how it was obtained."""
+    """One identified model and how it was obtained.
+
+    Parameters
+    ----------
+    key : str
+        ``"classical"``, ``"multislope"`` or ``"best"``.
+    label : str
+        What the report calls it.
+    model : PIModel
+        The fitted model.
+    requested_thresholds : list, optional
+        The thresholds asked for (the paper's, scaled), before unusable ones were left
+        out.
+    notes : list of str
+        What the fit said (warnings, thresholds left out).
+    fit_report : FitReport, optional
+        The fit's report.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> FittedModel("classical", "conventional PI", pihyst.ClassicalPI([0], [1.0])).notes
+    []
+    """
 
     key: str
     label: str
@@ -70,7 +115,48 @@ class FittedModel:
 
 @dataclass
 class Study:
-    """Everything the report shows; ``metrics`` is its JSON-ready summary."""
+    """Everything the report shows; ``metrics`` is its JSON-ready summary.
+
+    Made by :func:`paper_study` and :func:`loop_study`, written by
+    :func:`pihyst.study.write_report`.
+
+    Parameters
+    ----------
+    mode : str
+        ``"demo"`` (the simulated beam) or ``"report"`` (a user's record).
+    title : str
+        The report's title.
+    source : str
+        Where the data comes from.
+    loop : Recording
+        The record the models were fitted to.
+    models : dict
+        Model key -> :class:`FittedModel`.
+    predictions : dict
+        Record name -> {model key: prediction}.
+    operators : dict
+        ``"classical"``/``"multislope"`` -> (u, operator outputs, thresholds).
+    metrics : dict
+        The JSON-ready summary (metrics.json).
+    records : dict
+        The other records, by name.
+    tracking : dict
+        Experiment name -> dict of arrays (desired, voltage, measured).
+    variants : list
+        The comparison repeated on the other simulated beams.
+    variant_loops : dict
+        Their loops, by beam.
+    rig : object, optional
+        The study through the emulated rig (``pihyst.study._rig_study.RigStudy``).
+    learning : object, optional
+        A learning run (``pihyst.study._learning.LearningRun``).
+
+    Examples
+    --------
+    >>> study = paper_study(dt=2.0, variants=False, progress=None)
+    >>> study.mode, sorted(study.models)
+    ('demo', ['best', 'classical', 'multislope'])
+    """
 
     mode: str                       # "demo" (simulated beam) or "report" (a user's record)
     title: str
@@ -131,7 +217,27 @@ def _quiet(call, notes):
 
 def signed_extremes(u, error):
     """The error of largest magnitude (with its sign) in the low, middle and high third
-    of the input range, as the paper reports them."""
+    of the input range, as the paper reports them.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The input of each sample (V).
+    error : numpy.ndarray
+        The error at each sample (µm, measured - model).
+
+    Returns
+    -------
+    dict
+        ``low``, ``middle``, ``high``: the signed extreme error of each third (None for a
+        third without samples).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> signed_extremes(np.array([0.0, 50, 100, 150]), np.array([-3.0, 1, 2, -0.5]))
+    {'low': -3.0, 'middle': 2.0, 'high': 2.0}
+    """
     lo, hi = float(np.min(u)), float(np.max(u))
     edges = lo + (hi - lo) * np.array([0.0, 1 / 3, 2 / 3, 1.0])
     out = {}
@@ -172,13 +278,39 @@ def _usable_thresholds(thresholds, span, zero_state):
     return keep, drop
 
 
-def fit_paper_models(rec, *, paper_method=True, scale=1.0, notes_prefix=""):
+def fit_paper_models(rec, *, paper_method=True, scale=1.0):
     """The conventional and the multislope PI with the paper's thresholds (times
     ``scale``), fitted to ``rec``.
 
-    ``paper_method``: zero initial state and no offset, as the paper (for records that
-    start at rest at 0 V with the sensor zeroed there); otherwise the initial state is
-    found from the data and an offset is fitted (any record).
+    Parameters
+    ----------
+    rec : Recording
+        The record to fit.
+    paper_method : bool
+        Zero initial state and no offset, as the paper (for records that start at rest
+        at 0 V with the sensor zeroed there); otherwise the initial state is found from
+        the data and an offset is fitted (any record).
+    scale : float
+        Factor on the paper's thresholds (the record's span / 150 V).
+
+    Returns
+    -------
+    dict
+        ``"classical"`` and ``"multislope"`` -> :class:`FittedModel`.
+
+    Raises
+    ------
+    FitError
+        If the record cannot be fitted.
+
+    Examples
+    --------
+    >>> from pihyst.sim import make_plant
+    >>> from pihyst.sim.signals import triangle
+    >>> t, u = triangle(dt=2.0)
+    >>> rec = Recording("loop", t, u, make_plant("paper-beam").run(u, t))
+    >>> sorted(fit_paper_models(rec))
+    ['classical', 'multislope']
     """
     options = ({"initial_state": "zero", "offset": False} if paper_method else {})
     span = float(np.ptp(rec.u))
@@ -490,6 +622,29 @@ def loop_study(t, u, y, *, source, progress=print):
     The paper's thresholds are scaled to the record's input span and measured from the
     bottom of its range; the initial state is found from the data and an offset is
     fitted (the record may start anywhere, the sensor zero is arbitrary).
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times (s).
+    u : array_like
+        Voltages (V).
+    y : array_like
+        Displacements (µm).
+    source : str
+        Where the record comes from (its file), for the report.
+    progress : callable or None
+        Receives one line per step.
+
+    Returns
+    -------
+    Study
+        The study, for :func:`pihyst.study.write_report`.
+
+    Raises
+    ------
+    FitError
+        If the record cannot be fitted.
 
     Examples
     --------

@@ -485,6 +485,32 @@ def write_report(study, out_dir, *, command="", progress=None, figure_formats=()
     ``figure_formats`` ("svg", "pdf"). ``paper``: show the paper's numbers beside the
     study's (default: for the demo, not for a user's record).
 
+    Parameters
+    ----------
+    study : Study
+        What :func:`pihyst.study.paper_study` or :func:`pihyst.study.loop_study`
+        returned.
+    out_dir : str or os.PathLike
+        The report folder.
+    command : str
+        The command that made the study, shown in the report.
+    progress : callable, optional
+        Receives one line per step.
+    figure_formats : sequence of str
+        Also write every figure in these formats (``"svg"``, ``"pdf"``).
+    paper : bool, optional
+        Show the paper's numbers (default: for the demo only).
+
+    Returns
+    -------
+    list of str
+        The names of the files written, in ``out_dir``.
+
+    Raises
+    ------
+    OSError
+        If the folder or a file cannot be written.
+
     Examples
     --------
     >>> import tempfile
