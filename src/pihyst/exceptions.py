@@ -17,13 +17,27 @@ The rules (and the command line's exit statuses) are in docs/errors.md.
 
 
 class PihystWarning(UserWarning):
-    """Base class of every warning pihyst issues."""
+    """Base class of every warning pihyst issues.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", PihystWarning)   # silences all of pihyst's
+    ...     warnings.warn("weights not determined", IllConditionedWarning)
+    """
 
 
 class IllConditionedWarning(PihystWarning):
     """The least-squares problem is ill-conditioned: some weights are not determined by
     the data. The solution returned is still the best admissible one (with a tiny
-    regularization that picks the smallest such weights), but those weights mean little."""
+    regularization that picks the smallest such weights), but those weights mean little.
+
+    Examples
+    --------
+    >>> issubclass(IllConditionedWarning, PihystWarning)
+    True
+    """
 
 
 class InsufficientDataWarning(PihystWarning):
@@ -81,11 +95,26 @@ class InfeasibleConstraintsError(FitError):
         The 0-based sample the problem is at.
     column : str, optional
         ``"input"`` or ``"output"``.
+
+    Examples
+    --------
+    >>> isinstance(InfeasibleConstraintsError("no weights satisfy them"), FitError)
+    True
     """
 
 
 class InvalidModelError(ValueError):
-    """The parameters do not describe a valid model; the message says which and why."""
+    """The parameters do not describe a valid model; the message says which and why.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> try:
+    ...     pihyst.ClassicalPI([0, 10], [1.0])
+    ... except InvalidModelError as err:
+    ...     print(err)
+    2 thresholds but 1 weights
+    """
 
 
 class InputRangeError(ValueError):

@@ -135,7 +135,15 @@ class CompensatorBank:
         return np.array([c.last_flags for c in self.channels], dtype=np.uint8)
 
     def reset(self):
-        """Every channel back to its initial state and voltage."""
+        """Every channel back to its initial state and voltage.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> bank = CompensatorBank([pihyst.ClassicalPI([0], [2.0])])
+        >>> _ = bank.step([4.0]); bank.reset(); bank.voltages.tolist()
+        [0.0]
+        """
         for c in self._channels:
             c.reset()
         if self.fast:
