@@ -9,6 +9,7 @@ Examples
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def _residual(y_true, y_pred):
@@ -22,7 +23,7 @@ def _residual(y_true, y_pred):
     return y_pred - y_true
 
 
-def mean_abs_error(y_true, y_pred):
+def mean_abs_error(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Mean absolute error, mean_t |y_pred[t] - y_true[t]|.
 
     Parameters
@@ -50,7 +51,7 @@ def mean_abs_error(y_true, y_pred):
     return float(np.mean(np.abs(_residual(y_true, y_pred))))
 
 
-def max_abs_error(y_true, y_pred):
+def max_abs_error(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Largest absolute error, max_t |y_pred[t] - y_true[t]|.
 
     Parameters
@@ -78,7 +79,7 @@ def max_abs_error(y_true, y_pred):
     return float(np.max(np.abs(_residual(y_true, y_pred))))
 
 
-def rms_error(y_true, y_pred):
+def rms_error(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Root-mean-square error, sqrt(mean_t (y_pred[t] - y_true[t])^2).
 
     Parameters
@@ -106,7 +107,8 @@ def rms_error(y_true, y_pred):
     return float(np.sqrt(np.mean(_residual(y_true, y_pred) ** 2)))
 
 
-def error_summary(y_true, y_pred, measured_range):
+def error_summary(y_true: ArrayLike, y_pred: ArrayLike,
+                  measured_range: float) -> dict[str, float | None]:
     """Mean absolute, max absolute and RMS error, each in the output's unit and in % of
     ``measured_range`` (the peak-to-peak of the measured output).
 
@@ -136,9 +138,10 @@ def error_summary(y_true, y_pred, measured_range):
     >>> s["mean_abs"], s["mean_abs_pct"], s["max_abs"]
     (0.5, 5.0, 1.0)
     """
-    out = {"mean_abs": mean_abs_error(y_true, y_pred),
-           "max_abs": max_abs_error(y_true, y_pred),
-           "rms": rms_error(y_true, y_pred)}
-    for key in list(out):
-        out[f"{key}_pct"] = 100.0 * out[key] / measured_range if measured_range > 0 else None
+    errors = {"mean_abs": mean_abs_error(y_true, y_pred),
+              "max_abs": max_abs_error(y_true, y_pred),
+              "rms": rms_error(y_true, y_pred)}
+    out: dict[str, float | None] = dict(errors)
+    for key, value in errors.items():
+        out[f"{key}_pct"] = 100.0 * value / measured_range if measured_range > 0 else None
     return out

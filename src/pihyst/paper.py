@@ -7,6 +7,7 @@ the paper's shape, its Table 1, its drive or its published numbers imports them 
 """
 
 from types import MappingProxyType
+from typing import Any
 
 __all__ = ["BEAM_MAX_DISPLACEMENT_UM", "CITATION", "DRIVE_PERIOD_S", "DRIVE_U_MAX_V",
            "DRIVE_U_MIN_V", "FIT_EXTREMES_CLASSICAL_UM", "FIT_IMPROVEMENT_PCT",
@@ -49,7 +50,7 @@ TRACKING_MEAN_ABS_UM = 0.2828
 TRACKING_RMS_UM = 0.3100
 
 
-def published():
+def published() -> dict[str, Any]:
     """The paper's numbers as a JSON-ready dict (reports show them beside pihyst's).
 
     Returns

@@ -27,6 +27,7 @@ input in the range (a provisional value), while its state update raises
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 try:
     import control as ct
@@ -221,8 +222,9 @@ def compensator_system(model, dt=True, *, u_min=None, u_max=None, slew_rate=None
                                 states=_labels("f", k) + ["u_last"], dt=dt, name=name)
 
 
-def compensator_state(model, *, u_min=None, u_max=None, initial_voltage=None,
-                      initial_state=None):
+def compensator_state(model: PIModel, *, u_min: float | None = None,
+                      u_max: float | None = None, initial_voltage: float | None = None,
+                      initial_state: ArrayLike | None = None) -> NDArray[np.float64]:
     """The initial state of :func:`compensator_system`: the operator state (default the
     model's own) with the initial voltage applied (default 0 V, or the nearer limit),
     then that voltage; as :class:`pihyst.Compensator` starts.

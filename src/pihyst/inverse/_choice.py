@@ -2,11 +2,17 @@
 family's own for the others (Bouc-Wen: :class:`pihyst.inverse.BoucWenCompensator`), with
 the same options, so that callers (the CLI, the rig, control) need not know the family."""
 
+from typing import Any
+
+from numpy.typing import ArrayLike
+
 from pihyst.inverse._compensator import OTHER_COMPENSATORS, Compensator
 
 
-def compensator_for(model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                    initial_state=None, creep_state=None):
+def compensator_for(model: Any, *, u_min: float | None = None, u_max: float | None = None,
+                    slew_rate: float | None = None, initial_voltage: float | None = None,
+                    initial_state: ArrayLike | None = None,
+                    creep_state: ArrayLike | None = None) -> Any:
     """A compensator of ``model``, of the class its family needs.
 
     Parameters

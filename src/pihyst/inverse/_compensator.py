@@ -34,6 +34,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pihyst import _core
 from pihyst._arguments import real_array
@@ -47,7 +48,7 @@ __all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLA
 
 #: Compensators of the models that are not PI models (family -> class), registered by
 #: their modules (inverse/_boucwen.py); compensate() dispatches to them
-OTHER_COMPENSATORS: dict[str, Any] = {}
+OTHER_COMPENSATORS: dict[str | None, Any] = {}
 
 #: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
 #: Out of reach means beyond what the model gives at the voltage limit, whatever the slew
@@ -194,8 +195,10 @@ class Compensator:
     FLAG_NAN = FLAG_NAN
     FLAG_SLEW = FLAG_SLEW
 
-    def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None, creep_state=None):
+    def __init__(self, model: PIModel, *, u_min: float | None = None,
+                 u_max: float | None = None, slew_rate: float | None = None,
+                 initial_voltage: float | None = None, initial_state: ArrayLike | None = None,
+                 creep_state: ArrayLike | None = None) -> None:
         if not isinstance(model, PIModel):
             raise InvalidArgumentError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
                             f"PiecewiseLinearPI), not {type(model).__name__}")
@@ -282,7 +285,8 @@ class Compensator:
         """Flags of the last :meth:`step` (0: desired value reached)."""
         return self._core.last_flags
 
-    def reset(self, state=None, voltage=None, creep_state=None):
+    def reset(self, state: ArrayLike | None = None, voltage: float | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Go back to the initial state and voltage, or to ``state`` and ``voltage``
         (with creep: the lags to ``creep_state``, default settled at the output).
 
@@ -352,7 +356,7 @@ class Compensator:
         return a
 
     # ---------------------------------------------------------------- compensation
-    def step(self, y_desired, dt=None):
+    def step(self, y_desired: float, dt: float | None = None) -> float:
         """The voltage for one desired displacement (applied to the state).
 
         Parameters
@@ -393,7 +397,8 @@ class Compensator:
         self._output = float(y[0])
         return float(u[0])
 
-    def run(self, y_desired, t=None, t_previous=None):
+    def run(self, y_desired: ArrayLike, t: ArrayLike | None = None,
+            t_previous: float | None = None) -> CompensationResult:
         """Compensate a block of desired displacements, continuing from the current state.
         With creep, ``t`` are the sample times (s; default: every ``model.creep.dt``,
         the first one ``creep.dt`` after the previous sample, or at ``t[0] - t_previous``
@@ -486,8 +491,11 @@ def rest_interval(model, state, lo, hi):
     return a, rest_voltage(model, state, hi, lo, hi)
 
 
-def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
-               initial_voltage=None, initial_state=None, t=None, creep_state=None):
+def compensate(model: Any, y_desired: ArrayLike, *, u_min: float | None = None,
+               u_max: float | None = None, slew_rate: float | None = None,
+               initial_voltage: float | None = None, initial_state: ArrayLike | None = None,
+               t: ArrayLike | None = None,
+               creep_state: ArrayLike | None = None) -> CompensationResult:
     """Voltages that make ``model`` follow the desired displacements ``y_desired``.
 
     Exact inverse sample by sample (see the module notes), within the voltage limits
@@ -601,7 +609,8 @@ class PreviewRun:
     def _run(self, y, t, t_previous):
         return self.comp.run(y, t=t, t_previous=t_previous)
 
-    def feed(self, y_desired, t=None, *, last=False):
+    def feed(self, y_desired: ArrayLike, t: ArrayLike | None = None, *,
+             last: bool = False) -> CompensationResult:
         """The samples completed by the targets ``y_desired``.
 
         Parameters

@@ -22,7 +22,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,6 +53,8 @@ _SHORT_VECTOR = 6   # repr shows at most this many values of a vector
 OTHER_FAMILIES: dict[str, Any] = {}
 #: the JSON keys of the delay (docs/interfaces.md), omitted at their defaults
 DELAY_KEYS = ("delay_samples", "sample_period_s")
+#: a model class, for methods that return a model of their own class
+_Model = TypeVar("_Model", bound="PIModel")
 
 
 @dataclass(frozen=True)
@@ -656,7 +658,7 @@ class PIModel(Immutable, ABC):
     def _own_params(self):
         return {}
 
-    def replace(self, **changes: Any) -> "PIModel":
+    def replace(self: "_Model", **changes: Any) -> "_Model":
         """A copy with some constructor arguments changed (e.g. weights, offset).
 
         Parameters

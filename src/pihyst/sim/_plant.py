@@ -32,6 +32,7 @@ True
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._boucwen import BoucWen
@@ -133,7 +134,7 @@ class Plant:
         """Displacement at rest at 0 V (um, noise-free): 0 unless the beam is remanent."""
         return self._rest_output
 
-    def run(self, u, t):
+    def run(self, u: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
         """Measured displacement (µm) for the voltages ``u`` (V) at times ``t`` (s).
 
         Continues from the current state: ``t`` must not go backwards, also across
@@ -198,7 +199,7 @@ class Plant:
         self._t = float(t[-1])
         return y
 
-    def describe(self):
+    def describe(self) -> str:
         """One paragraph for reports: what the beam is and what it adds.
 
         Returns
@@ -268,8 +269,8 @@ _VARIANTS = {
 PLANT_NAMES = tuple(_VARIANTS)
 
 
-def make_plant(name="paper-beam", *, seed=0, noise=True, creep=True, quantisation=True,
-               dynamics=False):
+def make_plant(name: str = "paper-beam", *, seed: int = 0, noise: bool = True,
+               creep: bool = True, quantisation: bool = True, dynamics: bool = False) -> "Plant":
     """A simulated beam at rest at 0 V after a full cycle.
 
     Parameters

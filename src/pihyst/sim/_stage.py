@@ -20,6 +20,7 @@ period measured: the ``run_period`` of :func:`pihyst.learn.learn_periodic`.
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._plant import Plant, check_finite
@@ -99,7 +100,7 @@ class Stage(Plant):
         self._amplifier = 0.0
         self._tick = 0
 
-    def hold(self, voltage):
+    def hold(self, voltage: float) -> None:
         """As if the stage had been held at ``voltage`` for ever: from the rest state,
         the hysteresis driven there, the creep lags settled at its output, the modes at
         rest, the converter and the amplifier at that voltage (the start of a scan on a
@@ -138,7 +139,7 @@ class Stage(Plant):
         self._pending[:] = voltage
         self._amplifier = voltage
 
-    def settle_on(self, u):
+    def settle_on(self, u: ArrayLike) -> None:
         """As if the stage had been playing the period ``u`` over and over for ever: the
         hysteresis from the rest state through two periods (its memory then repeats),
         the creep lags settled at the mean hysteresis output of the period (where a
@@ -195,7 +196,7 @@ class Stage(Plant):
         self._amplifier = float(out[-1])
         return out
 
-    def run(self, u, t=None):
+    def run(self, u: ArrayLike, t: ArrayLike | None = None) -> NDArray[np.float64]:
         """Measured displacement (µm) for the commands ``u`` (V), one per clock tick,
         continuing from the last call.
 
@@ -239,7 +240,7 @@ class Stage(Plant):
         self._tick += u.size
         return y
 
-    def run_periodic(self, u, periods=None):
+    def run_periodic(self, u: ArrayLike, periods: int | None = None) -> NDArray[np.float64]:
         """Play one period of voltages ``u`` ``periods`` times in a row (default: enough to
         cover :attr:`settle_time_s`, at least 2) and return the last period measured.
 
@@ -273,7 +274,7 @@ class Stage(Plant):
         y = self.run(np.tile(u, int(periods)))
         return y[-u.size:]
 
-    def describe(self):
+    def describe(self) -> str:
         """One paragraph for reports: the beam, then the stage's clock, modes, converter
         delay and slew limit.
 

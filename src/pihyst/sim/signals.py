@@ -14,6 +14,7 @@ before anything is allocated.
 import numbers
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pihyst import paper
 from pihyst.exceptions import InvalidArgumentError, ResourceLimitError
@@ -22,6 +23,8 @@ from pihyst.sim._runs import checked_seed
 __all__ = ["DEFAULT_DT", "MAX_SAMPLES", "band_limited_triangle", "decaying_triangles",
            "growing_sine", "random_ramps", "sine", "staircase", "triangle"]
 
+#: (times in s, voltages in V): what every signal function returns
+Signal = tuple[NDArray[np.float64], NDArray[np.float64]]
 PAPER_PERIOD_S = paper.DRIVE_PERIOD_S
 PAPER_U_MAX = paper.DRIVE_U_MAX_V
 DEFAULT_DT = 0.1
@@ -95,8 +98,8 @@ def _piecewise_linear(times, levels, dt):
     return t, np.interp(t, times, levels)
 
 
-def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
-             dt=DEFAULT_DT):
+def triangle(u_min: float = 0.0, u_max: float = PAPER_U_MAX, period_s: float = PAPER_PERIOD_S,
+             n_cycles: int = 1, dt: float = DEFAULT_DT) -> Signal:
     """Triangle wave u_min -> u_max -> u_min, ``n_cycles`` times (the paper's drive:
     0-150 V, 300 s period).
 
@@ -142,7 +145,8 @@ def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
     return t, np.clip(np.round(u, 12), u_min, u_max)
 
 
-def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=DEFAULT_DT):
+def sine(u_min: float = 0.0, u_max: float = PAPER_U_MAX, period_s: float = PAPER_PERIOD_S,
+         n_cycles: int = 1, dt: float = DEFAULT_DT) -> Signal:
     """Sine between u_min and u_max starting at its minimum:
     u = (u_min + u_max)/2 - (u_max - u_min)/2 cos(2 pi t / P).
 
@@ -184,8 +188,9 @@ def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=D
     return t, np.clip(u, u_min, u_max)
 
 
-def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_triangles=5,
-                       ratio=0.7, dt=DEFAULT_DT):
+def decaying_triangles(u_min: float = 0.0, u_max: float = PAPER_U_MAX,
+                       period_s: float = PAPER_PERIOD_S, n_triangles: int = 5,
+                       ratio: float = 0.7, dt: float = DEFAULT_DT) -> Signal:
     """One full triangle u_min -> u_max -> u_min, then triangles back to u_min whose peaks
     decay geometrically: peak_k = u_min + (u_max - u_min) ratio^k, k = 0..n_triangles-1
     (minor loops inside the major one). All ramps have the full triangle's slope
@@ -243,7 +248,8 @@ def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_
     return _piecewise_linear(times, levels, dt)
 
 
-def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT_DT, seed=0):
+def random_ramps(u_min: float = 0.0, u_max: float = PAPER_U_MAX, n_ramps: int = 20,
+                 rate: float | None = None, dt: float = DEFAULT_DT, seed: int = 0) -> Signal:
     """Ramps at constant rate between random levels (uniform in [u_min, u_max]),
     starting at u_min: reversals inside the range, for judging models on minor loops.
 
@@ -299,8 +305,8 @@ def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT
     return _piecewise_linear(times, levels, dt)
 
 
-def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
-              dt=DEFAULT_DT):
+def staircase(u_min: float = 0.0, u_max: float = PAPER_U_MAX, n_steps: int = 10,
+              step_s: float = 10.0, down: bool = True, dt: float = DEFAULT_DT) -> Signal:
     """Steps of (u_max - u_min) / n_steps from u_min up to u_max (and back down if
     ``down``), each level held for ``step_s`` seconds (rounded to whole samples; at
     least ``dt``): creep shows within each step.
@@ -356,8 +362,9 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     return _times(u.size, dt), u
 
 
-def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=5,
-                 dt=DEFAULT_DT):
+def growing_sine(u_min: float = 0.0, u_max: float = PAPER_U_MAX,
+                 period_s: float = PAPER_PERIOD_S, n_cycles: int = 5,
+                 dt: float = DEFAULT_DT) -> Signal:
     """A sine from ``u_min`` whose amplitude grows linearly until the last cycle's peak
     reaches ``u_max``, then falls back to ``u_min``: nested loops growing outward.
 
@@ -403,8 +410,9 @@ def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles
     return t, np.clip(u, u_min, u_max)
 
 
-def band_limited_triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S,
-                          max_hz=None, dt=DEFAULT_DT):
+def band_limited_triangle(u_min: float = 0.0, u_max: float = PAPER_U_MAX,
+                          period_s: float = PAPER_PERIOD_S, max_hz: float | None = None,
+                          dt: float = DEFAULT_DT) -> Signal:
     """One period of a triangle with only its harmonics below ``max_hz``: a scan line
     without the corners a stage's modes would ring on.
 
