@@ -16,7 +16,9 @@ import os
 import time
 import traceback
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -101,7 +103,7 @@ class RecordOutcome:
         held = self.result.report.family(self.family)["errors"]["held_back"]
         return None if held is None else held["rms"]
 
-    def summary(self):
+    def summary(self) -> dict[str, Any]:
         """One row of the fleet's summary, as a dict.
 
         Returns
@@ -181,7 +183,7 @@ class FleetResult:
         """The chosen model of every fitted record, by record name."""
         return {o.record: o.model for o in self.outcomes if o.ok}
 
-    def summary(self):
+    def summary(self) -> list[dict[str, Any]]:
         """One plain dict per record (:meth:`RecordOutcome.summary`), in order.
 
         Returns
@@ -197,7 +199,9 @@ class FleetResult:
         return [o.summary() for o in self.outcomes]
 
 
-def fit_many(records, client=None, *, progress=None, **options):
+def fit_many(records: Any, client: Any = None, *,
+             progress: "Callable[[RecordOutcome], object] | None" = None,
+             **options: Any) -> "FleetResult":
     """Fit every record of a fleet, each exactly as :func:`pihyst.fit` would alone.
 
     Parameters

@@ -3,9 +3,15 @@
 import csv
 import io
 import json
+import os
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 from pihyst._atomic import write_atomically
 from pihyst.io._csv import write_sidecar
+
+if TYPE_CHECKING:
+    from pihyst.fleet._fit_many import FleetResult
 
 __all__ = ["SUMMARY_COLUMNS", "summary_csv", "summary_json"]
 
@@ -23,7 +29,8 @@ def _rows(result, model_files):
                "model_file": model_files.get(o.record), "warnings": row["warnings"]}
 
 
-def summary_json(result, path, *, model_files=None, **extra):
+def summary_json(result: "FleetResult", path: "str | os.PathLike[str]", *,
+                 model_files: Mapping[str, str] | None = None, **extra: Any) -> None:
     """Write the fleet's summary as JSON: ``extra`` keys, the counts, then one object per
     record (the CSV's columns and the warnings).
 
@@ -60,7 +67,9 @@ def summary_json(result, path, *, model_files=None, **extra):
     write_atomically(path, json.dumps(data, indent=2) + "\n")
 
 
-def summary_csv(result, path, *, model_files=None, comments=()):
+def summary_csv(result: "FleetResult", path: "str | os.PathLike[str]", *,
+                model_files: Mapping[str, str] | None = None,
+                comments: Sequence[str] = ()) -> None:
     """Write the fleet's summary as plain CSV (:data:`SUMMARY_COLUMNS`; ``comments`` in
     its sidecar ``PATH.json``); numbers with 17 significant digits, empty fields where a
     value does not apply.

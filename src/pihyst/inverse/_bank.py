@@ -12,12 +12,19 @@ voltages and displacements then equal those of separate compensators to rounding
 1e-13 of the range) instead of bit for bit, the flags are the same, and the limits hold
 exactly as before."""
 
+from collections.abc import Iterable, Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse._compensator import Compensator
+from pihyst.model import PIModel
 from pihyst.model._bank import refuse_delayed
+
+#: one value for every channel, or one per channel (None entries: the default)
+PerChannel = float | Sequence[float | None] | None
 
 
 def _per_channel(value, n, name):
@@ -78,8 +85,11 @@ class CompensatorBank:
     True
     """
 
-    def __init__(self, models, *, u_min=None, u_max=None, slew_rate=None,
-                 initial_voltage=None, initial_state=None, fast=False):
+    def __init__(self, models: Iterable[PIModel], *, u_min: PerChannel = None,
+                 u_max: PerChannel = None, slew_rate: PerChannel = None,
+                 initial_voltage: PerChannel = None,
+                 initial_state: Sequence[ArrayLike | None] | None = None,
+                 fast: bool = False) -> None:
         models = tuple(models)
         refuse_delayed(models)
         n = len(models)
@@ -134,7 +144,7 @@ class CompensatorBank:
         """Flags of the last tick per channel (0: desired value reached)."""
         return np.array([c.last_flags for c in self.channels], dtype=np.uint8)
 
-    def reset(self):
+    def reset(self) -> None:
         """Every channel back to its initial state and voltage.
 
         Examples
@@ -146,11 +156,11 @@ class CompensatorBank:
         """
         for c in self._channels:
             c.reset()
-        if self.fast:
+        if isinstance(self._array, _core.CompensatorSoA):
             self._array.reload()
         self._stale = False
 
-    def step(self, y_desired):
+    def step(self, y_desired: ArrayLike) -> NDArray[np.float64]:
         """One tick: the N voltages for N desired displacements (any values).
 
         Parameters
@@ -183,7 +193,8 @@ class CompensatorBank:
         self._stale = self.fast
         return self._u.copy()
 
-    def run(self, y_desired):
+    def run(self, y_desired: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                NDArray[np.uint8]]:
         """T ticks, row t of ``y_desired`` one tick.
 
         Parameters

@@ -5,7 +5,10 @@ outputs of the channels' own steppers. With ``fast=True`` it steps them from a
 structure-of-arrays copy of their states (pihyst_modelbank, docs/c-core.md): classical
 channels of up to 16 operators several at a time, with the same bits."""
 
+from collections.abc import Iterable, Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
@@ -42,7 +45,9 @@ class ModelBank:
     True
     """
 
-    def __init__(self, models, initial_states=None, *, fast=False):
+    def __init__(self, models: Iterable[PIModel],
+                 initial_states: Sequence[ArrayLike | None] | None = None, *,
+                 fast: bool = False) -> None:
         models = tuple(models)
         for i, m in enumerate(models):
             if not isinstance(m, PIModel):
@@ -84,7 +89,7 @@ class ModelBank:
         """The running operator state of every channel (a list of copies)."""
         return [s.state for s in self.channels]
 
-    def reset(self, states=None) -> None:
+    def reset(self, states: Sequence[ArrayLike | None] | None = None) -> None:
         """Every channel back to its initial state, or to ``states``.
 
         Parameters
@@ -109,7 +114,7 @@ class ModelBank:
             raise InvalidArgumentError(f"states must have {len(self)} entries, got {len(states)}")
         for s, state in zip(self._channels, states, strict=True):
             s.reset(state)
-        if self.fast:
+        if isinstance(self._array, _core.BankSoA):
             self._array.reload()
         self._stale = False
 
@@ -124,7 +129,7 @@ class ModelBank:
                                   (float(self._lo[i]), float(self._hi[i])))
         return u
 
-    def step(self, u):
+    def step(self, u: ArrayLike) -> NDArray[np.float64]:
         """One tick: advance channel i by the input u[i].
 
         Parameters
@@ -157,7 +162,7 @@ class ModelBank:
         self._stale = self.fast
         return y
 
-    def run(self, u):
+    def run(self, u: ArrayLike) -> NDArray[np.float64]:
         """T ticks, row t of ``u`` one tick.
 
         Parameters

@@ -16,6 +16,8 @@ of 0 - 2 ticks and an amplifier slew limit of 50 - 500 kV/s (log-uniform), drawn
 stream of their own so that ``dynamics=False`` draws exactly what it always drew.
 """
 
+from typing import Any
+
 import numpy as np
 
 from pihyst.sim._boucwen import BoucWen
@@ -106,7 +108,7 @@ def _bouc_wen(rng, strong):
     raise RuntimeError("no Bouc-Wen parameters with the requested remanence found")
 
 
-def random_plant(seed, *, dynamics=False):
+def random_plant(seed: int, *, dynamics: bool = False) -> tuple[Plant, dict[str, Any]]:
     """A random simulated actuator and a description of what was drawn.
 
     Returns ``(plant, description)``: a :class:`~pihyst.sim.Plant` at rest at 0 V after a

@@ -19,9 +19,12 @@ the beam at 0 V, an error of -3.09 um).
 
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import paper
 from pihyst._version import __version__
@@ -107,10 +110,10 @@ class FittedModel:
 
     key: str
     label: str
-    model: object
+    model: Any
     requested_thresholds: list | None = None
     notes: list = field(default_factory=list)
-    fit_report: object = None
+    fit_report: Any = None
 
 
 @dataclass
@@ -215,7 +218,8 @@ def _quiet(call, notes):
     return out
 
 
-def signed_extremes(u, error):
+def signed_extremes(u: NDArray[np.float64],
+                    error: NDArray[np.float64]) -> dict[str, float | None]:
     """The error of largest magnitude (with its sign) in the low, middle and high third
     of the input range, as the paper reports them.
 
@@ -240,7 +244,7 @@ def signed_extremes(u, error):
     """
     lo, hi = float(np.min(u)), float(np.max(u))
     edges = lo + (hi - lo) * np.array([0.0, 1 / 3, 2 / 3, 1.0])
-    out = {}
+    out: dict[str, float | None] = {}
     for name, a, b in zip(("low", "middle", "high"), edges[:-1], edges[1:]):
         inside = (u >= a) & (u <= b)
         if not np.any(inside):
@@ -278,7 +282,8 @@ def _usable_thresholds(thresholds, span, zero_state):
     return keep, drop
 
 
-def fit_paper_models(rec, *, paper_method=True, scale=1.0):
+def fit_paper_models(rec: "Recording", *, paper_method: bool = True,
+                     scale: float = 1.0) -> dict[str, "FittedModel"]:
     """The conventional and the multislope PI with the paper's thresholds (times
     ``scale``), fitted to ``rec``.
 
@@ -432,8 +437,9 @@ def _concat(*signals, dt):
 
 
 # ----------------------------------------------------------------------------- demo
-def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, rig=False,
-                progress=print):
+def paper_study(plant: str = "paper-beam", *, seed: int = 0, dt: float = 0.1,
+                variants: bool = True, rig: bool = False,
+                progress: Callable[[str], object] | None = print) -> "Study":
     """The paper's study on the simulated beam ``plant``.
 
     Parameters
@@ -493,7 +499,7 @@ def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, rig=False,
     valid = _record(make_plant(plant, seed=seed + 2), "validation", t_v, u_v,
                     "20 ramps at 1 V/s between random levels (seed "
                     f"{seed + 100}), fitted by no model")
-    predictions = {"loop": {}, "validation": {}}
+    predictions: dict[str, dict[str, Any]] = {"loop": {}, "validation": {}}
     for key, fm in models.items():
         predictions["loop"][key] = fm.model.predict(loop.u)
         predictions["validation"][key] = fm.model.predict(valid.u)
@@ -616,7 +622,8 @@ def _demo_metrics(beam, loop, valid, models, predictions, tracking, variant_rows
 
 
 # ----------------------------------------------------------------------------- report
-def loop_study(t, u, y, *, source, progress=print):
+def loop_study(t: ArrayLike, u: ArrayLike, y: ArrayLike, *, source: str,
+               progress: Callable[[str], object] | None = print) -> "Study":
     """The fit-and-compare study on a user's own record (no simulator).
 
     The paper's thresholds are scaled to the record's input span and measured from the

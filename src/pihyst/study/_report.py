@@ -20,6 +20,8 @@ import io
 import json
 import os
 import re
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +29,9 @@ from pihyst._atomic import write_atomically
 from pihyst.io import save_model, write_columns
 from pihyst.io._csv import sidecar_path
 from pihyst.study import _plot as plot
+
+if TYPE_CHECKING:
+    from pihyst.study._paper_study import Study
 
 MODEL_ORDER = ("classical", "multislope", "best")
 
@@ -476,8 +481,9 @@ def render_html(study, figs, files, command, paper=True):
 
 
 # ----------------------------------------------------------------------------- entry
-def write_report(study, out_dir, *, command="", progress=None, figure_formats=(),
-                 paper=None):
+def write_report(study: "Study", out_dir: "str | os.PathLike[str]", *, command: str = "",
+                 progress: Callable[[str], object] | None = None,
+                 figure_formats: Sequence[str] = (), paper: bool | None = None) -> list[str]:
     """Write the report folder ``out_dir`` (created if needed) for a
     :class:`pihyst.study.Study`; returns the names of the files written.
 
