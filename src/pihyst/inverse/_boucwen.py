@@ -34,6 +34,7 @@ lags by the H reached (csrc/pihyst_bw_creep.c; the twin: pihyst.model._creep's
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pihyst import _boucwen_core
 from pihyst.exceptions import InvalidArgumentError
@@ -43,6 +44,7 @@ from pihyst.inverse._compensator import (
     FLAG_SATURATED_LOW,
     FLAG_SLEW,
     OTHER_COMPENSATORS,
+    CompensationResult,
     _desired,
     _number,
     run_result,
@@ -82,8 +84,11 @@ class BoucWenCompensatorTwin:
     FLAG_NAN = FLAG_NAN
     FLAG_SLEW = FLAG_SLEW
 
-    def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None, creep_state=None):
+    def __init__(self, model: BoucWenModel, *, u_min: float | None = None,
+                 u_max: float | None = None, slew_rate: float | None = None,
+                 initial_voltage: float | None = None,
+                 initial_state: tuple[float, float] | None = None,
+                 creep_state: ArrayLike | None = None) -> None:
         if not isinstance(model, BoucWenModel):
             raise InvalidArgumentError(f"model must be a BoucWenModel, not {type(model).__name__}")
         if not model.is_monotone:
@@ -193,7 +198,8 @@ class BoucWenCompensatorTwin:
         except ValueError as err:
             raise InvalidArgumentError(str(err)) from None
 
-    def reset(self, state=None, voltage=None, creep_state=None):
+    def reset(self, state: tuple[float, float] | None = None, voltage: float | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Back to the initial state and voltage, or to ``state`` = (u, z) and ``voltage``
         (with creep: the lags to ``creep_state``, default settled at the output).
 
@@ -245,7 +251,7 @@ class BoucWenCompensatorTwin:
         z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
         return m.output(u, z), z
 
-    def step(self, y_desired, dt=None):
+    def step(self, y_desired: float, dt: float | None = None) -> float:
         """The voltage for one desired output (applied to the state).
 
         Parameters
@@ -362,7 +368,8 @@ class BoucWenCompensatorTwin:
                 dx = 0.5 * abs(b - a)
         return b, z_b, 0
 
-    def run(self, y_desired, t=None, t_previous=None):
+    def run(self, y_desired: ArrayLike, t: ArrayLike | None = None,
+            t_previous: float | None = None) -> CompensationResult:
         """Compensate a block of desired outputs, continuing from the current state.
 
         Parameters
@@ -498,7 +505,7 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
         if voltage is not None:
             self._core.reset(start, voltage)
 
-    def step(self, y_desired, dt=None):
+    def step(self, y_desired: float, dt: float | None = None) -> float:
         """The voltage for one desired output (applied to the state).
 
         Parameters

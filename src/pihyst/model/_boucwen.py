@@ -37,9 +37,12 @@ module are its Python twin, which the tests compare it against (:func:`twin_simu
 
 import json
 import math
+from collections.abc import Mapping
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
@@ -237,12 +240,32 @@ class BoucWenModel(Immutable):
     """
 
     family = FAMILY
+    # set once, in __init__
+    beta: float
+    gamma: float
+    n: float
+    hysteretic: float
+    linear: float
+    quadratic: float
+    offset: float
+    input_range: tuple[float, float]
+    initial_state: tuple[float, float]
+    units: Mapping[str, str]
+    metadata: Mapping[str, Any]
+    delay: int
+    sample_period: float | None
+    creep: Creep | None
     _KEYS = ("beta", "gamma", "n", "hysteretic", "linear", "quadratic", "offset",
              "input_range", "initial_state", "units", "metadata", "creep")
 
-    def __init__(self, *, beta, gamma, hysteretic, linear, n=1.0, quadratic=0.0, offset=0.0,
-                 input_range=None, initial_state=None, units=None, metadata=None, delay=0,
-                 sample_period=None, creep=None):
+    def __init__(self, *, beta: float, gamma: float, hysteretic: float, linear: float,
+                 n: float = 1.0, quadratic: float = 0.0, offset: float = 0.0,
+                 input_range: tuple[float, float] | None = None,
+                 initial_state: tuple[float, float] | None = None,
+                 units: Mapping[str, str] | None = None,
+                 metadata: Mapping[str, Any] | None = None, delay: int = 0,
+                 sample_period: float | None = None,
+                 creep: "Creep | Mapping[str, Any] | None" = None) -> None:
         set_ = object.__setattr__
         for name, value in (("beta", beta), ("gamma", gamma), ("n", n),
                             ("hysteretic", hysteretic), ("linear", linear),
@@ -380,8 +403,10 @@ class BoucWenModel(Immutable):
             return self.initial_state
         return self.replace(initial_state=state).initial_state
 
-    def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
-                 pending_input=None, t_previous=None):
+    def simulate(self, u: ArrayLike, *, initial_state: tuple[float, float] | None = None,
+                 t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                 pending_input: ArrayLike | None = None,
+                 t_previous: float | None = None) -> Response:
         """Run over the input ``u`` from ``initial_state`` (default: the model's own);
         returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z). With a
         :attr:`delay` the input is delayed as for the PI models
@@ -433,8 +458,9 @@ class BoucWenModel(Immutable):
                          creep_state=creep_state, pending_input=pending_input,
                          t_previous=t_previous)
 
-    def twin_simulation(self, u, *, initial_state=None, t=None, creep_state=None,
-                        pending_input=None):
+    def twin_simulation(self, u: ArrayLike, *, initial_state: tuple[float, float] | None = None,
+                        t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                        pending_input: ArrayLike | None = None) -> Response:
         """:meth:`simulate` by the Python twin of the C core (this module's functions and,
         with creep, :func:`creep_twin_run`): the reference the tests compare the C core
         against; slow.
@@ -471,29 +497,31 @@ class BoucWenModel(Immutable):
         >>> bool(abs(m.twin_simulation(u).output - m.predict(u)).max() < 1e-9)
         True
         """
-        u = self._checked_input(u)
+        x = self._checked_input(u)
         d = self.delay_at(t=t)
         if d and pending_input is not None:
             pending_input = self._checked_input(pending_input)
-        run = delayed_input(u, d, pending_input)
+        run = delayed_input(x, d, pending_input)
         u0, z0 = self._state(initial_state)
         # the substep given explicitly: trajectory() would hand one shape to the C core
         z = trajectory(self._x(run), self._x(u0), z0, self.beta, self.gamma, self.n,
                        h=substep(self.beta, self.gamma))
-        final = (float(run[-1]), float(z[-1])) if u.size else (u0, z0)
+        final = (float(run[-1]), float(z[-1])) if x.size else (u0, z0)
         h = self.output(run, z)
-        pending = pending_after(u, d, pending_input) if d else None
+        pending = pending_after(x, d, pending_input) if d else None
         if self.creep is None:
-            return Response(input=u, output=h, final_state=np.array(final),
+            return Response(input=x, output=h, final_state=np.array(final),
                             pending_input=pending)
         lags = self._lag_state((u0, z0), creep_state)
-        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        dt = None if t is None else sample_intervals(t, x.size, self.creep.dt)
         y = creep_twin_run(self.creep, lags, h, dt)
-        return Response(input=u, output=y, final_state=np.array(final),
+        return Response(input=x, output=y, final_state=np.array(final),
                         final_creep_state=lags, pending_input=pending)
 
-    def predict(self, u, *, initial_state=None, t=None, creep_state=None,
-                pending_input=None, t_previous=None):
+    def predict(self, u: ArrayLike, *, initial_state: tuple[float, float] | None = None,
+                t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                pending_input: ArrayLike | None = None,
+                t_previous: float | None = None) -> NDArray[np.float64]:
         """Displacements for the inputs ``u``: the output of :meth:`simulate`.
 
         Parameters
@@ -544,7 +572,8 @@ class BoucWenModel(Immutable):
         (None: settled at the output of the state (u, z))."""
         return self.creep.lags(self._lag_state(state, creep_state))
 
-    def delay_at(self, sample_period=None, *, t=None):
+    def delay_at(self, sample_period: float | None = None, *,
+                 t: ArrayLike | None = None) -> int:
         """The delay in samples at another sample period (see
         :meth:`pihyst.model.PIModel.delay_at`).
 
@@ -574,8 +603,9 @@ class BoucWenModel(Immutable):
         """
         return delay_at(self.delay, self.sample_period, sample_period, t)
 
-    def stepper(self, initial_state=None, *, creep_state=None, pending_input=None,
-                sample_period=None):
+    def stepper(self, initial_state: tuple[float, float] | None = None, *,
+                creep_state: ArrayLike | None = None, pending_input: ArrayLike | None = None,
+                sample_period: float | None = None) -> "BoucWenStepper":
         """A :class:`BoucWenStepper`: the model sample by sample (with a delay, through
         a FIFO of d inputs; with creep, from the lag state ``creep_state``).
 
@@ -615,7 +645,7 @@ class BoucWenModel(Immutable):
                 "delay": self.delay, "sample_period": self.sample_period,
                 "creep": self.creep}
 
-    def replace(self, **changes):
+    def replace(self, **changes: Any) -> "BoucWenModel":
         """A copy with some constructor arguments changed.
 
         Parameters
@@ -678,7 +708,7 @@ class BoucWenModel(Immutable):
             parts.append(f"creep={self.creep!r}")
         return f"BoucWenModel({', '.join(parts)})"
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
         """The model as a JSON-ready dict (docs/interfaces.md, family "bouc-wen").
 
         Returns
@@ -705,7 +735,7 @@ class BoucWenModel(Immutable):
         return d
 
     @classmethod
-    def from_dict(cls, d, source="model"):
+    def from_dict(cls, d: Mapping[str, Any], source: str = "model") -> "BoucWenModel":
         """A model from its JSON dict; errors name ``source`` and the key.
 
         Parameters
@@ -805,8 +835,9 @@ class BoucWenStepper:
     True
     """
 
-    def __init__(self, model, initial_state=None, creep_state=None, *, pending_input=None,
-                 sample_period=None):
+    def __init__(self, model: BoucWenModel, initial_state: tuple[float, float] | None = None,
+                 creep_state: ArrayLike | None = None, *, pending_input: ArrayLike | None = None,
+                 sample_period: float | None = None) -> None:
         self.model = model
         self._initial = model._state(initial_state)
         self._core = model._core(self._initial)
@@ -829,7 +860,8 @@ class BoucWenStepper:
         """The creep lag states z_i (a copy; None for a model without creep)."""
         return None if self._lags is None else self._lags.state
 
-    def reset(self, state=None, creep_state=None):
+    def reset(self, state: tuple[float, float] | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Back to ``state`` (default: the initial state); with creep, the lags to
         ``creep_state`` (default: settled at that state's output, or the stepper's own
         initial lags when neither is given); the delay FIFO to its start.
@@ -860,7 +892,7 @@ class BoucWenStepper:
             self._lags = self.model._lags(self._core.state, creep_state)
         self._line.reset()
 
-    def output_at(self, u):
+    def output_at(self, u: float) -> float:
         """The output if the next sample applied were ``u`` (the state is not changed;
         with a delay, ``u`` is the input leaving the FIFO; with creep, the settled
         output H, the lags aside).
@@ -887,7 +919,7 @@ class BoucWenStepper:
         z = self._core.advance(z_p, m._x(u) - m._x(u_p))
         return m.output(u, z)
 
-    def step(self, u, dt=None):
+    def step(self, u: float, dt: float | None = None) -> float:
         """One sample: advance the state by the input ``u`` (with a delay of d samples,
         by the input of d steps ago), return y.
 

@@ -14,9 +14,11 @@ sample, and the exact inverse stays exact (each sample solves for H[t], then the
 """
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core
 from pihyst._frozen import frozen_array
@@ -64,7 +66,7 @@ class Creep:
     gain: NDArray[np.float64]
     dt: float
 
-    def __init__(self, tau, gain, dt):
+    def __init__(self, tau: ArrayLike, gain: ArrayLike, dt: float) -> None:
         set_ = object.__setattr__
         set_(self, "tau", _vector(tau, "creep tau_s"))
         set_(self, "gain", _vector(gain, "creep gain", self.tau.size))
@@ -111,7 +113,7 @@ class Creep:
         return (f"Creep(tau={[float(x) for x in self.tau]}, "
                 f"gain={[float(x) for x in self.gain]}, dt={self.dt:g})")
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """The JSON form: ``{"tau_s": [...], "gain": [...], "dt_s": dt}``.
 
         Returns
@@ -127,7 +129,7 @@ class Creep:
         return {"tau_s": self.tau.tolist(), "gain": self.gain.tolist(), "dt_s": self.dt}
 
     @classmethod
-    def from_dict(cls, d) -> "Creep":
+    def from_dict(cls, d: "Creep | Mapping[str, Any]") -> "Creep":
         """Creep lags from their JSON form (or a :class:`Creep`, returned as it is).
 
         Parameters
@@ -164,7 +166,7 @@ class Creep:
                                     f"gain, tau_s)")
         return cls(d["tau_s"], d["gain"], d["dt_s"])
 
-    def lags(self, initial_state):
+    def lags(self, initial_state: ArrayLike) -> _core.Creep:
         """The C lags (``pihyst._core.Creep``) from the lag state z_i[t-1].
 
         Parameters
