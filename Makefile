@@ -44,10 +44,12 @@ test: ctest lint typecheck pytest
 test-slow: install
 	$(BIN)/python -m pytest -m slow
 
-# the docs extra (pyproject.toml), installed into the venv on first use
-DOCS_REQUIREMENTS = $(BIN)/python -c "from importlib.metadata import requires; \
-	print(' '.join(r.split(';')[0] for r in requires('pihyst') if 'extra == \"docs\"' in r))"
-$(VENV)/.docs-installed: $(BIN)/pihyst
+# the docs extra of pyproject.toml, installed into the venv on first use (read from the
+# file, so that no rebuild of the extension is needed)
+DOCS_REQUIREMENTS = $(BIN)/python -c "import sys; \
+	toml = __import__('tomllib' if sys.version_info >= (3, 11) else 'tomli'); \
+	print(' '.join(toml.load(open('pyproject.toml', 'rb'))['project']['optional-dependencies']['docs']))"
+$(VENV)/.docs-installed: $(BIN)/pihyst pyproject.toml
 	@echo "make: installing the docs extra (Sphinx, MyST, numpydoc) into $(VENV)"
 	$(BIN)/pip install --quiet $$($(DOCS_REQUIREMENTS))
 	touch $@
