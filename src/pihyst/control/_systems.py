@@ -140,7 +140,8 @@ def _check(model):
                                 f"delay in series (a {model.delay}-sample delay block)")
 
 
-def model_system(model, dt=True, *, name=None, inputs="voltage", outputs="displacement"):
+def model_system(model: PIModel, dt: float | bool = True, *, name: str | None = None,
+                 inputs: str = "voltage", outputs: str = "displacement") -> "ct.NonlinearIOSystem":
     """The model as a discrete-time :class:`control.NonlinearIOSystem`.
 
     Parameters
@@ -178,8 +179,10 @@ def model_system(model, dt=True, *, name=None, inputs="voltage", outputs="displa
                                 states=_labels("f", k), dt=dt, name=name)
 
 
-def compensator_system(model, dt=True, *, u_min=None, u_max=None, slew_rate=None,
-                       name=None, inputs="desired", outputs="voltage"):
+def compensator_system(model: PIModel, dt: float | bool = True, *, u_min: float | None = None,
+                       u_max: float | None = None, slew_rate: float | None = None,
+                       name: str | None = None, inputs: str = "desired",
+                       outputs: str = "voltage") -> "ct.NonlinearIOSystem":
     """The model's exact compensator as a discrete-time :class:`control.NonlinearIOSystem`.
 
     Parameters
