@@ -15,6 +15,8 @@ Each is a ``ValueError`` (or a ``UserWarning``), so ``except ValueError`` still 
 The rules (and the command line's exit statuses) are in docs/errors.md.
 """
 
+import os
+
 
 class PihystWarning(UserWarning):
     """Base class of every warning pihyst issues.
@@ -159,7 +161,7 @@ class RecordError(ValueError):
     "loop.mat: variable 'u': sample 4 is NaN"
     """
 
-    def __init__(self, path, message: str) -> None:
+    def __init__(self, path: "str | os.PathLike[str]", message: str) -> None:
         self.path, self.message = path, message
         super().__init__(f"{path}: {message}")
 
@@ -184,7 +186,8 @@ class CSVError(RecordError):
     "loop.csv:7:2: 'abc' is not a number"
     """
 
-    def __init__(self, path, line: int, column: int | None, message: str) -> None:
+    def __init__(self, path: "str | os.PathLike[str]", line: int, column: int | None,
+                 message: str) -> None:
         self.line, self.column = line, column
         where = f"{path}:{line}:{column}" if column else f"{path}:{line}"
         ValueError.__init__(self, f"{where}: {message}")

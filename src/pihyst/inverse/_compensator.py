@@ -595,15 +595,15 @@ class PreviewRun:
     [3.0, 3.0]
     """
 
-    def __init__(self, compensator, delay):
+    def __init__(self, compensator: Any, delay: int) -> None:
         self.comp, self.d = compensator, int(delay)
         self._seen = 0                   # targets fed
         self._desired = np.empty(0)      # targets of the samples not yet returned
         self._voltage = np.empty(0)      # voltages of those samples, as far as known
         # the compensator's (displacement, flags) of desired[k - d], sample k on; None:
         # before sample d (the displacement at the initial voltage)
-        self._reached = [None] * self.d
-        self._start = None
+        self._reached: list[Any] = [None] * self.d
+        self._start: Any = None
         self._t_last = None
 
     def _run(self, y, t, t_previous):

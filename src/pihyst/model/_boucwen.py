@@ -37,6 +37,7 @@ module are its Python twin, which the tests compare it against (:func:`twin_simu
 
 import json
 import math
+import os
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
@@ -342,7 +343,7 @@ class BoucWenModel(Immutable):
         lo, hi = self.input_range
         return (u - lo) / (hi - lo)
 
-    def output(self, u, z):
+    def output(self, u: Any, z: Any) -> Any:
         """y = offset + c_1 x + c_2 x^2 + a z at input u (floats or arrays).
 
         Parameters
@@ -366,7 +367,7 @@ class BoucWenModel(Immutable):
         x = self._x(u)
         return self.offset + self.linear * x + self.quadratic * x * x + self.hysteretic * z
 
-    def hysteresis_output(self, state) -> float:
+    def hysteresis_output(self, state: tuple[float, float]) -> float:
         """The output at the state (u, z) without creep: the settled displacement H.
 
         Parameters
@@ -786,7 +787,7 @@ class BoucWenModel(Immutable):
         except (TypeError, ValueError, OverflowError) as err:
             raise InvalidModelError(f"{source}: {err}") from None
 
-    def save(self, path) -> None:
+    def save(self, path: "str | os.PathLike[str]") -> None:
         """Write the model as JSON to ``path`` (the file appears only once complete).
 
         Parameters

@@ -31,6 +31,9 @@ Examples
 True
 """
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -87,8 +90,11 @@ class Plant:
     ('paper-beam', 150.0)
     """
 
-    def __init__(self, name, hysteresis, *, creep_per_decade=0.0, noise_um=0.0, quantum_V=0.0,
-                 dynamics=None, modes=None, seed=0, summary=""):
+    def __init__(self, name: str, hysteresis: Any, *,
+                 creep_per_decade: float = 0.0, noise_um: float = 0.0, quantum_V: float = 0.0,
+                 dynamics: tuple[float, float] | None = None,
+                 modes: Sequence[Sequence[float]] | None = None, seed: int = 0,
+                 summary: str = "") -> None:
         self.name = name
         self.hysteresis = hysteresis
         self.u_min = 0.0
@@ -100,11 +106,12 @@ class Plant:
         self.seed = seed
         self.summary = summary
         self._creep = creep_filter(self.creep_per_decade) if self.creep_per_decade > 0 else None
-        self._beam = (modes_filter(modes) if modes else
+        self._t: float | None = None
+        self._beam: Any = (modes_filter(modes) if modes else
                       beam_filter(*dynamics) if dynamics else None)
         self.reset()
 
-    def reset(self):
+    def reset(self) -> None:
         """Back to the initial rest state (0 V after a full cycle, creep settled, noise
         generator re-seeded): the same calls then give the same output again.
 

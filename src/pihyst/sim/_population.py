@@ -153,10 +153,10 @@ def random_plant(seed: int, *, dynamics: bool = False) -> tuple[Plant, dict[str,
                  "range_um": rise, "seed": int(seed)})
     summary = (f"random {desc['kind']} actuator (seed {seed}): creep "
                f"{100 * creep:.2g} %/decade, noise {noise:.3g} um, {rate:.0f} Hz")
-    options = dict(creep_per_decade=creep, noise_um=noise, quantum_V=SUPPLY_STEP_V,
+    options: dict[str, Any] = dict(creep_per_decade=creep, noise_um=noise, quantum_V=SUPPLY_STEP_V,
                    seed=int(seed), summary=summary)
     if not dynamics:
         return Plant(f"random-{seed}", hyst, **options), desc
-    stage = _stage_dynamics(seed)
+    stage: dict[str, Any] = _stage_dynamics(seed)
     desc.update(stage)
     return Stage(f"random-stage-{seed}", hyst, **stage, **options), desc

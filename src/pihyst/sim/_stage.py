@@ -18,6 +18,8 @@ period measured: the ``run_period`` of :func:`pihyst.learn.learn_periodic`.
 """
 
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -57,8 +59,10 @@ class Stage(Plant):
     (20000.0, 1)
     """
 
-    def __init__(self, name, hysteresis, *, modes, rate_hz, delay_samples=0, slew_V_per_s=None,
-                 creep_per_decade=0.0, noise_um=0.0, quantum_V=0.0, seed=0, summary=""):
+    def __init__(self, name: str, hysteresis: Any, *, modes: Sequence[Sequence[float]],
+                 rate_hz: float, delay_samples: int = 0, slew_V_per_s: float | None = None,
+                 creep_per_decade: float = 0.0, noise_um: float = 0.0, quantum_V: float = 0.0,
+                 seed: int = 0, summary: str = "") -> None:
         if not (math.isfinite(rate_hz) and rate_hz > 0):
             raise InvalidArgumentError(f"rate_hz must be a positive number, got {rate_hz!r}")
         if int(delay_samples) != delay_samples or delay_samples < 0:
@@ -83,7 +87,7 @@ class Stage(Plant):
         the modes has fallen below 1 % of its start after that."""
         return max(5.0 / (z * 2 * np.pi * hz) for hz, z, _ in self.modes)
 
-    def reset(self):
+    def reset(self) -> None:
         """Back to the initial rest state, the converter and the amplifier at 0 V and the
         clock at tick 0.
 
@@ -295,9 +299,11 @@ class Stage(Plant):
                 f"converter delay {self.delay_samples} tick(s); {slew}.")
 
 
-def make_stage(name="paper-beam", *, modes=((800.0, 0.04),), rate_hz=20_000.0,
-               delay_samples=1, slew_V_per_s=None, noise_um=0.005, creep=True,
-               quantisation=True, seed=0):
+def make_stage(name: str = "paper-beam", *,
+               modes: Sequence[Sequence[float]] = ((800.0, 0.04),), rate_hz: float = 20_000.0,
+               delay_samples: int = 1, slew_V_per_s: float | None = None,
+               noise_um: float = 0.005, creep: bool = True, quantisation: bool = True,
+               seed: int = 0) -> Stage:
     """A simulated stage: the hysteresis and creep of the beam ``name`` (one of
     :data:`pihyst.sim.PLANT_NAMES`) followed by ``modes`` ((hz, damping) or (hz, damping,
     share) each), a converter delay, an amplifier slew limit, at ``rate_hz``.
