@@ -15,15 +15,31 @@ Each is a ``ValueError`` (or a ``UserWarning``), so ``except ValueError`` still 
 The rules (and the command line's exit statuses) are in docs/errors.md.
 """
 
+import os
+
 
 class PihystWarning(UserWarning):
-    """Base class of every warning pihyst issues."""
+    """Base class of every warning pihyst issues.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", PihystWarning)   # silences all of pihyst's
+    ...     warnings.warn("weights not determined", IllConditionedWarning)
+    """
 
 
 class IllConditionedWarning(PihystWarning):
     """The least-squares problem is ill-conditioned: some weights are not determined by
     the data. The solution returned is still the best admissible one (with a tiny
-    regularization that picks the smallest such weights), but those weights mean little."""
+    regularization that picks the smallest such weights), but those weights mean little.
+
+    Examples
+    --------
+    >>> issubclass(IllConditionedWarning, PihystWarning)
+    True
+    """
 
 
 class InsufficientDataWarning(PihystWarning):
@@ -46,26 +62,82 @@ class FitError(ValueError):
 
     ``index`` is the 0-based sample the problem is at, and ``column`` is ``"input"`` or
     ``"output"``, when they are known (the command line turns them into file:line:column).
+
+    Parameters
+    ----------
+    message : str
+        What is wrong.
+    index : int, optional
+        The 0-based sample the problem is at.
+    column : str, optional
+        ``"input"`` or ``"output"``.
+
+    Examples
+    --------
+    >>> err = FitError("the output does not vary", column="output")
+    >>> str(err), err.column, isinstance(err, ValueError)
+    ('the output does not vary', 'output', True)
     """
 
-    def __init__(self, message, *, index=None, column=None):
+    def __init__(self, message: str, *, index: int | None = None,
+                 column: str | None = None) -> None:
         super().__init__(message)
         self.index = index
         self.column = column
 
 
 class InfeasibleConstraintsError(FitError):
-    """No weights satisfy the constraints (bounds and equality constraints together)."""
+    """No weights satisfy the constraints (bounds and equality constraints together).
+
+    Parameters
+    ----------
+    message : str
+        What is wrong.
+    index : int, optional
+        The 0-based sample the problem is at.
+    column : str, optional
+        ``"input"`` or ``"output"``.
+
+    Examples
+    --------
+    >>> isinstance(InfeasibleConstraintsError("no weights satisfy them"), FitError)
+    True
+    """
 
 
 class InvalidModelError(ValueError):
-    """The parameters do not describe a valid model; the message says which and why."""
+    """The parameters do not describe a valid model; the message says which and why.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> try:
+    ...     pihyst.ClassicalPI([0, 10], [1.0])
+    ... except InvalidModelError as err:
+    ...     print(err)
+    2 thresholds but 1 weights
+    """
 
 
 class InputRangeError(ValueError):
-    """An input sample lies outside the model's input range."""
+    """An input sample lies outside the model's input range.
 
-    def __init__(self, index, value, input_range):
+    Parameters
+    ----------
+    index : int
+        The 0-based sample.
+    value : float
+        Its value.
+    input_range : (float, float)
+        The model's input range.
+
+    Examples
+    --------
+    >>> str(InputRangeError(3, 151.0, (0.0, 150.0)))
+    "sample 3: input 151 is outside the model's input range [0, 150]"
+    """
+
+    def __init__(self, index: int, value: float, input_range: tuple[float, float]) -> None:
         self.index = index
         self.value = value
         super().__init__(f"sample {index}: input {value:g} is outside the model's input range "
@@ -74,17 +146,48 @@ class InputRangeError(ValueError):
 
 class RecordError(ValueError):
     """A record could not be used: ``FILE: where: what is wrong`` (``where`` names the
-    variable and sample of an array file)."""
+    variable and sample of an array file).
 
-    def __init__(self, path, message):
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The record's file.
+    message : str
+        Where and what is wrong.
+
+    Examples
+    --------
+    >>> str(RecordError("loop.mat", "variable 'u': sample 4 is NaN"))
+    "loop.mat: variable 'u': sample 4 is NaN"
+    """
+
+    def __init__(self, path: "str | os.PathLike[str]", message: str) -> None:
         self.path, self.message = path, message
         super().__init__(f"{path}: {message}")
 
 
 class CSVError(RecordError):
-    """A CSV file could not be used; the message names file, line and column."""
+    """A CSV file could not be used; the message names file, line and column.
 
-    def __init__(self, path, line, column, message):
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    line : int
+        The 1-based line.
+    column : int or None
+        The 1-based column (None: the whole line).
+    message : str
+        What is wrong.
+
+    Examples
+    --------
+    >>> str(CSVError("loop.csv", 7, 2, "'abc' is not a number"))
+    "loop.csv:7:2: 'abc' is not a number"
+    """
+
+    def __init__(self, path: "str | os.PathLike[str]", line: int, column: int | None,
+                 message: str) -> None:
         self.line, self.column = line, column
         where = f"{path}:{line}:{column}" if column else f"{path}:{line}"
         ValueError.__init__(self, f"{where}: {message}")

@@ -9,6 +9,7 @@ Examples
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def _residual(y_true, y_pred):
@@ -22,8 +23,25 @@ def _residual(y_true, y_pred):
     return y_pred - y_true
 
 
-def mean_abs_error(y_true, y_pred):
+def mean_abs_error(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Mean absolute error, mean_t |y_pred[t] - y_true[t]|.
+
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+
+    Returns
+    -------
+    float
+        The mean absolute error, in the output's unit.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
 
     Examples
     --------
@@ -33,8 +51,25 @@ def mean_abs_error(y_true, y_pred):
     return float(np.mean(np.abs(_residual(y_true, y_pred))))
 
 
-def max_abs_error(y_true, y_pred):
+def max_abs_error(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Largest absolute error, max_t |y_pred[t] - y_true[t]|.
+
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+
+    Returns
+    -------
+    float
+        The largest absolute error, in the output's unit.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
 
     Examples
     --------
@@ -44,8 +79,25 @@ def max_abs_error(y_true, y_pred):
     return float(np.max(np.abs(_residual(y_true, y_pred))))
 
 
-def rms_error(y_true, y_pred):
+def rms_error(y_true: ArrayLike, y_pred: ArrayLike) -> float:
     """Root-mean-square error, sqrt(mean_t (y_pred[t] - y_true[t])^2).
+
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+
+    Returns
+    -------
+    float
+        The RMS error, in the output's unit.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
 
     Examples
     --------
@@ -55,9 +107,30 @@ def rms_error(y_true, y_pred):
     return float(np.sqrt(np.mean(_residual(y_true, y_pred) ** 2)))
 
 
-def error_summary(y_true, y_pred, measured_range):
+def error_summary(y_true: ArrayLike, y_pred: ArrayLike,
+                  measured_range: float) -> dict[str, float | None]:
     """Mean absolute, max absolute and RMS error, each in the output's unit and in % of
     ``measured_range`` (the peak-to-peak of the measured output).
+
+    Parameters
+    ----------
+    y_true : array_like
+        The measured (or desired) output.
+    y_pred : array_like
+        The model's output, of the same shape.
+    measured_range : float
+        The peak-to-peak of the measured output, for the percentages.
+
+    Returns
+    -------
+    dict
+        ``mean_abs``, ``max_abs``, ``rms`` and each with ``_pct`` (None when
+        ``measured_range`` is not > 0).
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ or there are no samples.
 
     Examples
     --------
@@ -65,9 +138,10 @@ def error_summary(y_true, y_pred, measured_range):
     >>> s["mean_abs"], s["mean_abs_pct"], s["max_abs"]
     (0.5, 5.0, 1.0)
     """
-    out = {"mean_abs": mean_abs_error(y_true, y_pred),
-           "max_abs": max_abs_error(y_true, y_pred),
-           "rms": rms_error(y_true, y_pred)}
-    for key in list(out):
-        out[f"{key}_pct"] = 100.0 * out[key] / measured_range if measured_range > 0 else None
+    errors = {"mean_abs": mean_abs_error(y_true, y_pred),
+              "max_abs": max_abs_error(y_true, y_pred),
+              "rms": rms_error(y_true, y_pred)}
+    out: dict[str, float | None] = dict(errors)
+    for key, value in errors.items():
+        out[f"{key}_pct"] = 100.0 * value / measured_range if measured_range > 0 else None
     return out

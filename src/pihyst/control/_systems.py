@@ -27,6 +27,7 @@ input in the range (a provisional value), while its state update raises
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 try:
     import control as ct
@@ -139,7 +140,8 @@ def _check(model):
                                 f"delay in series (a {model.delay}-sample delay block)")
 
 
-def model_system(model, dt=True, *, name=None, inputs="voltage", outputs="displacement"):
+def model_system(model: PIModel, dt: float | bool = True, *, name: str | None = None,
+                 inputs: str = "voltage", outputs: str = "displacement") -> "ct.NonlinearIOSystem":
     """The model as a discrete-time :class:`control.NonlinearIOSystem`.
 
     Parameters
@@ -177,8 +179,10 @@ def model_system(model, dt=True, *, name=None, inputs="voltage", outputs="displa
                                 states=_labels("f", k), dt=dt, name=name)
 
 
-def compensator_system(model, dt=True, *, u_min=None, u_max=None, slew_rate=None,
-                       name=None, inputs="desired", outputs="voltage"):
+def compensator_system(model: PIModel, dt: float | bool = True, *, u_min: float | None = None,
+                       u_max: float | None = None, slew_rate: float | None = None,
+                       name: str | None = None, inputs: str = "desired",
+                       outputs: str = "voltage") -> "ct.NonlinearIOSystem":
     """The model's exact compensator as a discrete-time :class:`control.NonlinearIOSystem`.
 
     Parameters
@@ -224,11 +228,39 @@ def compensator_system(model, dt=True, *, u_min=None, u_max=None, slew_rate=None
                                 states=_labels("f", k) + ["u_last"], dt=dt, name=name)
 
 
-def compensator_state(model, *, u_min=None, u_max=None, initial_voltage=None,
-                      initial_state=None):
+def compensator_state(model: PIModel, *, u_min: float | None = None,
+                      u_max: float | None = None, initial_voltage: float | None = None,
+                      initial_state: ArrayLike | None = None) -> NDArray[np.float64]:
     """The initial state of :func:`compensator_system`: the operator state (default the
     model's own) with the initial voltage applied (default 0 V, or the nearer limit),
-    then that voltage; as :class:`pihyst.Compensator` starts."""
+    then that voltage; as :class:`pihyst.Compensator` starts.
+
+    Parameters
+    ----------
+    model : PIModel
+        The model the compensator inverts (non-negative weights).
+    u_min, u_max, initial_voltage, initial_state
+        As for :class:`pihyst.Compensator`.
+
+    Returns
+    -------
+    numpy.ndarray
+        The K operator states, then the voltage.
+
+    Raises
+    ------
+    InvalidModelError
+        If the model cannot be inverted.
+    InvalidArgumentError
+        If the model is not a PI model or an argument is not valid.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> from pihyst.control import compensator_state
+    >>> compensator_state(pihyst.ClassicalPI([0, 10], [1.0, 0.5]), u_min=20.0).tolist()
+    [20.0, 10.0, 20.0]
+    """
     _check(model)
     comp = Compensator(model, u_min=u_min, u_max=u_max, initial_voltage=initial_voltage,
                        initial_state=initial_state)

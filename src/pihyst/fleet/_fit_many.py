@@ -16,7 +16,9 @@ import os
 import time
 import traceback
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +43,7 @@ _FIT_OPTIONS = None if any(p.kind is p.VAR_KEYWORD for p in _FIT_PARAMETERS.valu
 class RecordOutcome:
     """What became of one record of a fleet.
 
-    Attributes
+    Parameters
     ----------
     record : str
         The record's name (the file name for a file).
@@ -61,16 +63,22 @@ class RecordOutcome:
     traceback : str or None
         The traceback of an unexpected error (not a bad record but a fault), for a bug
         report.
+
+    Examples
+    --------
+    >>> o = RecordOutcome("a.csv", "failed", error="a.csv:3:2: 'x' is not a number")
+    >>> o.ok, o.model
+    (False, None)
     """
 
     record: str
     status: str
-    error: str = None
-    result: FitResult = None
+    error: str | None = None
+    result: FitResult | None = None
     warnings: tuple = ()
     seconds: float = 0.0
-    source: str = None
-    traceback: str = None
+    source: str | None = None
+    traceback: str | None = None
 
     @property
     def ok(self):
@@ -95,8 +103,20 @@ class RecordOutcome:
         held = self.result.report.family(self.family)["errors"]["held_back"]
         return None if held is None else held["rms"]
 
-    def summary(self):
-        """One row of the fleet's summary, as a dict."""
+    def summary(self) -> dict[str, Any]:
+        """One row of the fleet's summary, as a dict.
+
+        Returns
+        -------
+        dict
+            ``record``, ``status``, ``error``, ``family``, ``n_operators``,
+            ``held_back_rms``, ``seconds`` and ``warnings``.
+
+        Examples
+        --------
+        >>> RecordOutcome("a.csv", "failed", error="unreadable").summary()["error"]
+        'unreadable'
+        """
         return {"record": self.record, "status": self.status, "error": self.error,
                 "family": self.family,
                 "n_operators": None if self.model is None else int(self.model.n_operators),
@@ -112,12 +132,27 @@ class FleetResult:
     ``result["name"]`` is a record's outcome, ``result.models`` the fitted models by
     record, ``result.failed`` the outcomes that failed, ``result.ok`` whether all were
     fitted, ``result.summary()`` one plain dict per record.
+
+    Parameters
+    ----------
+    outcomes : tuple of RecordOutcome
+        One per record, in the order given.
+    seconds : float
+        Wall time of the whole fleet (s).
+    scheduler : str
+        Where it ran: ``"serial"`` or the Dask scheduler's address.
+
+    Examples
+    --------
+    >>> result = FleetResult((RecordOutcome("a.csv", "failed", error="unreadable"),))
+    >>> result.ok, len(result.failed), result["a.csv"].error
+    (False, 1, 'unreadable')
     """
 
     outcomes: tuple
     seconds: float = 0.0
     scheduler: str = "serial"
-    _index: dict = field(default=None, repr=False, compare=False)
+    _index: dict | None = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "_index", {o.record: o for o in self.outcomes})
@@ -148,11 +183,25 @@ class FleetResult:
         """The chosen model of every fitted record, by record name."""
         return {o.record: o.model for o in self.outcomes if o.ok}
 
-    def summary(self):
+    def summary(self) -> list[dict[str, Any]]:
+        """One plain dict per record (:meth:`RecordOutcome.summary`), in order.
+
+        Returns
+        -------
+        list of dict
+            The rows of the fleet's summary.
+
+        Examples
+        --------
+        >>> FleetResult((RecordOutcome("a.csv", "failed"),)).summary()[0]["status"]
+        'failed'
+        """
         return [o.summary() for o in self.outcomes]
 
 
-def fit_many(records, client=None, *, progress=None, **options):
+def fit_many(records: Any, client: Any = None, *,
+             progress: "Callable[[RecordOutcome], object] | None" = None,
+             **options: Any) -> "FleetResult":
     """Fit every record of a fleet, each exactly as :func:`pihyst.fit` would alone.
 
     Parameters

@@ -3,9 +3,15 @@
 import csv
 import io
 import json
+import os
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 from pihyst._atomic import write_atomically
 from pihyst.io._csv import write_sidecar
+
+if TYPE_CHECKING:
+    from pihyst.fleet._fit_many import FleetResult
 
 __all__ = ["SUMMARY_COLUMNS", "summary_csv", "summary_json"]
 
@@ -23,9 +29,37 @@ def _rows(result, model_files):
                "model_file": model_files.get(o.record), "warnings": row["warnings"]}
 
 
-def summary_json(result, path, *, model_files=None, **extra):
+def summary_json(result: "FleetResult", path: "str | os.PathLike[str]", *,
+                 model_files: Mapping[str, str] | None = None, **extra: Any) -> None:
     """Write the fleet's summary as JSON: ``extra`` keys, the counts, then one object per
-    record (the CSV's columns and the warnings)."""
+    record (the CSV's columns and the warnings).
+
+    Parameters
+    ----------
+    result : FleetResult
+        What :func:`pihyst.fit_many` returned.
+    path : str or os.PathLike
+        The file to write (it appears only once complete).
+    model_files : dict, optional
+        Record name -> the model file written for it.
+    **extra
+        Keys written first (e.g. the command and its options).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from pihyst.fleet import FleetResult, RecordOutcome
+    >>> result = FleetResult((RecordOutcome("a.csv", "failed", error="unreadable"),))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> summary_json(result, folder / "summary.json", command="fit-many")
+    >>> import json; json.loads((folder / "summary.json").read_text())["failed"]
+    1
+    """
     rows = list(_rows(result, model_files or {}))
     data = {**extra, "records": len(rows), "fitted": len(result.fitted),
             "failed": len(result.failed), "scheduler": result.scheduler,
@@ -33,10 +67,39 @@ def summary_json(result, path, *, model_files=None, **extra):
     write_atomically(path, json.dumps(data, indent=2) + "\n")
 
 
-def summary_csv(result, path, *, model_files=None, comments=()):
+def summary_csv(result: "FleetResult", path: "str | os.PathLike[str]", *,
+                model_files: Mapping[str, str] | None = None,
+                comments: Sequence[str] = ()) -> None:
     """Write the fleet's summary as plain CSV (:data:`SUMMARY_COLUMNS`; ``comments`` in
     its sidecar ``PATH.json``); numbers with 17 significant digits, empty fields where a
-    value does not apply."""
+    value does not apply.
+
+    Parameters
+    ----------
+    result : FleetResult
+        What :func:`pihyst.fit_many` returned.
+    path : str or os.PathLike
+        The file to write (it appears only once complete).
+    model_files : dict, optional
+        Record name -> the model file written for it.
+    comments : sequence of str
+        Lines for the sidecar's comments.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from pihyst.fleet import FleetResult, RecordOutcome
+    >>> result = FleetResult((RecordOutcome("a.csv", "failed", error="unreadable"),))
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> summary_csv(result, folder / "summary.csv")
+    >>> (folder / "summary.csv").read_text().splitlines()[1]
+    'a.csv,failed,unreadable,,,,0,'
+    """
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(SUMMARY_COLUMNS)

@@ -12,12 +12,19 @@ voltages and displacements then equal those of separate compensators to rounding
 1e-13 of the range) instead of bit for bit, the flags are the same, and the limits hold
 exactly as before."""
 
+from collections.abc import Iterable, Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse._compensator import Compensator
+from pihyst.model import PIModel
 from pihyst.model._bank import refuse_delayed
+
+#: one value for every channel, or one per channel (None entries: the default)
+PerChannel = float | Sequence[float | None] | None
 
 
 def _per_channel(value, n, name):
@@ -45,6 +52,15 @@ class CompensatorBank:
         at 1000 channels of K = 16, equal to the exact compensator to rounding rather
         than bit for bit.
 
+    Raises
+    ------
+    InvalidArgumentError
+        If a model is delayed or an argument does not have one value per channel.
+    InvalidModelError
+        If a model cannot be inverted (a negative weight).
+
+    Notes
+    -----
     ``channels`` holds the N :class:`Compensator` objects; the bank steps their states,
     so ``channels[i].voltage`` and ``.state`` are current when read through
     ``bank.channels`` (a fast bank writes its state back to them when they are read).
@@ -70,8 +86,11 @@ class CompensatorBank:
     True
     """
 
-    def __init__(self, models, *, u_min=None, u_max=None, slew_rate=None,
-                 initial_voltage=None, initial_state=None, fast=False, sample_period=None):
+    def __init__(self, models: Iterable[PIModel], *, u_min: PerChannel = None,
+                 u_max: PerChannel = None, slew_rate: PerChannel = None,
+                 initial_voltage: PerChannel = None,
+                 initial_state: Sequence[ArrayLike | None] | None = None,
+                 fast: bool = False, sample_period: float | None = None) -> None:
         models = tuple(models)
         refuse_delayed(models)
         n = len(models)
@@ -128,16 +147,47 @@ class CompensatorBank:
         """Flags of the last tick per channel (0: desired value reached)."""
         return np.array([c.last_flags for c in self.channels], dtype=np.uint8)
 
-    def reset(self):
-        """Every channel back to its initial state and voltage."""
+    def reset(self) -> None:
+        """Every channel back to its initial state and voltage.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> bank = CompensatorBank([pihyst.ClassicalPI([0], [2.0])])
+        >>> _ = bank.step([4.0]); bank.reset(); bank.voltages.tolist()
+        [0.0]
+        """
         for c in self._channels:
             c.reset()
-        if self.fast:
+        if isinstance(self._array, _core.CompensatorSoA):
             self._array.reload()
         self._stale = False
 
-    def step(self, y_desired):
-        """One tick: the N voltages for N desired displacements (any values)."""
+    def step(self, y_desired: ArrayLike) -> NDArray[np.float64]:
+        """One tick: the N voltages for N desired displacements (any values).
+
+        Parameters
+        ----------
+        y_desired : array_like
+            One desired displacement per channel (µm), shape (N,).
+
+        Returns
+        -------
+        numpy.ndarray
+            The N voltages; :attr:`last_flags` says which were not reached.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` does not have N values.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> bank = CompensatorBank([pihyst.ClassicalPI([0], [2.0])] * 2)
+        >>> bank.step([2.0, 4.0]).tolist()
+        [1.0, 2.0]
+        """
         y_desired = np.ascontiguousarray(y_desired, dtype=np.float64)
         if y_desired.shape != (len(self),):
             raise InvalidArgumentError(f"y_desired must have {len(self)} values, got shape "
@@ -146,9 +196,33 @@ class CompensatorBank:
         self._stale = self.fast
         return self._u.copy()
 
-    def run(self, y_desired):
-        """T ticks: y_desired has shape (T, N). Returns (voltage, displacement, flags),
-        each (T, N)."""
+    def run(self, y_desired: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                NDArray[np.uint8]]:
+        """T ticks, row t of ``y_desired`` one tick.
+
+        Parameters
+        ----------
+        y_desired : array_like
+            Desired displacements (µm), shape (T, N).
+
+        Returns
+        -------
+        voltage, displacement, flags : numpy.ndarray
+            Each of shape (T, N).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` does not have shape (T, N).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> bank = CompensatorBank([pihyst.ClassicalPI([0], [2.0])])
+        >>> u, y, flags = bank.run([[2.0], [400.0]])
+        >>> u.tolist(), flags.tolist()
+        ([[1.0], [150.0]], [[0], [2]])
+        """
         y_desired = np.ascontiguousarray(y_desired, dtype=np.float64)
         if y_desired.ndim != 2 or y_desired.shape[1] != len(self):
             raise InvalidArgumentError(f"y_desired must have shape (T, {len(self)}), got "

@@ -34,6 +34,7 @@ lags by the H reached (csrc/pihyst_bw_creep.c; the twin: pihyst.model._creep's
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pihyst import _boucwen_core
 from pihyst.exceptions import InvalidArgumentError
@@ -43,6 +44,7 @@ from pihyst.inverse._compensator import (
     FLAG_SATURATED_LOW,
     FLAG_SLEW,
     OTHER_COMPENSATORS,
+    CompensationResult,
     _desired,
     _number,
     run_result,
@@ -83,8 +85,12 @@ class BoucWenCompensatorTwin:
     FLAG_NAN = FLAG_NAN
     FLAG_SLEW = FLAG_SLEW
 
-    def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None, creep_state=None, sample_period=None):
+    def __init__(self, model: BoucWenModel, *, u_min: float | None = None,
+                 u_max: float | None = None, slew_rate: float | None = None,
+                 initial_voltage: float | None = None,
+                 initial_state: tuple[float, float] | None = None,
+                 creep_state: ArrayLike | None = None,
+                 sample_period: float | None = None) -> None:
         if not isinstance(model, BoucWenModel):
             raise InvalidArgumentError(f"model must be a BoucWenModel, not {type(model).__name__}")
         if not model.is_monotone:
@@ -190,9 +196,33 @@ class BoucWenCompensatorTwin:
         except ValueError as err:
             raise InvalidArgumentError(str(err)) from None
 
-    def reset(self, state=None, voltage=None, creep_state=None):
+    def reset(self, state: tuple[float, float] | None = None, voltage: float | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Back to the initial state and voltage, or to ``state`` = (u, z) and ``voltage``
-        (with creep: the lags to ``creep_state``, default settled at the output)."""
+        (with creep: the lags to ``creep_state``, default settled at the output).
+
+        Parameters
+        ----------
+        state : (float, float), optional
+            The state (u, z) to go to (default: the initial state).
+        voltage : float, optional
+            A voltage to apply to it, within the limits.
+        creep_state : array_like, optional
+            With creep: the lag states.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If the voltage is outside the limits.
+
+        Examples
+        --------
+        >>> from pihyst.model import BoucWenModel
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> comp = BoucWenCompensatorTwin(m)
+        >>> _ = comp.step(5.0); comp.reset(); comp.voltage
+        0.0
+        """
         if state is None and voltage is None and creep_state is None:
             creep_state = self._start_creep
         self._reset_hysteresis(state, voltage)
@@ -219,9 +249,30 @@ class BoucWenCompensatorTwin:
         z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
         return m.output(u, z), z
 
-    def step(self, y_desired, dt=None):
-        """The voltage for one desired output (applied to the state). With creep, ``dt``
-        is the time since the previous sample (default ``model.creep.dt``)."""
+    def step(self, y_desired: float, dt: float | None = None) -> float:
+        """The voltage for one desired output (applied to the state).
+
+        Parameters
+        ----------
+        y_desired : float
+            The desired output (µm; any value: out of reach saturates, NaN holds).
+        dt : float, optional
+            With creep: the time (s) since the previous sample (default
+            ``model.creep.dt``).
+
+        Returns
+        -------
+        float
+            The voltage, within the limits and the slew limit.
+
+        Examples
+        --------
+        >>> from pihyst.model import BoucWenModel
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> u = BoucWenCompensator(m).step(5.0)
+        >>> round(u, 6)
+        18.667945
+        """
         yd = float(y_desired)
         creep = self.model.creep
         if creep is None:
@@ -315,10 +366,35 @@ class BoucWenCompensatorTwin:
                 dx = 0.5 * abs(b - a)
         return b, z_b, 0
 
-    def run(self, y_desired, t=None, t_previous=None):
-        """Compensate a block of desired outputs, continuing from the current state; with
-        creep, ``t`` and ``t_previous`` as for :meth:`pihyst.Compensator.run` (without
-        creep they are ignored). Returns a :class:`pihyst.inverse.CompensationResult`."""
+    def run(self, y_desired: ArrayLike, t: ArrayLike | None = None,
+            t_previous: float | None = None) -> CompensationResult:
+        """Compensate a block of desired outputs, continuing from the current state.
+
+        Parameters
+        ----------
+        y_desired : array_like
+            Desired outputs (µm), one per sample (any values).
+        t, t_previous : array_like, float, optional
+            With creep: as for :meth:`pihyst.Compensator.run` (ignored without).
+
+        Returns
+        -------
+        pihyst.inverse.CompensationResult
+            Voltages, outputs, flags, and the states before and after.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` is not a vector of numbers.
+
+        Examples
+        --------
+        >>> from pihyst.model import BoucWenModel
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> r = BoucWenCompensatorTwin(m).run([5.0, 100.0])
+        >>> r.flags.tolist()
+        [0, 2]
+        """
         yd = _desired(y_desired)
         initial_state, initial_voltage = self.state, self.voltage
         initial_creep = self.creep_state
@@ -349,6 +425,33 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
     """Streaming exact inverse of a :class:`pihyst.model.BoucWenModel`, with voltage
     limits and a slew limit; the same interface as :class:`pihyst.Compensator`. Runs in
     the C core; :class:`BoucWenCompensatorTwin` is the same algorithm in Python.
+
+    Parameters
+    ----------
+    model : BoucWenModel
+        A monotone Bouc-Wen model (``model.is_monotone``).
+    u_min, u_max : float, optional
+        Voltage limits, inside the model's input range (default: that range).
+    slew_rate : float, optional
+        Largest voltage change, V/s (default none), a step of ``slew_rate *
+        sample_period`` per sample.
+    initial_voltage : float, optional
+        The voltage before the first sample (default 0 V within the limits; with
+        ``initial_state`` given, that state's u within the limits).
+    initial_state : (float, float), optional
+        The state (u, z) before the first sample (default: the model's own).
+    creep_state : array_like, optional
+        For a model with creep: the lag states before the first sample.
+    sample_period : float, optional
+        Seconds per sample, for the slew limit (default: the model's sample period or
+        its creep's dt; an error when a slew limit has none).
+
+    Raises
+    ------
+    InvalidModelError
+        If the model is not monotone.
+    InvalidArgumentError
+        If the model is not a Bouc-Wen model, or a limit is not valid.
 
     Examples
     --------
@@ -405,9 +508,30 @@ class BoucWenCompensator(BoucWenCompensatorTwin):
         if voltage is not None:
             self._core.reset(start, voltage)
 
-    def step(self, y_desired, dt=None):
-        """The voltage for one desired output (applied to the state). With creep, ``dt``
-        is the time since the previous sample (default ``model.creep.dt``)."""
+    def step(self, y_desired: float, dt: float | None = None) -> float:
+        """The voltage for one desired output (applied to the state).
+
+        Parameters
+        ----------
+        y_desired : float
+            The desired output (µm; any value: out of reach saturates, NaN holds).
+        dt : float, optional
+            With creep: the time (s) since the previous sample (default
+            ``model.creep.dt``).
+
+        Returns
+        -------
+        float
+            The voltage, within the limits and the slew limit.
+
+        Examples
+        --------
+        >>> from pihyst.model import BoucWenModel
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> u = BoucWenCompensator(m).step(5.0)
+        >>> round(u, 6)
+        18.667945
+        """
         yd = float(y_desired)
         if self.model.creep is None:
             return self._core.step(yd)

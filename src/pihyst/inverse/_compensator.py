@@ -31,8 +31,10 @@ streaming :class:`Compensator` takes, at each tick, the target d samples ahead.
 """
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pihyst import _core
 from pihyst._arguments import real_array
@@ -46,7 +48,7 @@ __all__ = ["CompensationResult", "Compensator", "PreviewRun", "compensate", "FLA
 
 #: Compensators of the models that are not PI models (family -> class), registered by
 #: their modules (inverse/_boucwen.py); compensate() dispatches to them
-OTHER_COMPENSATORS = {}
+OTHER_COMPENSATORS: dict[str | None, Any] = {}
 
 #: Per-sample flag bits of :attr:`CompensationResult.flags` (0: desired value reached).
 #: Out of reach means beyond what the model gives at the voltage limit, whatever the slew
@@ -62,7 +64,7 @@ FLAG_SLEW = _core.FLAG_SLEW                      # slew limit reached before the
 class CompensationResult:
     """Result of :func:`compensate` and :meth:`Compensator.run`.
 
-    Attributes
+    Parameters
     ----------
     desired : ndarray
         The desired displacements, as given.
@@ -88,6 +90,15 @@ class CompensationResult:
         The slew limit, V/s.
     max_step : float or None
         The slew limit as the largest voltage step per sample, V.
+    initial_creep_state, final_creep_state : ndarray or None
+        With creep: the lag states before the first and after the last sample.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> r = pihyst.compensate(pihyst.ClassicalPI([0], [1.0]), [1.0, 200.0])
+    >>> r.voltage.tolist(), r.saturated_high.tolist(), r.final_voltage
+    ([1.0, 150.0], [False, True], 150.0)
     """
 
     desired: np.ndarray
@@ -104,10 +115,10 @@ class CompensationResult:
     final_state: np.ndarray
     final_voltage: float
     limits: tuple
-    slew_rate: float = None
-    max_step: float = None
-    initial_creep_state: np.ndarray = None
-    final_creep_state: np.ndarray = None
+    slew_rate: float | None = None
+    max_step: float | None = None
+    initial_creep_state: np.ndarray | None = None
+    final_creep_state: np.ndarray | None = None
 
     @property
     def n_saturated(self):
@@ -159,6 +170,15 @@ class Compensator:
         For a model with creep: the lag states before the first sample (default:
         settled at the model's output at the initial voltage).
 
+    Raises
+    ------
+    InvalidModelError
+        If a weight is negative (the model is not monotone, so not invertible).
+    InvalidArgumentError
+        If the model is not a PI model, or a limit or the initial voltage is not valid.
+
+    Notes
+    -----
     A model with a delay of d samples (:attr:`delay`) makes the voltage of tick k act
     at tick k + d: ``step`` and ``run`` take the target d samples ahead (y_d[k + d] at
     tick k; :func:`compensate` shifts a whole trajectory so), and their displacement is
@@ -182,8 +202,11 @@ class Compensator:
     FLAG_NAN = FLAG_NAN
     FLAG_SLEW = FLAG_SLEW
 
-    def __init__(self, model, *, u_min=None, u_max=None, slew_rate=None, initial_voltage=None,
-                 initial_state=None, creep_state=None, sample_period=None):
+    def __init__(self, model: PIModel, *, u_min: float | None = None,
+                 u_max: float | None = None, slew_rate: float | None = None,
+                 initial_voltage: float | None = None, initial_state: ArrayLike | None = None,
+                 creep_state: ArrayLike | None = None,
+                 sample_period: float | None = None) -> None:
         if not isinstance(model, PIModel):
             raise InvalidArgumentError(f"model must be a pihyst model (ClassicalPI, MultislopePI, "
                             f"PiecewiseLinearPI), not {type(model).__name__}")
@@ -266,7 +289,8 @@ class Compensator:
         """Flags of the last :meth:`step` (0: desired value reached)."""
         return self._core.last_flags
 
-    def reset(self, state=None, voltage=None, creep_state=None):
+    def reset(self, state: ArrayLike | None = None, voltage: float | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Go back to the initial state and voltage, or to ``state`` and ``voltage``
         (with creep: the lags to ``creep_state``, default settled at the output).
 
@@ -277,7 +301,30 @@ class Compensator:
         inside the play of every operator, or a model without a zero threshold) it does
         not say which voltage was last, and the slew limit and a NaN target depend on
         it: an :class:`InvalidArgumentError` asks for ``voltage``, as it does for a state
-        at rest nowhere within the limits (no run within them reaches it)."""
+        at rest nowhere within the limits (no run within them reaches it).
+
+        Parameters
+        ----------
+        state : array_like, optional
+            The operator state to go to (default: the initial state).
+        voltage : float, optional
+            The voltage to apply to it, within the limits (default: see above).
+        creep_state : array_like, optional
+            With creep: the lag states (default: settled at the output).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If the voltage is outside the limits, or is needed and not given.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> m = pihyst.MultislopePI([0, 20, 30, 40], [0.196, 0.026, 0.046, 0.028])
+        >>> comp = pihyst.Compensator(m)
+        >>> _ = comp.step(10.0); comp.reset(); comp.voltage
+        0.0
+        """
         start_state, start_voltage, start_creep = self._start
         if state is None and voltage is None and creep_state is None:
             creep_state = start_creep
@@ -313,10 +360,35 @@ class Compensator:
         return a
 
     # ---------------------------------------------------------------- compensation
-    def step(self, y_desired, dt=None):
-        """The voltage for one desired displacement (applied to the state). With creep,
-        ``dt`` is the time since the previous sample (default ``model.creep.dt``). With a
-        delay of d samples, ``y_desired`` is the target d samples ahead."""
+    def step(self, y_desired: float, dt: float | None = None) -> float:
+        """The voltage for one desired displacement (applied to the state).
+
+        Parameters
+        ----------
+        y_desired : float
+            The desired displacement (µm; any value: out of reach saturates, NaN holds
+            the last voltage; :attr:`last_flags` says which). With a delay of d samples,
+            the target d samples ahead.
+        dt : float, optional
+            With creep: the time (s) since the previous sample (default
+            ``model.creep.dt``).
+
+        Returns
+        -------
+        float
+            The voltage, within the limits and the slew limit.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` or ``dt`` is not a number (``dt`` >= 0).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> pihyst.Compensator(pihyst.ClassicalPI([0], [2.0])).step(10.0)
+        5.0
+        """
         y_desired = _number(y_desired, "y_desired", allow_inf=True, allow_nan=True)
         if self._lags is None:
             return self._core.step(y_desired)
@@ -329,13 +401,39 @@ class Compensator:
         self._output = float(y[0])
         return float(u[0])
 
-    def run(self, y_desired, t=None, t_previous=None):
+    def run(self, y_desired: ArrayLike, t: ArrayLike | None = None,
+            t_previous: float | None = None) -> CompensationResult:
         """Compensate a block of desired displacements, continuing from the current state.
         With creep, ``t`` are the sample times (s; default: every ``model.creep.dt``,
         the first one ``creep.dt`` after the previous sample, or at ``t[0] - t_previous``
         when the previous sample's time is given).
 
-        Returns a :class:`CompensationResult`."""
+        Parameters
+        ----------
+        y_desired : array_like
+            Desired displacements (µm), one per sample (any values, as for :meth:`step`).
+        t : array_like, optional
+            With creep: the sample times (s).
+        t_previous : float, optional
+            With creep: the time (s) of the sample before the block.
+
+        Returns
+        -------
+        CompensationResult
+            Voltages, displacements, flags, and the states before and after.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` is not a vector of numbers (or ``t`` does not fit it).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> comp = pihyst.Compensator(pihyst.ClassicalPI([0], [2.0]))
+        >>> comp.run([10.0, 20.0]).voltage.tolist()
+        [5.0, 10.0]
+        """
         y_desired = _desired(y_desired)
         initial_state, initial_voltage = self.state, self.voltage
         initial_creep = self.creep_state
@@ -398,9 +496,11 @@ def rest_interval(model, state, lo, hi):
     return a, rest_voltage(model, state, hi, lo, hi)
 
 
-def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
-               initial_voltage=None, initial_state=None, t=None, creep_state=None,
-               sample_period=None):
+def compensate(model: Any, y_desired: ArrayLike, *, u_min: float | None = None,
+               u_max: float | None = None, slew_rate: float | None = None,
+               initial_voltage: float | None = None, initial_state: ArrayLike | None = None,
+               t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+               sample_period: float | None = None) -> CompensationResult:
     """Voltages that make ``model`` follow the desired displacements ``y_desired``.
 
     Exact inverse sample by sample (see the module notes), within the voltage limits
@@ -439,6 +539,14 @@ def compensate(model, y_desired, *, u_min=None, u_max=None, slew_rate=None,
         ``voltage``, ``displacement`` (the model's prediction for those voltages),
         ``saturated`` per sample, the other flags and counts, and the final state.
 
+    Raises
+    ------
+    InvalidModelError
+        If the model cannot be inverted (a negative weight, a Bouc-Wen model that is
+        not monotone).
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+
     Examples
     --------
     >>> import numpy as np, pihyst
@@ -476,26 +584,73 @@ class PreviewRun:
     the last d, whose voltage holds. Sample k gets ``voltage[k]`` aiming at
     ``desired[k + d]``, the displacement the model has at k (the compensator's at
     ``desired[k]``; before sample d the one at the initial voltage, which the actuator
-    held before the run) and the flags of ``desired[k]`` (none before sample d)."""
+    held before the run) and the flags of ``desired[k]`` (none before sample d).
 
-    def __init__(self, compensator, delay):
+    Parameters
+    ----------
+    compensator : Compensator or BoucWenCompensator
+        The compensator of the delayed model, at the state the run starts from.
+    delay : int
+        The model's delay d in samples.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> from pihyst.inverse import PreviewRun
+    >>> m = pihyst.ClassicalPI([0], [2.0], delay=1)
+    >>> run = PreviewRun(pihyst.Compensator(m), m.delay)
+    >>> run.feed([2.0, 4.0]).voltage.tolist()      # sample 0 aims at desired[1]
+    [2.0]
+    >>> run.feed([6.0], last=True).voltage.tolist()
+    [3.0, 3.0]
+    """
+
+    def __init__(self, compensator: Any, delay: int) -> None:
         self.comp, self.d = compensator, int(delay)
         self._seen = 0                   # targets fed
         self._desired = np.empty(0)      # targets of the samples not yet returned
         self._voltage = np.empty(0)      # voltages of those samples, as far as known
         # the compensator's (displacement, flags) of desired[k - d], sample k on; None:
         # before sample d (the displacement at the initial voltage)
-        self._reached = [None] * self.d
-        self._start = None
+        self._reached: list[Any] = [None] * self.d
+        self._start: Any = None
         self._t_last = None
 
     def _run(self, y, t, t_previous):
         return self.comp.run(y, t=t, t_previous=t_previous)
 
-    def feed(self, y_desired, t=None, *, last=False):
-        """The samples completed by the targets ``y_desired`` (sample times ``t`` for
-        a model with creep), as a :class:`CompensationResult`; with ``last``, every
-        remaining sample."""
+    def feed(self, y_desired: ArrayLike, t: ArrayLike | None = None, *,
+             last: bool = False) -> CompensationResult:
+        """The samples completed by the targets ``y_desired``.
+
+        Parameters
+        ----------
+        y_desired : array_like
+            The next desired displacements (µm).
+        t : array_like, optional
+            Their sample times (s), for a model with creep.
+        last : bool, default False
+            The trajectory ends here: return every remaining sample (the last d hold
+            the last voltage).
+
+        Returns
+        -------
+        CompensationResult
+            The samples whose voltage is now known, in order, continuing the previous
+            results.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``y_desired`` is not a vector of numbers.
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> m = pihyst.ClassicalPI([0], [2.0], delay=1)
+        >>> PreviewRun(pihyst.Compensator(m), 1).feed([2.0, 4.0], last=True).voltage.tolist()
+        [2.0, 2.0]
+        """
         y = _desired(y_desired)
         if self._start is None:
             self._start = (self.comp.state, self.comp.voltage, self.comp.displacement,

@@ -5,7 +5,10 @@ outputs of the channels' own steppers. With ``fast=True`` it steps them from a
 structure-of-arrays copy of their states (pihyst_modelbank, docs/c-core.md): classical
 channels of up to 16 operators several at a time, with the same bits."""
 
+from collections.abc import Iterable, Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core
 from pihyst.exceptions import InputRangeError, InvalidArgumentError, InvalidModelError
@@ -42,7 +45,9 @@ class ModelBank:
     True
     """
 
-    def __init__(self, models, initial_states=None, *, fast=False):
+    def __init__(self, models: Iterable[PIModel],
+                 initial_states: Sequence[ArrayLike | None] | None = None, *,
+                 fast: bool = False) -> None:
         models = tuple(models)
         for i, m in enumerate(models):
             if not isinstance(m, PIModel):
@@ -84,15 +89,32 @@ class ModelBank:
         """The running operator state of every channel (a list of copies)."""
         return [s.state for s in self.channels]
 
-    def reset(self, states=None):
-        """Every channel back to its initial state, or to ``states`` (one per channel,
-        None entries: the channel's initial state)."""
+    def reset(self, states: Sequence[ArrayLike | None] | None = None) -> None:
+        """Every channel back to its initial state, or to ``states``.
+
+        Parameters
+        ----------
+        states : sequence, optional
+            One operator state per channel (None entries: the channel's initial state).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``states`` does not have one entry per channel.
+
+        Examples
+        --------
+        >>> from pihyst.model import ClassicalPI
+        >>> bank = ModelBank([ClassicalPI([0], [1.0])])
+        >>> _ = bank.step([5.0]); bank.reset(); bank.states[0].tolist()
+        [0.0]
+        """
         states = [None] * len(self) if states is None else list(states)
         if len(states) != len(self):
             raise InvalidArgumentError(f"states must have {len(self)} entries, got {len(states)}")
         for s, state in zip(self._channels, states, strict=True):
             s.reset(state)
-        if self.fast:
+        if isinstance(self._array, _core.BankSoA):
             self._array.reload()
         self._stale = False
 
@@ -107,8 +129,32 @@ class ModelBank:
                                   (float(self._lo[i]), float(self._hi[i])))
         return u
 
-    def step(self, u):
-        """One tick: advance channel i by the input u[i]; returns the N outputs."""
+    def step(self, u: ArrayLike) -> NDArray[np.float64]:
+        """One tick: advance channel i by the input u[i].
+
+        Parameters
+        ----------
+        u : array_like
+            One input per channel (V), shape (N,).
+
+        Returns
+        -------
+        numpy.ndarray
+            The N outputs.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` does not have N values.
+        InputRangeError
+            If an input is outside its channel's input range.
+
+        Examples
+        --------
+        >>> from pihyst.model import ClassicalPI
+        >>> ModelBank([ClassicalPI([0], [1.0]), ClassicalPI([0], [2.0])]).step([1, 1]).tolist()
+        [1.0, 2.0]
+        """
         u = np.asarray(u, dtype=np.float64)
         if u.shape != (len(self),):
             raise InvalidArgumentError(f"input must have {len(self)} values, got shape {u.shape}")
@@ -116,8 +162,32 @@ class ModelBank:
         self._stale = self.fast
         return y
 
-    def run(self, u):
-        """T ticks: u has shape (T, N), row t one tick; returns the outputs (T, N)."""
+    def run(self, u: ArrayLike) -> NDArray[np.float64]:
+        """T ticks, row t of ``u`` one tick.
+
+        Parameters
+        ----------
+        u : array_like
+            Inputs of shape (T, N) (V).
+
+        Returns
+        -------
+        numpy.ndarray
+            The outputs, shape (T, N).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` does not have shape (T, N).
+        InputRangeError
+            If an input is outside its channel's input range.
+
+        Examples
+        --------
+        >>> from pihyst.model import ClassicalPI
+        >>> ModelBank([ClassicalPI([0], [1.0])]).run([[1.0], [3.0]]).tolist()
+        [[1.0], [3.0]]
+        """
         y = self._array.run(self._checked(u))
         self._stale = self.fast
         return y

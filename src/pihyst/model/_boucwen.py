@@ -37,9 +37,13 @@ module are its Python twin, which the tests compare it against (:func:`twin_simu
 
 import json
 import math
+import os
+from collections.abc import Mapping
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _boucwen_core
 from pihyst._atomic import write_atomically
@@ -207,8 +211,13 @@ class BoucWenModel(Immutable):
         Output at u_lo with z = 0.
     input_range : (float, float)
         (u_lo, u_hi), default (0, 150).
-    initial_state : (u, z), optional
-        Default: at rest at u_lo after a full u_lo -> u_hi -> u_lo cycle.
+    initial_state : (float, float), optional
+        The state (u, z); default: at rest at u_lo after a full u_lo -> u_hi -> u_lo
+        cycle.
+    units : dict, optional
+        Names of the units (default: {"input": "V", "output": "um"}).
+    metadata : dict, optional
+        Free-form notes carried with the model and its file (JSON types).
     delay : int
         Input dead time in samples (as for the PI models: y[k] = P[u](k - d)).
     sample_period : float, optional
@@ -216,6 +225,11 @@ class BoucWenModel(Immutable):
     creep : Creep or dict, optional
         Creep lags driven by the Bouc-Wen output, which is then the settled
         displacement (module notes, docs/theory/creep.md); None: rate-independent.
+
+    Raises
+    ------
+    InvalidModelError
+        If a parameter is not valid (the message names it).
 
     Examples
     --------
@@ -227,12 +241,32 @@ class BoucWenModel(Immutable):
     """
 
     family = FAMILY
+    # set once, in __init__
+    beta: float
+    gamma: float
+    n: float
+    hysteretic: float
+    linear: float
+    quadratic: float
+    offset: float
+    input_range: tuple[float, float]
+    initial_state: tuple[float, float]
+    units: Mapping[str, str]
+    metadata: Mapping[str, Any]
+    delay: int
+    sample_period: float | None
+    creep: Creep | None
     _KEYS = ("beta", "gamma", "n", "hysteretic", "linear", "quadratic", "offset",
              "input_range", "initial_state", "units", "metadata", "creep")
 
-    def __init__(self, *, beta, gamma, hysteretic, linear, n=1.0, quadratic=0.0, offset=0.0,
-                 input_range=None, initial_state=None, units=None, metadata=None, delay=0,
-                 sample_period=None, creep=None):
+    def __init__(self, *, beta: float, gamma: float, hysteretic: float, linear: float,
+                 n: float = 1.0, quadratic: float = 0.0, offset: float = 0.0,
+                 input_range: tuple[float, float] | None = None,
+                 initial_state: tuple[float, float] | None = None,
+                 units: Mapping[str, str] | None = None,
+                 metadata: Mapping[str, Any] | None = None, delay: int = 0,
+                 sample_period: float | None = None,
+                 creep: "Creep | Mapping[str, Any] | None" = None) -> None:
         set_ = object.__setattr__
         for name, value in (("beta", beta), ("gamma", gamma), ("n", n),
                             ("hysteretic", hysteretic), ("linear", linear),
@@ -309,13 +343,49 @@ class BoucWenModel(Immutable):
         lo, hi = self.input_range
         return (u - lo) / (hi - lo)
 
-    def output(self, u, z):
-        """y = offset + c_1 x + c_2 x^2 + a z at input u (floats or arrays)."""
+    def output(self, u: Any, z: Any) -> Any:
+        """y = offset + c_1 x + c_2 x^2 + a z at input u (floats or arrays).
+
+        Parameters
+        ----------
+        u : float or numpy.ndarray
+            Input (V).
+        z : float or numpy.ndarray
+            The Bouc-Wen variable.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            The output y (µm), before creep.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> float(m.output(150.0, 0.0))
+        40.0
+        """
         x = self._x(u)
         return self.offset + self.linear * x + self.quadratic * x * x + self.hysteretic * z
 
-    def hysteresis_output(self, state):
-        """The output at the state (u, z) without creep: the settled displacement H."""
+    def hysteresis_output(self, state: tuple[float, float]) -> float:
+        """The output at the state (u, z) without creep: the settled displacement H.
+
+        Parameters
+        ----------
+        state : (float, float)
+            The state (u, z).
+
+        Returns
+        -------
+        float
+            The output (µm) at that state, before creep.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> m.hysteresis_output((75.0, 0.0))
+        20.0
+        """
         u, z = state
         return self.output(float(u), float(z))
 
@@ -334,8 +404,10 @@ class BoucWenModel(Immutable):
             return self.initial_state
         return self.replace(initial_state=state).initial_state
 
-    def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
-                 pending_input=None, t_previous=None):
+    def simulate(self, u: ArrayLike, *, initial_state: tuple[float, float] | None = None,
+                 t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                 pending_input: ArrayLike | None = None,
+                 t_previous: float | None = None) -> Response:
         """Run over the input ``u`` from ``initial_state`` (default: the model's own);
         returns a :class:`pihyst.model.Response` whose ``final_state`` is (u, z). With a
         :attr:`delay` the input is delayed as for the PI models
@@ -343,7 +415,42 @@ class BoucWenModel(Immutable):
         times (s; default every ``creep.dt``; ``t_previous``: the time of the sample
         before, for a following chunk), ``creep_state`` the lag state (default:
         settled at the initial output) and the response carries ``final_creep_state``, as
-        for the PI models; without creep ``t`` only checks the sample period."""
+        for the PI models; without creep ``t`` only checks the sample period.
+
+        Parameters
+        ----------
+        u : array_like
+            Input samples (V), each inside :attr:`input_range`.
+        initial_state : (float, float), optional
+            The state (u, z) before ``u`` (default: the model's own).
+        t : array_like, optional
+            Sample times (s), for creep and to check the period of a delayed model.
+        creep_state : array_like, optional
+            Creep lag states before ``u`` (default: settled at the initial output).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before ``u`` (default: u[0] held).
+        t_previous : float, optional
+            Time (s) of the sample before ``u``, for the first creep interval.
+
+        Returns
+        -------
+        pihyst.model.Response
+            Input, output, final state (u, z), and final creep state, pending input.
+
+        Raises
+        ------
+        InputRangeError
+            If an input sample is outside :attr:`input_range` (or not finite).
+        InvalidArgumentError
+            If an argument is malformed (not numbers, wrong length or period).
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> r = m.simulate([0.0, 150.0])
+        >>> float(r.final_state[0])
+        150.0
+        """
         def hysteresis(state, run):
             core = self._core(state)
             return core.run(run), np.array(core.state)
@@ -352,36 +459,105 @@ class BoucWenModel(Immutable):
                          creep_state=creep_state, pending_input=pending_input,
                          t_previous=t_previous)
 
-    def twin_simulation(self, u, *, initial_state=None, t=None, creep_state=None,
-                        pending_input=None):
+    def twin_simulation(self, u: ArrayLike, *, initial_state: tuple[float, float] | None = None,
+                        t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                        pending_input: ArrayLike | None = None) -> Response:
         """:meth:`simulate` by the Python twin of the C core (this module's functions and,
         with creep, :func:`creep_twin_run`): the reference the tests compare the C core
-        against; slow."""
-        u = self._checked_input(u)
+        against; slow.
+
+        Parameters
+        ----------
+        u : array_like
+            Input samples (V), each inside :attr:`input_range`.
+        initial_state : (float, float), optional
+            The state (u, z) before ``u`` (default: the model's own).
+        t : array_like, optional
+            Sample times (s), for creep and to check the period of a delayed model.
+        creep_state : array_like, optional
+            Creep lag states before ``u`` (default: settled at the initial output).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before ``u`` (default: u[0] held).
+
+        Returns
+        -------
+        pihyst.model.Response
+            As :meth:`simulate` returns it, to rounding.
+
+        Raises
+        ------
+        InputRangeError
+            If an input sample is outside :attr:`input_range` (or not finite).
+        InvalidArgumentError
+            If an argument is malformed (not numbers, wrong length or period).
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> u = [0.0, 75.0, 150.0, 75.0]
+        >>> bool(abs(m.twin_simulation(u).output - m.predict(u)).max() < 1e-9)
+        True
+        """
+        x = self._checked_input(u)
         d = self.delay_at(t=t)
         if d and pending_input is not None:
             pending_input = self._checked_input(pending_input)
-        run = delayed_input(u, d, pending_input)
+        run = delayed_input(x, d, pending_input)
         u0, z0 = self._state(initial_state)
         # the substep given explicitly: trajectory() would hand one shape to the C core
         z = trajectory(self._x(run), self._x(u0), z0, self.beta, self.gamma, self.n,
                        h=substep(self.beta, self.gamma))
-        final = (float(run[-1]), float(z[-1])) if u.size else (u0, z0)
+        final = (float(run[-1]), float(z[-1])) if x.size else (u0, z0)
         h = self.output(run, z)
-        pending = pending_after(u, d, pending_input) if d else None
+        pending = pending_after(x, d, pending_input) if d else None
         if self.creep is None:
-            return Response(input=u, output=h, final_state=np.array(final),
+            return Response(input=x, output=h, final_state=np.array(final),
                             pending_input=pending)
         lags = self._lag_state((u0, z0), creep_state)
-        dt = None if t is None else sample_intervals(t, u.size, self.creep.dt)
+        dt = None if t is None else sample_intervals(t, x.size, self.creep.dt)
         y = creep_twin_run(self.creep, lags, h, dt)
-        return Response(input=u, output=y, final_state=np.array(final),
+        return Response(input=x, output=y, final_state=np.array(final),
                         final_creep_state=lags, pending_input=pending)
 
-    def predict(self, u, *, initial_state=None, t=None, creep_state=None,
-                pending_input=None, t_previous=None):
-        """Displacements for the inputs ``u``; ``t``, ``creep_state``: see
-        :meth:`simulate`."""
+    def predict(self, u: ArrayLike, *, initial_state: tuple[float, float] | None = None,
+                t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                pending_input: ArrayLike | None = None,
+                t_previous: float | None = None) -> NDArray[np.float64]:
+        """Displacements for the inputs ``u``: the output of :meth:`simulate`.
+
+        Parameters
+        ----------
+        u : array_like
+            Input samples (V), each inside :attr:`input_range`.
+        initial_state : (float, float), optional
+            The state (u, z) before ``u`` (default: the model's own).
+        t : array_like, optional
+            Sample times (s), for creep and to check the period of a delayed model.
+        creep_state : array_like, optional
+            Creep lag states before ``u`` (default: settled at the initial output).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before ``u`` (default: u[0] held).
+        t_previous : float, optional
+            Time (s) of the sample before ``u``, for the first creep interval.
+
+        Returns
+        -------
+        numpy.ndarray
+            The displacement at each sample (µm), as long as ``u``.
+
+        Raises
+        ------
+        InputRangeError
+            If an input sample is outside :attr:`input_range` (or not finite).
+        InvalidArgumentError
+            If an argument is malformed (not numbers, wrong length or period).
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> m.predict([0.0, 150.0]).round(3).tolist()
+        [1.326, 38.674]
+        """
         return self.simulate(u, initial_state=initial_state, t=t, creep_state=creep_state,
                              pending_input=pending_input, t_previous=t_previous).output
 
@@ -397,15 +573,66 @@ class BoucWenModel(Immutable):
         (None: settled at the output of the state (u, z))."""
         return self.creep.lags(self._lag_state(state, creep_state))
 
-    def delay_at(self, sample_period=None, *, t=None):
+    def delay_at(self, sample_period: float | None = None, *,
+                 t: ArrayLike | None = None) -> int:
         """The delay in samples at another sample period (see
-        :meth:`pihyst.model.PIModel.delay_at`)."""
+        :meth:`pihyst.model.PIModel.delay_at`).
+
+        Parameters
+        ----------
+        sample_period : float, optional
+            The sample period (s) to convert the delay to.
+        t : array_like, optional
+            Uniform sample times (s), whose period is used instead.
+
+        Returns
+        -------
+        int
+            The delay in samples at that period.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If the delay is not a whole number of samples at that period.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0, delay=1,
+        ...                  sample_period=0.01)
+        >>> m.delay_at(0.005)
+        2
+        """
         return delay_at(self.delay, self.sample_period, sample_period, t)
 
-    def stepper(self, initial_state=None, *, creep_state=None, pending_input=None,
-                sample_period=None):
+    def stepper(self, initial_state: tuple[float, float] | None = None, *,
+                creep_state: ArrayLike | None = None, pending_input: ArrayLike | None = None,
+                sample_period: float | None = None) -> "BoucWenStepper":
         """A :class:`BoucWenStepper`: the model sample by sample (with a delay, through
-        a FIFO of d inputs; with creep, from the lag state ``creep_state``)."""
+        a FIFO of d inputs; with creep, from the lag state ``creep_state``).
+
+        Parameters
+        ----------
+        initial_state : (float, float), optional
+            The state (u, z) before the first step (default: the model's own).
+        creep_state : array_like, optional
+            Creep lag states before the first step (default: settled).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before the first step.
+        sample_period : float, optional
+            The period (s) the stepper is stepped at, to convert the delay.
+
+        Returns
+        -------
+        BoucWenStepper
+            A stepper owning its own running state.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> s = m.stepper()
+        >>> round(s.step(150.0), 3)
+        38.674
+        """
         return BoucWenStepper(self, initial_state, creep_state, pending_input=pending_input,
                               sample_period=sample_period)
 
@@ -419,8 +646,30 @@ class BoucWenModel(Immutable):
                 "delay": self.delay, "sample_period": self.sample_period,
                 "creep": self.creep}
 
-    def replace(self, **changes):
-        """A copy with some constructor arguments changed."""
+    def replace(self, **changes: Any) -> "BoucWenModel":
+        """A copy with some constructor arguments changed.
+
+        Parameters
+        ----------
+        **changes
+            Constructor arguments by name, and their new values.
+
+        Returns
+        -------
+        BoucWenModel
+            The changed copy (its rest state follows a changed shape).
+
+        Raises
+        ------
+        InvalidModelError
+            If a name is not a constructor argument or a value is not valid.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> m.replace(offset=1.0).offset
+        1.0
+        """
         params = self._params()
         unknown = sorted(set(changes) - set(params))
         if unknown:
@@ -460,8 +709,20 @@ class BoucWenModel(Immutable):
             parts.append(f"creep={self.creep!r}")
         return f"BoucWenModel({', '.join(parts)})"
 
-    def to_dict(self):
-        """The model as a JSON-ready dict (docs/interfaces.md, family "bouc-wen")."""
+    def to_dict(self) -> dict[str, Any]:
+        """The model as a JSON-ready dict (docs/interfaces.md, family "bouc-wen").
+
+        Returns
+        -------
+        dict
+            Plain JSON types only; :meth:`from_dict` reads it back.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> BoucWenModel.from_dict(m.to_dict()) == m
+        True
+        """
         d = {"schema_version": SCHEMA_VERSION, "family": FAMILY,
              **{k: getattr(self, k) for k in ("beta", "gamma", "n", "hysteretic", "linear",
                                                 "quadratic", "offset")},
@@ -475,8 +736,33 @@ class BoucWenModel(Immutable):
         return d
 
     @classmethod
-    def from_dict(cls, d, source="model"):
-        """A model from its JSON dict; errors name ``source`` and the key."""
+    def from_dict(cls, d: Mapping[str, Any], source: str = "model") -> "BoucWenModel":
+        """A model from its JSON dict; errors name ``source`` and the key.
+
+        Parameters
+        ----------
+        d : dict
+            The model in the JSON schema (docs/interfaces.md, family "bouc-wen").
+        source : str, default "model"
+            Where ``d`` comes from, for the error messages (e.g. a file name).
+
+        Returns
+        -------
+        BoucWenModel
+            The model ``d`` describes.
+
+        Raises
+        ------
+        InvalidModelError
+            If ``d`` does not describe a valid model (the message names the key).
+
+        Examples
+        --------
+        >>> d = {"family": "bouc-wen", "beta": 5, "gamma": 1, "hysteretic": -8,
+        ...      "linear": 40}
+        >>> BoucWenModel.from_dict(d).linear
+        40.0
+        """
         if not isinstance(d, dict):
             raise InvalidModelError(f"{source}: a model must be a JSON object")
         if d.get("family") != FAMILY:
@@ -501,8 +787,25 @@ class BoucWenModel(Immutable):
         except (TypeError, ValueError, OverflowError) as err:
             raise InvalidModelError(f"{source}: {err}") from None
 
-    def save(self, path):
-        """Write the model as JSON to ``path`` (the file appears only once complete)."""
+    def save(self, path: "str | os.PathLike[str]") -> None:
+        """Write the model as JSON to ``path`` (the file appears only once complete).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write.
+
+        Raises
+        ------
+        OSError
+            If the file cannot be written.
+
+        Examples
+        --------
+        >>> import pathlib, tempfile
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> m.save(pathlib.Path(tempfile.mkdtemp()) / "bw.json")
+        """
         write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
 
 
@@ -512,6 +815,19 @@ OTHER_FAMILIES[FAMILY] = BoucWenModel
 class BoucWenStepper:
     """A :class:`BoucWenModel` run sample by sample; owns the running state (u, z).
 
+    Parameters
+    ----------
+    model : BoucWenModel
+        The model to run.
+    initial_state : (float, float), optional
+        The state (u, z) before the first step (default: the model's own).
+    creep_state : array_like, optional
+        With creep: the lag states before the first step (default: settled).
+    pending_input : array_like, optional
+        With a delay of d samples: the d inputs before the first step.
+    sample_period : float, optional
+        The period (s) it is stepped at, to convert the model's delay.
+
     Examples
     --------
     >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
@@ -520,8 +836,9 @@ class BoucWenStepper:
     True
     """
 
-    def __init__(self, model, initial_state=None, creep_state=None, *, pending_input=None,
-                 sample_period=None):
+    def __init__(self, model: BoucWenModel, initial_state: tuple[float, float] | None = None,
+                 creep_state: ArrayLike | None = None, *, pending_input: ArrayLike | None = None,
+                 sample_period: float | None = None) -> None:
         self.model = model
         self._initial = model._state(initial_state)
         self._core = model._core(self._initial)
@@ -544,10 +861,31 @@ class BoucWenStepper:
         """The creep lag states z_i (a copy; None for a model without creep)."""
         return None if self._lags is None else self._lags.state
 
-    def reset(self, state=None, creep_state=None):
+    def reset(self, state: tuple[float, float] | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Back to ``state`` (default: the initial state); with creep, the lags to
         ``creep_state`` (default: settled at that state's output, or the stepper's own
-        initial lags when neither is given); the delay FIFO to its start."""
+        initial lags when neither is given); the delay FIFO to its start.
+
+        Parameters
+        ----------
+        state : (float, float), optional
+            The state (u, z) to go back to (default: the initial state).
+        creep_state : array_like, optional
+            The creep lag states (default: see above).
+
+        Raises
+        ------
+        InvalidModelError
+            If ``state`` is not a valid state (u, z).
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> s = m.stepper(); _ = s.step(150.0); s.reset()
+        >>> s.state.tolist() == list(m.initial_state)
+        True
+        """
         if state is None and creep_state is None:
             creep_state = self._initial_creep
         self._core.state = self._initial if state is None else self.model._state(state)
@@ -555,19 +893,62 @@ class BoucWenStepper:
             self._lags = self.model._lags(self._core.state, creep_state)
         self._line.reset()
 
-    def output_at(self, u):
+    def output_at(self, u: float) -> float:
         """The output if the next sample applied were ``u`` (the state is not changed;
         with a delay, ``u`` is the input leaving the FIFO; with creep, the settled
-        output H, the lags aside)."""
+        output H, the lags aside).
+
+        Parameters
+        ----------
+        u : float
+            The candidate input (V).
+
+        Returns
+        -------
+        float
+            The output (µm) that input would give.
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> s = m.stepper()
+        >>> s.output_at(150.0) == s.step(150.0)
+        True
+        """
         m = self.model
         u_p, z_p = self._core.state
         z = self._core.advance(z_p, m._x(u) - m._x(u_p))
         return m.output(u, z)
 
-    def step(self, u, dt=None):
+    def step(self, u: float, dt: float | None = None) -> float:
         """One sample: advance the state by the input ``u`` (with a delay of d samples,
-        by the input of d steps ago), return y. With creep, ``dt`` is the time since the
-        previous sample (default ``creep.dt``)."""
+        by the input of d steps ago), return y.
+
+        Parameters
+        ----------
+        u : float
+            The input sample (V), inside the model's input range.
+        dt : float, optional
+            With creep: the time (s) since the previous sample (default ``creep.dt``).
+
+        Returns
+        -------
+        float
+            The output y (µm).
+
+        Raises
+        ------
+        InputRangeError
+            If ``u`` is outside the model's input range.
+        InvalidArgumentError
+            If ``u`` or ``dt`` is not a number (``dt`` not finite and >= 0).
+
+        Examples
+        --------
+        >>> m = BoucWenModel(beta=5.0, gamma=1.0, hysteretic=-8.0, linear=40.0)
+        >>> round(m.stepper().step(150.0), 3)
+        38.674
+        """
         try:
             u = float(u)
         except (TypeError, ValueError, OverflowError):

@@ -24,19 +24,34 @@ For models with multislope or polyline operators (or any w >= 0) the exact inver
 the compensator of :mod:`pihyst.inverse`.
 """
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from pihyst.exceptions import InvalidModelError
 
+if TYPE_CHECKING:   # _models imports this module
+    from pihyst.model._models import ClassicalPI, PIModel
+
 __all__ = ["classical_inverse", "reachable_output_range"]
 
 
-def reachable_output_range(model):
+def reachable_output_range(model: "PIModel") -> tuple[float, float]:
     """An interval holding every output ``model`` can produce from its initial state.
 
     Each operator output f_k stays within [min(f_k[-1], F_k(u_min)), max(f_k[-1],
     R_k(u_max))]: it can only be pushed down by F_k and up by R_k. The output bound is
     the weighted sum of those ends (by the sign of each weight).
+
+    Parameters
+    ----------
+    model : PIModel
+        Any PI model.
+
+    Returns
+    -------
+    (float, float)
+        The lowest and highest output it can reach (µm).
 
     Examples
     --------
@@ -58,7 +73,7 @@ def reachable_output_range(model):
     return float(y_min), float(y_max)
 
 
-def classical_inverse(model):
+def classical_inverse(model: "ClassicalPI") -> "ClassicalPI":
     """The classical PI model of the inverse of a classical PI ``model``.
 
     Parameters

@@ -14,8 +14,11 @@ sample, and the exact inverse stays exact (each sample solves for H[t], then the
 """
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core
 from pihyst._frozen import frozen_array
@@ -35,6 +38,20 @@ class Creep:
 
     A value like the models: immutable, ``==`` compares the parameters.
 
+    Parameters
+    ----------
+    tau : array_like
+        Time constant tau_i of each lag (s), > 0.
+    gain : array_like
+        Gain g_i of each lag, >= 0, summing to less than 1.
+    dt : float
+        The fixed sample interval (s), > 0.
+
+    Raises
+    ------
+    InvalidModelError
+        If a parameter is not valid (the message names it).
+
     Examples
     --------
     >>> c = Creep([1.0, 10.0], [0.02, 0.03], dt=0.1)
@@ -45,8 +62,11 @@ class Creep:
     """
 
     __slots__ = ("tau", "gain", "dt")
+    tau: NDArray[np.float64]
+    gain: NDArray[np.float64]
+    dt: float
 
-    def __init__(self, tau, gain, dt):
+    def __init__(self, tau: ArrayLike, gain: ArrayLike, dt: float) -> None:
         set_ = object.__setattr__
         set_(self, "tau", _vector(tau, "creep tau_s"))
         set_(self, "gain", _vector(gain, "creep gain", self.tau.size))
@@ -74,7 +94,8 @@ class Creep:
         raise AttributeError("Creep is immutable: make a new one")
 
     @property
-    def n_lags(self):
+    def n_lags(self) -> int:
+        """The number of lags."""
         return self.tau.size
 
     def _key(self):
@@ -92,12 +113,45 @@ class Creep:
         return (f"Creep(tau={[float(x) for x in self.tau]}, "
                 f"gain={[float(x) for x in self.gain]}, dt={self.dt:g})")
 
-    def to_dict(self):
-        """The JSON form: ``{"tau_s": [...], "gain": [...], "dt_s": dt}``."""
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form: ``{"tau_s": [...], "gain": [...], "dt_s": dt}``.
+
+        Returns
+        -------
+        dict
+            Plain JSON types; :meth:`from_dict` reads it back.
+
+        Examples
+        --------
+        >>> Creep([1.0], [0.02], dt=0.1).to_dict()
+        {'tau_s': [1.0], 'gain': [0.02], 'dt_s': 0.1}
+        """
         return {"tau_s": self.tau.tolist(), "gain": self.gain.tolist(), "dt_s": self.dt}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: "Creep | Mapping[str, Any]") -> "Creep":
+        """Creep lags from their JSON form (or a :class:`Creep`, returned as it is).
+
+        Parameters
+        ----------
+        d : dict or Creep
+            ``{"tau_s": [...], "gain": [...], "dt_s": dt}``.
+
+        Returns
+        -------
+        Creep
+            The lags ``d`` describes.
+
+        Raises
+        ------
+        InvalidModelError
+            If ``d`` is not that object, or its values are not valid.
+
+        Examples
+        --------
+        >>> Creep.from_dict({"tau_s": [1.0], "gain": [0.02], "dt_s": 0.1})
+        Creep(tau=[1.0], gain=[0.02], dt=0.1)
+        """
         if isinstance(d, Creep):
             return d
         if not isinstance(d, dict):
@@ -112,12 +166,40 @@ class Creep:
                                     f"gain, tau_s)")
         return cls(d["tau_s"], d["gain"], d["dt_s"])
 
-    def lags(self, initial_state):
-        """A :class:`pihyst._core.Creep` (the C lags) from the lag state z_i[t-1]."""
+    def lags(self, initial_state: ArrayLike) -> _core.Creep:
+        """The C lags (``pihyst._core.Creep``) from the lag state z_i[t-1].
+
+        Parameters
+        ----------
+        initial_state : array_like
+            The lag states z_i before the first sample, one per lag.
+
+        Returns
+        -------
+        pihyst._core.Creep
+            The lags, with their own running state.
+
+        Examples
+        --------
+        >>> lags = Creep([1.0], [0.02], dt=0.1).lags([5.0])
+        >>> lags.state.tolist()
+        [5.0]
+        """
         return _core.Creep(self.tau, self.gain, self.dt, initial_state)
 
-    def steady_slope(self):
-        """The smallest slope dy/dH at a sample, 1 - sum_i g_i (> 0)."""
+    def steady_slope(self) -> float:
+        """The smallest slope dy/dH at a sample, 1 - sum_i g_i (> 0).
+
+        Returns
+        -------
+        float
+            1 - sum_i g_i.
+
+        Examples
+        --------
+        >>> Creep([1.0, 10.0], [0.25, 0.25], dt=0.1).steady_slope()
+        0.5
+        """
         return 1.0 - float(self.gain.sum())
 
 

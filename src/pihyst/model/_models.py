@@ -17,11 +17,15 @@ owns the running operator state.
 
 import json
 import numbers
+import os
 from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import _core, paper
 from pihyst._arguments import real_array
@@ -46,23 +50,46 @@ SCHEMA_VERSION = 1
 _SHORT_VECTOR = 6   # repr shows at most this many values of a vector
 #: Model classes that are not PI models (family -> class with from_dict), registered by
 #: their modules; PIModel.from_dict dispatches to them
-OTHER_FAMILIES = {}
+OTHER_FAMILIES: dict[str, Any] = {}
 #: the JSON keys of the delay (docs/interfaces.md), omitted at their defaults
 DELAY_KEYS = ("delay_samples", "sample_period_s")
+#: a model class, for methods that return a model of their own class
+_Model = TypeVar("_Model", bound="PIModel")
 
 
 @dataclass(frozen=True)
 class Response:
-    """Result of :meth:`PIModel.simulate`."""
+    """Result of :meth:`PIModel.simulate`.
+
+    Parameters
+    ----------
+    input : numpy.ndarray
+        The input run, as checked (V).
+    output : numpy.ndarray
+        The output at each sample (µm).
+    final_state : numpy.ndarray
+        The operator state after the last sample: a following chunk's ``initial_state``.
+    final_creep_state : numpy.ndarray or None
+        With creep: the lag states z_i after the last sample (None without creep).
+    pending_input : numpy.ndarray or None
+        With a delay of d samples: the last d inputs, not yet seen at the output (the
+        ``pending_input`` of a following chunk); None without a delay.
+
+    Examples
+    --------
+    >>> r = ClassicalPI([0, 10], [1.0, 0.5]).simulate([0.0, 20.0, 15.0])
+    >>> r.output.tolist(), r.final_state.tolist()
+    ([0.0, 25.0, 20.0], [15.0, 10.0])
+    """
 
     input: np.ndarray
     output: np.ndarray
     final_state: np.ndarray
     #: with creep: the lag states z_i after the last sample (None without creep)
-    final_creep_state: np.ndarray = None
+    final_creep_state: NDArray[np.float64] | None = None
     #: with a delay of d samples: the last d inputs, not yet seen at the output (the
     #: ``pending_input`` of a following chunk); None without a delay
-    pending_input: np.ndarray = None
+    pending_input: NDArray[np.float64] | None = None
 
 
 def _finite_vector(values, name, length=None):
@@ -224,18 +251,66 @@ class PIModel(Immutable, ABC):
 
     Subclasses describe their operators through ``_bank_args``, their own parameters
     through ``_own_params`` and their JSON keys through ``_own_dict``/``_own_from_dict``.
+    Build a model through a family's class (:class:`ClassicalPI`, :class:`MultislopePI`,
+    :class:`PiecewiseLinearPI`) or :meth:`from_dict`.
+
+    Parameters
+    ----------
+    weights : array_like
+        Weight w_k of each operator (µm per V of operator output).
+    offset : float, default 0
+        Output offset c (µm).
+    input_range : (float, float), optional
+        The inputs the model accepts, [min, max] (V); default (0, 150).
+    initial_state : array_like, optional
+        The operator outputs before the first sample (default: zeros).
+    units : dict, optional
+        Names of the units (default: {"input": "V", "output": "um"}).
+    metadata : dict, optional
+        Free-form notes carried with the model and its file (JSON types).
+    creep : pihyst.model.Creep or dict, optional
+        Creep lags after the hysteresis (docs/theory/creep.md); None: rate independent.
+    delay : int, default 0
+        Input dead time in samples.
+    sample_period : float, optional
+        The sample period (s) the delay was identified at.
+
+    Raises
+    ------
+    InvalidModelError
+        If a parameter is not valid (the message names it).
+
+    Examples
+    --------
+    >>> PIModel.from_dict({"family": "classical", "thresholds": [0], "weights": [1]})
+    ClassicalPI(thresholds=[0.0], weights=[1.0])
     """
 
-    family = None
-    _registry = {}
+    family: ClassVar[str | None] = None
+    _registry: ClassVar[dict[str, type["PIModel"]]] = {}
+    # set once, in __init__ (read-only arrays and mappings)
+    weights: NDArray[np.float64]
+    offset: float
+    input_range: tuple[float, float]
+    initial_state: NDArray[np.float64]
+    units: Mapping[str, str]
+    metadata: Mapping[str, Any]
+    creep: Creep | None
+    delay: int
+    sample_period: float | None
+    _bank: _core.Bank
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         if cls.family is not None:
             PIModel._registry[cls.family] = cls
 
-    def __init__(self, weights, *, offset=0.0, input_range=None, initial_state=None,
-                 units=None, metadata=None, creep=None, delay=0, sample_period=None):
+    def __init__(self, weights: ArrayLike, *, offset: float = 0.0,
+                 input_range: tuple[float, float] | None = None,
+                 initial_state: ArrayLike | None = None, units: Mapping[str, str] | None = None,
+                 metadata: Mapping[str, Any] | None = None,
+                 creep: "Creep | Mapping[str, Any] | None" = None, delay: int = 0,
+                 sample_period: float | None = None) -> None:
         set_ = object.__setattr__
         set_(self, "weights", _finite_vector(weights, "weights"))
         if self.weights.size == 0:
@@ -283,7 +358,8 @@ class PIModel(Immutable, ABC):
                                     "for floating point)")
 
     @property
-    def n_operators(self):
+    def n_operators(self) -> int:
+        """The number of operators K."""
         return self.weights.size
 
     @abstractmethod
@@ -307,11 +383,15 @@ class PIModel(Immutable, ABC):
             return self.initial_state
         return _finite_vector(initial_state, "initial_state", self.n_operators)
 
-    def simulate(self, u, *, initial_state=None, t=None, creep_state=None,
-                 pending_input=None, t_previous=None):
+    def simulate(self, u: ArrayLike, *, initial_state: ArrayLike | None = None,
+                 t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                 pending_input: ArrayLike | None = None,
+                 t_previous: float | None = None) -> Response:
         """Run the model over the input ``u`` from ``initial_state`` (default: the
-        model's own). Returns a :class:`Response` with the final operator state,
-        from which a following chunk continues exactly.
+        model's own).
+
+        Returns a :class:`Response` with the final operator state, from which a
+        following chunk continues exactly.
 
         A model with :attr:`creep` also uses the sample times ``t`` (s; default: every
         ``creep.dt``; the first sample comes ``creep.dt`` after the initial state, or at
@@ -326,6 +406,40 @@ class PIModel(Immutable, ABC):
         ``pending_input`` continues a following chunk. Sample times ``t`` at another
         period than the model's ``sample_period`` convert the delay when exact, else
         InvalidArgumentError (:meth:`delay_at`).
+
+        Parameters
+        ----------
+        u : array_like
+            Input samples (V), each inside :attr:`input_range`.
+        initial_state : array_like, optional
+            Operator state before ``u`` (default: the model's ``initial_state``).
+        t : array_like, optional
+            Sample times (s), for creep and to check the period of a delayed model.
+        creep_state : array_like, optional
+            Creep lag states before ``u`` (default: settled at the initial output).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before ``u`` (default: u[0] held).
+        t_previous : float, optional
+            Time (s) of the sample before ``u``, for the first creep interval.
+
+        Returns
+        -------
+        Response
+            Input, output, final state (and final creep state, pending input).
+
+        Raises
+        ------
+        InputRangeError
+            If an input sample is outside :attr:`input_range` (or not finite).
+        InvalidArgumentError
+            If an argument is malformed (not numbers, wrong length or period).
+
+        Examples
+        --------
+        >>> m = ClassicalPI([0, 10], [1.0, 0.5])
+        >>> first = m.simulate([0.0, 20.0])
+        >>> m.simulate([15.0], initial_state=first.final_state).output.tolist()
+        [20.0]
         """
         def hysteresis(state, run):
             bank = self._new_bank(state)
@@ -335,21 +449,96 @@ class PIModel(Immutable, ABC):
                          creep_state=creep_state, pending_input=pending_input,
                          t_previous=t_previous)
 
-    def predict(self, u, *, initial_state=None, t=None, creep_state=None,
-                pending_input=None, t_previous=None):
-        """Displacements for the voltages ``u`` (a NumPy array of the same length);
-        ``t``, ``creep_state``, ``pending_input``: see :meth:`simulate`."""
+    def predict(self, u: ArrayLike, *, initial_state: ArrayLike | None = None,
+                t: ArrayLike | None = None, creep_state: ArrayLike | None = None,
+                pending_input: ArrayLike | None = None,
+                t_previous: float | None = None) -> NDArray[np.float64]:
+        """Displacements for the voltages ``u``: the output of :meth:`simulate`.
+
+        Parameters
+        ----------
+        u : array_like
+            Input samples (V), each inside :attr:`input_range`.
+        initial_state : array_like, optional
+            Operator state before ``u`` (default: the model's ``initial_state``).
+        t : array_like, optional
+            Sample times (s), for creep and to check the period of a delayed model.
+        creep_state : array_like, optional
+            Creep lag states before ``u`` (default: settled at the initial output).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before ``u`` (default: u[0] held).
+        t_previous : float, optional
+            Time (s) of the sample before ``u``, for the first creep interval.
+
+        Returns
+        -------
+        numpy.ndarray
+            The displacement at each sample (µm), as long as ``u``.
+
+        Raises
+        ------
+        InputRangeError
+            If an input sample is outside :attr:`input_range` (or not finite).
+        InvalidArgumentError
+            If an argument is malformed.
+
+        Examples
+        --------
+        >>> ClassicalPI([0, 10], [1.0, 0.5]).predict([0.0, 20.0, 15.0]).tolist()
+        [0.0, 25.0, 20.0]
+        """
         return self.simulate(u, initial_state=initial_state, t=t, creep_state=creep_state,
                              pending_input=pending_input, t_previous=t_previous).output
 
-    def delay_at(self, sample_period=None, *, t=None):
+    def delay_at(self, sample_period: float | None = None, *,
+                 t: ArrayLike | None = None) -> int:
         """The delay in samples at ``sample_period`` (s) or at the uniform sample times
         ``t``: :attr:`delay` when either period is unknown, d T / period when that is a
-        whole number; InvalidArgumentError otherwise (docs/theory/identification.md)."""
+        whole number (docs/theory/identification.md).
+
+        Parameters
+        ----------
+        sample_period : float, optional
+            The sample period (s) to convert the delay to.
+        t : array_like, optional
+            Uniform sample times (s), whose period is used instead.
+
+        Returns
+        -------
+        int
+            The delay in samples at that period.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If the delay is not a whole number of samples at that period.
+
+        Examples
+        --------
+        >>> m = ClassicalPI([0], [1.0], delay=2, sample_period=0.01)
+        >>> m.delay_at(0.005), m.delay_at()
+        (4, 2)
+        """
         return delay_at(self.delay, self.sample_period, sample_period, t)
 
-    def hysteresis_output(self, state):
-        """offset + sum_k w_k f_k for an operator state: the settled displacement."""
+    def hysteresis_output(self, state: ArrayLike) -> float:
+        """offset + sum_k w_k f_k for an operator state: the settled displacement.
+
+        Parameters
+        ----------
+        state : array_like
+            Operator outputs f_k, one per operator.
+
+        Returns
+        -------
+        float
+            The model's output at that state, before creep (µm).
+
+        Examples
+        --------
+        >>> ClassicalPI([0, 10], [1.0, 0.5], offset=1.0).hysteresis_output([2.0, 4.0])
+        5.0
+        """
         return self.offset + float(self.weights @ np.asarray(state, dtype=np.float64))
 
     def _lags(self, state, creep_state):
@@ -361,14 +550,60 @@ class PIModel(Immutable, ABC):
             creep_state = _finite_vector(creep_state, "creep_state", self.creep.n_lags)
         return self.creep.lags(creep_state)
 
-    def operators(self, u, *, initial_state=None):
+    def operators(self, u: ArrayLike, *,
+                  initial_state: ArrayLike | None = None) -> NDArray[np.float64]:
         """The N x K operator matrix Phi[t, k] = f_k[t] (paper eq. 8), of the input as
-        given (a delay is not applied: Phi pairs with the output d samples later)."""
+        given (a delay is not applied: Phi pairs with the output d samples later).
+
+        Parameters
+        ----------
+        u : array_like
+            Input samples (V), each inside :attr:`input_range`.
+        initial_state : array_like, optional
+            Operator state before ``u`` (default: the model's ``initial_state``).
+
+        Returns
+        -------
+        numpy.ndarray
+            The N x K operator outputs.
+
+        Raises
+        ------
+        InputRangeError
+            If an input sample is outside :attr:`input_range` (or not finite).
+
+        Examples
+        --------
+        >>> ClassicalPI([0, 10], [1.0, 0.5]).operators([0.0, 20.0]).tolist()
+        [[0.0, 0.0], [20.0, 10.0]]
+        """
         u = self._checked_input(u)
         return self._new_bank(self._state_or_initial(initial_state)).operators(u)
 
-    def envelopes(self, u):
-        """(R_k(u), F_k(u)) of every operator at one input value."""
+    def envelopes(self, u: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(R_k(u), F_k(u)) of every operator at one input value.
+
+        Parameters
+        ----------
+        u : float
+            One input value (V).
+
+        Returns
+        -------
+        rising, falling : numpy.ndarray
+            The rising and falling envelope of each operator at ``u``.
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` is not a number.
+
+        Examples
+        --------
+        >>> r, f = ClassicalPI([0, 10], [1.0, 0.5]).envelopes(20.0)
+        >>> r.tolist(), f.tolist()
+        ([20.0, 10.0], [20.0, 30.0])
+        """
         try:
             if isinstance(u, (str, bytes, bool, np.bool_)):      # float() would take "3"
                 raise TypeError
@@ -378,12 +613,36 @@ class PIModel(Immutable, ABC):
                                        f"{u!r:.40}") from None
         return self._bank.envelopes(value)
 
-    def stepper(self, initial_state=None, *, creep_state=None, pending_input=None,
-                sample_period=None):
+    def stepper(self, initial_state: ArrayLike | None = None, *,
+                creep_state: ArrayLike | None = None, pending_input: ArrayLike | None = None,
+                sample_period: float | None = None) -> "Stepper":
         """A :class:`Stepper`: this model run sample by sample from ``initial_state``
         (default: the model's own); a delayed model's stepper holds a FIFO of its d
         ``pending_input`` (default: the first input, d times), d converted to
-        ``sample_period`` (s) if given."""
+        ``sample_period`` (s) if given.
+
+        Parameters
+        ----------
+        initial_state : array_like, optional
+            Operator state before the first step (default: the model's own).
+        creep_state : array_like, optional
+            Creep lag states before the first step (default: settled).
+        pending_input : array_like, optional
+            With a delay of d samples: the d inputs before the first step.
+        sample_period : float, optional
+            The period (s) the stepper is stepped at, to convert the delay.
+
+        Returns
+        -------
+        Stepper
+            A stepper owning its own running state.
+
+        Examples
+        --------
+        >>> s = ClassicalPI([0, 10], [1.0, 0.5]).stepper()
+        >>> s.step(20.0)
+        25.0
+        """
         return Stepper(self, initial_state, creep_state, pending_input=pending_input,
                        sample_period=sample_period)
 
@@ -399,8 +658,23 @@ class PIModel(Immutable, ABC):
     def _own_params(self):
         return {}
 
-    def replace(self, **changes):
+    def replace(self: "_Model", **changes: Any) -> "_Model":
         """A copy with some constructor arguments changed (e.g. weights, offset).
+
+        Parameters
+        ----------
+        **changes
+            Constructor arguments by name, and their new values.
+
+        Returns
+        -------
+        PIModel
+            A model of the same class with those arguments changed.
+
+        Raises
+        ------
+        InvalidModelError
+            If a name is not a constructor argument or a value is not valid.
 
         Examples
         --------
@@ -466,8 +740,19 @@ class PIModel(Immutable, ABC):
                 "creep": None, "delay": 0, "sample_period": None}
 
     # ---------------------------------------------------------------- persistence
-    def to_dict(self):
-        """The model as a JSON-ready dict (the schema of docs/interfaces.md)."""
+    def to_dict(self) -> dict[str, Any]:
+        """The model as a JSON-ready dict (the schema of docs/interfaces.md).
+
+        Returns
+        -------
+        dict
+            Plain JSON types only; :meth:`from_dict` reads it back.
+
+        Examples
+        --------
+        >>> ClassicalPI([0], [1.0]).to_dict()["family"]
+        'classical'
+        """
         d = {"schema_version": SCHEMA_VERSION, "family": self.family, **self._own_dict(),
              "weights": self.weights.tolist(), "offset": self.offset,
              "input_range": list(self.input_range),
@@ -485,15 +770,38 @@ class PIModel(Immutable, ABC):
     _COMMON_KEYS = frozenset({"family", "weights", "offset", "input_range", "initial_state",
                               "units", "metadata", "schema_version", "creep",
                               *DELAY_KEYS})
-    _OWN_KEYS = frozenset()
-    _REQUIRED_KEYS = ("weights",)
+    _OWN_KEYS: ClassVar[frozenset[str]] = frozenset()
+    _REQUIRED_KEYS: ClassVar[tuple[str, ...]] = ("weights",)
 
     @classmethod
-    def from_dict(cls, d, source="model"):
+    def from_dict(cls, d: Mapping[str, Any], source: str = "model") -> Any:
         """A model from a dict of the JSON schema; errors name ``source`` and the key.
 
         Called on :class:`PIModel` it picks the class by ``d["family"]``; called on a
         family's class it accepts that family only.
+
+        Parameters
+        ----------
+        d : dict
+            The model in the JSON schema (docs/interfaces.md).
+        source : str, default "model"
+            Where ``d`` comes from, for the error messages (e.g. a file name).
+
+        Returns
+        -------
+        PIModel or BoucWenModel
+            The model ``d`` describes.
+
+        Raises
+        ------
+        InvalidModelError
+            If ``d`` does not describe a valid model (the message names the key).
+
+        Examples
+        --------
+        >>> ClassicalPI.from_dict({"family": "classical", "thresholds": [0, 5],
+        ...                        "weights": [1, 0.5]})
+        ClassicalPI(thresholds=[0.0, 5.0], weights=[1.0, 0.5])
         """
         if not isinstance(d, dict):
             raise InvalidModelError(f"{source}: a model must be a JSON object, got "
@@ -535,8 +843,27 @@ class PIModel(Immutable, ABC):
     def _own_from_dict(cls, d):
         return {}
 
-    def save(self, path):
-        """Write the model as JSON to ``path`` (the file appears only once complete)."""
+    def save(self, path: "str | os.PathLike[str]") -> None:
+        """Write the model as JSON to ``path`` (the file appears only once complete).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write.
+
+        Raises
+        ------
+        OSError
+            If the file cannot be written.
+
+        Examples
+        --------
+        >>> import pathlib, tempfile
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "model.json"
+        >>> ClassicalPI([0], [1.0]).save(path)
+        >>> PIModel.from_dict(__import__("json").loads(path.read_text())).weights.tolist()
+        [1.0]
+        """
         write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
 
 
@@ -572,6 +899,20 @@ class Stepper:
     copy of the operator state; ``reset(state=None)`` goes back to a state (default: the
     initial state it was made with).
 
+    Parameters
+    ----------
+    model : PIModel
+        The model to run.
+    initial_state : array_like, optional
+        Operator state before the first step (default: the model's own).
+    creep_state : array_like, optional
+        With creep: the lag states before the first step (default: settled).
+    pending_input : array_like, optional
+        With a delay of d samples: the d inputs before the first step (default: the
+        first input, d times).
+    sample_period : float, optional
+        The period (s) it is stepped at, to convert the model's delay.
+
     Examples
     --------
     >>> m = ClassicalPI([0, 10], [1.0, 0.5])
@@ -580,8 +921,10 @@ class Stepper:
     [0.0, 25.0, 20.0]
     """
 
-    def __init__(self, model, initial_state=None, creep_state=None, *, pending_input=None,
-                 sample_period=None):
+    def __init__(self, model: PIModel, initial_state: ArrayLike | None = None,
+                 creep_state: ArrayLike | None = None, *,
+                 pending_input: ArrayLike | None = None,
+                 sample_period: float | None = None) -> None:
         self.model = model
         self._initial = model._state_or_initial(initial_state)
         self._bank = model._new_bank(self._initial)
@@ -609,20 +952,67 @@ class Stepper:
         delayed model without given ``pending_input``; empty without a delay)."""
         return self._line.contents if self.delay else np.empty(0)
 
-    def reset(self, state=None, creep_state=None):
+    def reset(self, state: ArrayLike | None = None,
+              creep_state: ArrayLike | None = None) -> None:
         """Set the running state to ``state`` (default: the initial state); with
         creep, the lags to ``creep_state`` (default: settled at that state's output);
-        the delay FIFO back to its start."""
+        the delay FIFO back to its start.
+
+        Parameters
+        ----------
+        state : array_like, optional
+            The operator state to go back to (default: the initial state).
+        creep_state : array_like, optional
+            The creep lag states (default: settled at that state's output).
+
+        Raises
+        ------
+        InvalidModelError
+            If ``state`` is not one finite number per operator.
+
+        Examples
+        --------
+        >>> s = ClassicalPI([0], [1.0]).stepper()
+        >>> s.step(5.0)
+        5.0
+        >>> s.reset(); s.state.tolist()
+        [0.0]
+        """
         self._bank.state = self._initial if state is None else \
             self.model._state_or_initial(state)
         if self._lags is not None:
             self._lags = self.model._lags(self._bank.state, creep_state)
         self._line.reset()
 
-    def step(self, u, dt=None):
+    def step(self, u: float, dt: float | None = None) -> float:
         """One sample: advance the running state by the input ``u`` (with a delay of d
-        samples, by the input of d steps ago), return y. With creep, ``dt`` is the time
-        since the previous sample (default ``creep.dt``)."""
+        samples, by the input of d steps ago), return y.
+
+        Parameters
+        ----------
+        u : float
+            The input sample (V), inside the model's input range.
+        dt : float, optional
+            With creep: the time (s) since the previous sample (default ``creep.dt``).
+
+        Returns
+        -------
+        float
+            The output y (µm).
+
+        Raises
+        ------
+        InputRangeError
+            If ``u`` is outside the model's input range.
+        InvalidArgumentError
+            If ``u`` or ``dt`` is not a number (``dt`` not finite and >= 0).
+
+        Examples
+        --------
+        >>> s = ClassicalPI([0, 10], [1.0, 0.5]).stepper()
+        >>> s.step(20.0), s.step(15.0)
+        (25.0, 20.0)
+        """
         try:
             u = float(u)
         except (TypeError, ValueError, OverflowError):
@@ -647,6 +1037,35 @@ class Stepper:
 class ClassicalPI(PIModel):
     """Classical Prandtl-Ishlinskii model (paper eq. 1-3).
 
+    Parameters
+    ----------
+    thresholds : array_like
+        Threshold r_k of each operator (V from the bottom of the input range), >= 0
+        and strictly increasing.
+    weights : array_like
+        Weight w_k of each operator (µm/V).
+    offset : float, default 0
+        Output offset c (µm).
+    input_range : (float, float), optional
+        The inputs the model accepts, [min, max] (V); default (0, 150).
+    initial_state : array_like, optional
+        The operator outputs before the first sample (default: zeros).
+    units : dict, optional
+        Names of the units (default: {"input": "V", "output": "um"}).
+    metadata : dict, optional
+        Free-form notes carried with the model and its file (JSON types).
+    creep : pihyst.model.Creep or dict, optional
+        Creep lags after the hysteresis (docs/theory/creep.md); None: rate independent.
+    delay : int, default 0
+        Input dead time in samples.
+    sample_period : float, optional
+        The sample period (s) the delay was identified at.
+
+    Raises
+    ------
+    InvalidModelError
+        If a parameter is not valid (the message names it).
+
     Examples
     --------
     >>> import numpy as np
@@ -661,10 +1080,18 @@ class ClassicalPI(PIModel):
 
     _OWN_KEYS = frozenset({"thresholds"})
     _REQUIRED_KEYS = ("thresholds", "weights")
+    thresholds: NDArray[np.float64]
 
-    def __init__(self, thresholds, weights, **kwargs):
+    def __init__(self, thresholds: ArrayLike, weights: ArrayLike, *, offset: float = 0.0,
+                 input_range: tuple[float, float] | None = None,
+                 initial_state: ArrayLike | None = None, units: Mapping[str, str] | None = None,
+                 metadata: Mapping[str, Any] | None = None,
+                 creep: "Creep | Mapping[str, Any] | None" = None, delay: int = 0,
+                 sample_period: float | None = None) -> None:
         object.__setattr__(self, "thresholds", _finite_vector(thresholds, "thresholds"))
-        super().__init__(weights, **kwargs)
+        super().__init__(weights, offset=offset, input_range=input_range,
+                         initial_state=initial_state, units=units, metadata=metadata,
+                         creep=creep, delay=delay, sample_period=sample_period)
 
     def _bank_args(self):
         _check_thresholds(self.thresholds, self.weights.size)
@@ -680,9 +1107,26 @@ class ClassicalPI(PIModel):
     def _own_from_dict(cls, d):
         return {"thresholds": d["thresholds"]}
 
-    def inverse(self):
+    def inverse(self) -> "ClassicalPI":
         """The analytic inverse, a :class:`ClassicalPI` from displacement to voltage
-        (docs/theory/inverse.md; see :func:`pihyst.inverse.classical_inverse`)."""
+        (docs/theory/inverse.md; see :func:`pihyst.inverse.classical_inverse`).
+
+        Returns
+        -------
+        ClassicalPI
+            The inverse model, whose input is the displacement (µm).
+
+        Raises
+        ------
+        InvalidModelError
+            If the model cannot be inverted analytically (see ``classical_inverse``).
+
+        Examples
+        --------
+        >>> m = ClassicalPI([0, 10], [1.0, 0.5])
+        >>> round(float(m.inverse().predict([0.0, 25.0])[-1]), 6)
+        20.0
+        """
         return classical_inverse(self)
 
 
@@ -691,6 +1135,38 @@ class MultislopePI(PIModel):
 
     R(u) = max(a(u - r), b u - r - (b - 1)U),  F(u) = min(b u, a u + (1 - a)U - (1 - a h) r).
     Thresholds must not exceed (1 - a)U / (1 - a h) (50 V for the paper's shape).
+
+    Parameters
+    ----------
+    thresholds : array_like
+        Threshold r_k of each operator (V), >= 0, strictly increasing, at most
+        :attr:`max_threshold`.
+    weights : array_like
+        Weight w_k of each operator.
+    U, a, b, h : float
+        The shape: top of the drive (V), slopes 0 < a < b, hold ratio 0 <= h <= 1 with
+        a h < 1 (default: the paper's, 150, 0.8, 1.2, 0.5).
+    offset : float, default 0
+        Output offset c (µm).
+    input_range : (float, float), optional
+        The inputs the model accepts, [min, max] (V); default (0, U).
+    initial_state : array_like, optional
+        The operator outputs before the first sample (default: zeros).
+    units : dict, optional
+        Names of the units (default: {"input": "V", "output": "um"}).
+    metadata : dict, optional
+        Free-form notes carried with the model and its file (JSON types).
+    creep : pihyst.model.Creep or dict, optional
+        Creep lags after the hysteresis (docs/theory/creep.md); None: rate independent.
+    delay : int, default 0
+        Input dead time in samples.
+    sample_period : float, optional
+        The sample period (s) the delay was identified at.
+
+    Raises
+    ------
+    InvalidModelError
+        If a parameter is not valid (the message names it).
 
     Examples
     --------
@@ -706,9 +1182,20 @@ class MultislopePI(PIModel):
 
     _OWN_KEYS = frozenset({"thresholds", "U", "a", "b", "h"})
     _REQUIRED_KEYS = ("thresholds", "weights")
+    thresholds: NDArray[np.float64]
+    U: float
+    a: float
+    b: float
+    h: float
 
-    def __init__(self, thresholds, weights, *, U=PAPER_SHAPE["U"], a=PAPER_SHAPE["a"],
-                 b=PAPER_SHAPE["b"], h=PAPER_SHAPE["h"], input_range=None, **kwargs):
+    def __init__(self, thresholds: ArrayLike, weights: ArrayLike, *,
+                 U: float = PAPER_SHAPE["U"], a: float = PAPER_SHAPE["a"],
+                 b: float = PAPER_SHAPE["b"], h: float = PAPER_SHAPE["h"],
+                 input_range: tuple[float, float] | None = None, offset: float = 0.0,
+                 initial_state: ArrayLike | None = None, units: Mapping[str, str] | None = None,
+                 metadata: Mapping[str, Any] | None = None,
+                 creep: "Creep | Mapping[str, Any] | None" = None, delay: int = 0,
+                 sample_period: float | None = None) -> None:
         set_ = object.__setattr__
         set_(self, "thresholds", _finite_vector(thresholds, "thresholds"))
         for name, value in (("U", U), ("a", a), ("b", b), ("h", h)):
@@ -723,10 +1210,12 @@ class MultislopePI(PIModel):
                                     f"overflows floating point")
         if input_range is None:
             input_range = (0.0, self.U)
-        super().__init__(weights, input_range=input_range, **kwargs)
+        super().__init__(weights, offset=offset, input_range=input_range,
+                         initial_state=initial_state, units=units, metadata=metadata,
+                         creep=creep, delay=delay, sample_period=sample_period)
 
     @property
-    def max_threshold(self):
+    def max_threshold(self) -> float:
         """Largest valid threshold, (1 - a)U / (1 - a h): F's kink stays at u >= 0."""
         return (1 - self.a) * self.U / (1 - self.a * self.h)
 
@@ -764,17 +1253,65 @@ class PiecewiseLinearPI(PIModel):
     ``rising[k]`` and ``falling[k]`` are (x, y) breakpoint pairs of operator k, x strictly
     increasing and y non-decreasing; beyond its ends a polyline continues with the slope
     of its end segment. R_k <= F_k must hold on the input range.
+
+    Parameters
+    ----------
+    rising : sequence of (array_like, array_like)
+        The rising envelope R_k of each operator: (x, y) breakpoints.
+    falling : sequence of (array_like, array_like)
+        The falling envelope F_k of each operator: (x, y) breakpoints.
+    weights : array_like
+        Weight w_k of each operator.
+    offset : float, default 0
+        Output offset c (µm).
+    input_range : (float, float), optional
+        The inputs the model accepts, [min, max] (V); default (0, 150).
+    initial_state : array_like, optional
+        The operator outputs before the first sample (default: zeros).
+    units : dict, optional
+        Names of the units (default: {"input": "V", "output": "um"}).
+    metadata : dict, optional
+        Free-form notes carried with the model and its file (JSON types).
+    creep : pihyst.model.Creep or dict, optional
+        Creep lags after the hysteresis (docs/theory/creep.md); None: rate independent.
+    delay : int, default 0
+        Input dead time in samples.
+    sample_period : float, optional
+        The sample period (s) the delay was identified at.
+
+    Raises
+    ------
+    InvalidModelError
+        If a parameter is not valid (the message names it).
+
+    Examples
+    --------
+    >>> m = PiecewiseLinearPI(rising=[([0, 1], [-10, -9])], falling=[([0, 1], [10, 11])],
+    ...                       weights=[1.0])
+    >>> m.predict([0.0, 20.0, 15.0]).tolist()
+    [0.0, 10.0, 10.0]
     """
 
     family = "pwl"
 
     _OWN_KEYS = frozenset({"rising", "falling"})
     _REQUIRED_KEYS = ("rising", "falling", "weights")
+    rising: tuple[tuple[NDArray[np.float64], NDArray[np.float64]], ...]
+    falling: tuple[tuple[NDArray[np.float64], NDArray[np.float64]], ...]
 
-    def __init__(self, rising, falling, weights, **kwargs):
+    def __init__(self, rising: Sequence[tuple[ArrayLike, ArrayLike]],
+                 falling: Sequence[tuple[ArrayLike, ArrayLike]], weights: ArrayLike, *,
+                 offset: float = 0.0,
+                 input_range: tuple[float, float] | None = None,
+                 initial_state: ArrayLike | None = None, units: Mapping[str, str] | None = None,
+                 metadata: Mapping[str, Any] | None = None,
+                 creep: "Creep | Mapping[str, Any] | None" = None, delay: int = 0,
+                 sample_period: float | None = None) -> None:
         object.__setattr__(self, "rising", _polylines(rising, "rising"))
         object.__setattr__(self, "falling", _polylines(falling, "falling"))
-        super().__init__(weights, **kwargs)
+        super().__init__(weights, offset=offset, input_range=input_range,
+                         initial_state=initial_state, units=units, metadata=metadata,
+                         creep=creep, delay=delay, sample_period=sample_period)
 
     def _bank_args(self):
         k = self.weights.size

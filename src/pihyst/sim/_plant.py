@@ -31,7 +31,11 @@ Examples
 True
 """
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.sim._boucwen import BoucWen
@@ -77,10 +81,20 @@ class Plant:
         Seed of the noise generator.
     summary : str
         What the variant stands for (used by :meth:`describe`).
+
+    Examples
+    --------
+    >>> from pihyst.sim import make_plant
+    >>> plant = make_plant("paper-beam")
+    >>> plant.name, plant.u_max
+    ('paper-beam', 150.0)
     """
 
-    def __init__(self, name, hysteresis, *, creep_per_decade=0.0, noise_um=0.0, quantum_V=0.0,
-                 dynamics=None, modes=None, seed=0, summary=""):
+    def __init__(self, name: str, hysteresis: Any, *,
+                 creep_per_decade: float = 0.0, noise_um: float = 0.0, quantum_V: float = 0.0,
+                 dynamics: tuple[float, float] | None = None,
+                 modes: Sequence[Sequence[float]] | None = None, seed: int = 0,
+                 summary: str = "") -> None:
         self.name = name
         self.hysteresis = hysteresis
         self.u_min = 0.0
@@ -92,13 +106,23 @@ class Plant:
         self.seed = seed
         self.summary = summary
         self._creep = creep_filter(self.creep_per_decade) if self.creep_per_decade > 0 else None
-        self._beam = (modes_filter(modes) if modes else
+        self._t: float | None = None
+        self._beam: Any = (modes_filter(modes) if modes else
                       beam_filter(*dynamics) if dynamics else None)
         self.reset()
 
-    def reset(self):
+    def reset(self) -> None:
         """Back to the initial rest state (0 V after a full cycle, creep settled, noise
-        generator re-seeded): the same calls then give the same output again."""
+        generator re-seeded): the same calls then give the same output again.
+
+        Examples
+        --------
+        >>> from pihyst.sim import make_plant
+        >>> plant = make_plant("paper-beam")
+        >>> a = plant.run([50.0], [1.0]); plant.reset()
+        >>> bool(plant.run([50.0], [1.0]) == a)
+        True
+        """
         self.hysteresis.reset()
         h_rest = float(self.hysteresis.run(np.array([0.0]))[0])
         self.hysteresis.reset()
@@ -117,11 +141,36 @@ class Plant:
         """Displacement at rest at 0 V (um, noise-free): 0 unless the beam is remanent."""
         return self._rest_output
 
-    def run(self, u, t):
-        """Measured displacement (um) for the voltages ``u`` (V) at times ``t`` (s).
+    def run(self, u: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
+        """Measured displacement (µm) for the voltages ``u`` (V) at times ``t`` (s).
 
         Continues from the current state: ``t`` must not go backwards, also across
         calls. Voltages must lie in [u_min, u_max] (after supply quantisation).
+
+        Parameters
+        ----------
+        u : array_like
+            Voltages (V).
+        t : array_like
+            Their times (s), of the same length, not decreasing.
+
+        Returns
+        -------
+        numpy.ndarray
+            The measured displacement at each sample (µm).
+
+        Raises
+        ------
+        InvalidArgumentError
+            If ``u`` and ``t`` are not vectors of one length, not finite, a voltage is
+            outside the drive range or the time goes backwards.
+
+        Examples
+        --------
+        >>> from pihyst.sim import make_plant
+        >>> y = make_plant("paper-beam").run([0.0, 150.0], [0.0, 150.0])
+        >>> bool(40 < y[-1] < 50)
+        True
         """
         u = np.asarray(u, dtype=float)
         t = np.asarray(t, dtype=float)
@@ -157,8 +206,20 @@ class Plant:
         self._t = float(t[-1])
         return y
 
-    def describe(self):
-        """One paragraph for reports: what the beam is and what it adds."""
+    def describe(self) -> str:
+        """One paragraph for reports: what the beam is and what it adds.
+
+        Returns
+        -------
+        str
+            The paragraph.
+
+        Examples
+        --------
+        >>> from pihyst.sim import make_plant
+        >>> make_plant("paper-beam").describe().startswith("Simulated beam 'paper-beam'")
+        True
+        """
         parts = [f"Simulated beam '{self.name}': {self.summary}"]
         parts.append(f"Drive range {self.u_min:g}-{self.u_max:g} V")
         parts.append(f"supply quantisation {self.quantum_V * 1000:g} mV" if self.quantum_V
@@ -215,8 +276,8 @@ _VARIANTS = {
 PLANT_NAMES = tuple(_VARIANTS)
 
 
-def make_plant(name="paper-beam", *, seed=0, noise=True, creep=True, quantisation=True,
-               dynamics=False):
+def make_plant(name: str = "paper-beam", *, seed: int = 0, noise: bool = True,
+               creep: bool = True, quantisation: bool = True, dynamics: bool = False) -> "Plant":
     """A simulated beam at rest at 0 V after a full cycle.
 
     Parameters

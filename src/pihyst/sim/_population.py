@@ -16,6 +16,8 @@ of 0 - 2 ticks and an amplifier slew limit of 50 - 500 kV/s (log-uniform), drawn
 stream of their own so that ``dynamics=False`` draws exactly what it always drew.
 """
 
+from typing import Any
+
 import numpy as np
 
 from pihyst.sim._boucwen import BoucWen
@@ -106,7 +108,7 @@ def _bouc_wen(rng, strong):
     raise RuntimeError("no Bouc-Wen parameters with the requested remanence found")
 
 
-def random_plant(seed, *, dynamics=False):
+def random_plant(seed: int, *, dynamics: bool = False) -> tuple[Plant, dict[str, Any]]:
     """A random simulated actuator and a description of what was drawn.
 
     Returns ``(plant, description)``: a :class:`~pihyst.sim.Plant` at rest at 0 V after a
@@ -115,6 +117,20 @@ def random_plant(seed, *, dynamics=False):
     rate its records are made at) and ``remanence_pct``. ``dynamics=True``: a
     :class:`~pihyst.sim.Stage` (module notes), whose description adds ``modes``,
     ``delay_samples`` and ``slew_V_per_s`` and whose ``rate_hz`` is its clock.
+
+    Parameters
+    ----------
+    seed : int
+        The seed: the same seed gives the same actuator.
+    dynamics : bool, default False
+        Draw a stage with modes, a converter delay and a slew limit.
+
+    Returns
+    -------
+    plant : Plant or Stage
+        The actuator.
+    description : dict
+        What was drawn.
 
     Examples
     --------
@@ -137,10 +153,10 @@ def random_plant(seed, *, dynamics=False):
                  "range_um": rise, "seed": int(seed)})
     summary = (f"random {desc['kind']} actuator (seed {seed}): creep "
                f"{100 * creep:.2g} %/decade, noise {noise:.3g} um, {rate:.0f} Hz")
-    options = dict(creep_per_decade=creep, noise_um=noise, quantum_V=SUPPLY_STEP_V,
+    options: dict[str, Any] = dict(creep_per_decade=creep, noise_um=noise, quantum_V=SUPPLY_STEP_V,
                    seed=int(seed), summary=summary)
     if not dynamics:
         return Plant(f"random-{seed}", hyst, **options), desc
-    stage = _stage_dynamics(seed)
+    stage: dict[str, Any] = _stage_dynamics(seed)
     desc.update(stage)
     return Stage(f"random-stage-{seed}", hyst, **stage, **options), desc

@@ -14,11 +14,17 @@ before anything is allocated.
 import numbers
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pihyst import paper
 from pihyst.exceptions import InvalidArgumentError, ResourceLimitError
 from pihyst.sim._runs import checked_seed
 
+__all__ = ["DEFAULT_DT", "MAX_SAMPLES", "band_limited_triangle", "decaying_triangles",
+           "growing_sine", "random_ramps", "sine", "staircase", "triangle"]
+
+#: (times in s, voltages in V): what every signal function returns
+Signal = tuple[NDArray[np.float64], NDArray[np.float64]]
 PAPER_PERIOD_S = paper.DRIVE_PERIOD_S
 PAPER_U_MAX = paper.DRIVE_U_MAX_V
 DEFAULT_DT = 0.1
@@ -92,12 +98,35 @@ def _piecewise_linear(times, levels, dt):
     return t, np.interp(t, times, levels)
 
 
-def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
-             dt=DEFAULT_DT):
+def triangle(u_min: float = 0.0, u_max: float = PAPER_U_MAX, period_s: float = PAPER_PERIOD_S,
+             n_cycles: int = 1, dt: float = DEFAULT_DT) -> Signal:
     """Triangle wave u_min -> u_max -> u_min, ``n_cycles`` times (the paper's drive:
     0-150 V, 300 s period).
 
     The peaks are sampled exactly when period_s / 2 is a multiple of dt.
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_cycles : int
+        Number of periods.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -116,9 +145,33 @@ def triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1,
     return t, np.clip(np.round(u, 12), u_min, u_max)
 
 
-def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=DEFAULT_DT):
+def sine(u_min: float = 0.0, u_max: float = PAPER_U_MAX, period_s: float = PAPER_PERIOD_S,
+         n_cycles: int = 1, dt: float = DEFAULT_DT) -> Signal:
     """Sine between u_min and u_max starting at its minimum:
     u = (u_min + u_max)/2 - (u_max - u_min)/2 cos(2 pi t / P).
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_cycles : int
+        Number of periods.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -135,12 +188,38 @@ def sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=1, dt=D
     return t, np.clip(u, u_min, u_max)
 
 
-def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_triangles=5,
-                       ratio=0.7, dt=DEFAULT_DT):
+def decaying_triangles(u_min: float = 0.0, u_max: float = PAPER_U_MAX,
+                       period_s: float = PAPER_PERIOD_S, n_triangles: int = 5,
+                       ratio: float = 0.7, dt: float = DEFAULT_DT) -> Signal:
     """One full triangle u_min -> u_max -> u_min, then triangles back to u_min whose peaks
     decay geometrically: peak_k = u_min + (u_max - u_min) ratio^k, k = 0..n_triangles-1
     (minor loops inside the major one). All ramps have the full triangle's slope
     2 (u_max - u_min) / period_s; each turning point lies on the dt grid.
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_triangles : int
+        Number of triangles, the full one included.
+    ratio : float
+        Ratio of each peak's height to the one before, 0 < ratio < 1.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -169,13 +248,39 @@ def decaying_triangles(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_
     return _piecewise_linear(times, levels, dt)
 
 
-def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT_DT, seed=0):
+def random_ramps(u_min: float = 0.0, u_max: float = PAPER_U_MAX, n_ramps: int = 20,
+                 rate: float | None = None, dt: float = DEFAULT_DT, seed: int = 0) -> Signal:
     """Ramps at constant rate between random levels (uniform in [u_min, u_max]),
     starting at u_min: reversals inside the range, for judging models on minor loops.
 
     ``rate`` (units per second) defaults to the paper's triangle slope,
     2 (u_max - u_min) / 300 s. Each ramp's duration is rounded up to whole samples, so
     every level is sampled exactly.
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    n_ramps : int
+        Number of ramps.
+    rate : float, optional
+        Ramp rate (V/s); default the paper's triangle slope.
+    dt : float
+        Sample interval (s); default 0.1 s.
+    seed : int
+        Seed of the random levels.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -200,11 +305,36 @@ def random_ramps(u_min=0.0, u_max=PAPER_U_MAX, n_ramps=20, rate=None, dt=DEFAULT
     return _piecewise_linear(times, levels, dt)
 
 
-def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
-              dt=DEFAULT_DT):
+def staircase(u_min: float = 0.0, u_max: float = PAPER_U_MAX, n_steps: int = 10,
+              step_s: float = 10.0, down: bool = True, dt: float = DEFAULT_DT) -> Signal:
     """Steps of (u_max - u_min) / n_steps from u_min up to u_max (and back down if
     ``down``), each level held for ``step_s`` seconds (rounded to whole samples; at
     least ``dt``): creep shows within each step.
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    n_steps : int
+        Number of steps from u_min to u_max.
+    step_s : float
+        How long each level is held (s).
+    down : bool
+        Step back down to u_min too.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -232,13 +362,37 @@ def staircase(u_min=0.0, u_max=PAPER_U_MAX, n_steps=10, step_s=10.0, down=True,
     return _times(u.size, dt), u
 
 
-def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles=5,
-                 dt=DEFAULT_DT):
+def growing_sine(u_min: float = 0.0, u_max: float = PAPER_U_MAX,
+                 period_s: float = PAPER_PERIOD_S, n_cycles: int = 5,
+                 dt: float = DEFAULT_DT) -> Signal:
     """A sine from ``u_min`` whose amplitude grows linearly until the last cycle's peak
     reaches ``u_max``, then falls back to ``u_min``: nested loops growing outward.
 
         u(t) = u_min + (u_max - u_min) min(t / T_p, 1) (1 - cos(2 pi t / period_s)) / 2,
         T_p = (n_cycles - 1/2) period_s   (the last peak)
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    n_cycles : int
+        Number of periods.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
 
     Examples
     --------
@@ -256,8 +410,9 @@ def growing_sine(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S, n_cycles
     return t, np.clip(u, u_min, u_max)
 
 
-def band_limited_triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S,
-                          max_hz=None, dt=DEFAULT_DT):
+def band_limited_triangle(u_min: float = 0.0, u_max: float = PAPER_U_MAX,
+                          period_s: float = PAPER_PERIOD_S, max_hz: float | None = None,
+                          dt: float = DEFAULT_DT) -> Signal:
     """One period of a triangle with only its harmonics below ``max_hz``: a scan line
     without the corners a stage's modes would ring on.
 
@@ -265,6 +420,35 @@ def band_limited_triangle(u_min=0.0, u_max=PAPER_U_MAX, period_s=PAPER_PERIOD_S,
 
     scaled so that its lowest value is ``u_min`` (at t = 0) and its highest ``u_max``;
     ``max_hz`` None keeps every harmonic below the Nyquist frequency 1 / (2 dt).
+
+    Parameters
+    ----------
+    u_min, u_max : float
+        The signal's range (V), u_min < u_max; default 0-150 V.
+    period_s : float
+        Period (s); default the paper's 300 s.
+    max_hz : float, optional
+        The highest frequency kept (Hz); default the Nyquist frequency.
+    dt : float
+        Sample interval (s); default 0.1 s.
+
+    Returns
+    -------
+    t, u : numpy.ndarray
+        Sample times (s, from 0, every ``dt``) and the signal (V).
+
+    Raises
+    ------
+    InvalidArgumentError
+        If an argument is not valid (the message names it).
+    ResourceLimitError
+        If the signal would have more than :data:`MAX_SAMPLES` samples.
+
+    Examples
+    --------
+    >>> t, u = band_limited_triangle(period_s=10.0, max_hz=0.5, dt=1.0)
+    >>> float(u[0]), float(u.max()), u.size
+    (0.0, 150.0, 10)
     """
     _check_common(u_min, u_max, dt)
     _positive(period_s, "period_s")

@@ -19,9 +19,12 @@ the beam at 0 V, an error of -3.09 um).
 
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst import paper
 from pihyst._version import __version__
@@ -43,7 +46,28 @@ PAPER = paper.published()
 
 @dataclass
 class Recording:
-    """A measured (or simulated) record."""
+    """A measured (or simulated) record.
+
+    Parameters
+    ----------
+    name : str
+        The record's name in the report.
+    t : numpy.ndarray
+        Sample times (s).
+    u : numpy.ndarray
+        Voltages (V).
+    y : numpy.ndarray
+        Displacements (µm).
+    description : str
+        Where it comes from, for the report.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rec = Recording("loop", np.arange(3.0), np.array([0.0, 150, 0]), np.array([0.0, 40, 2]))
+    >>> rec.span_y
+    40.0
+    """
 
     name: str
     t: np.ndarray
@@ -53,24 +77,89 @@ class Recording:
 
     @property
     def span_y(self):
+        """The peak-to-peak of the displacement (µm)."""
         return float(np.ptp(self.y))
 
 
 @dataclass
 class FittedModel:
-    """One identified model and how it was obtained."""
+    """One identified model and how it was obtained.
+
+    Parameters
+    ----------
+    key : str
+        ``"classical"``, ``"multislope"`` or ``"best"``.
+    label : str
+        What the report calls it.
+    model : PIModel
+        The fitted model.
+    requested_thresholds : list, optional
+        The thresholds asked for (the paper's, scaled), before unusable ones were left
+        out.
+    notes : list of str
+        What the fit said (warnings, thresholds left out).
+    fit_report : FitReport, optional
+        The fit's report.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> FittedModel("classical", "conventional PI", pihyst.ClassicalPI([0], [1.0])).notes
+    []
+    """
 
     key: str
     label: str
-    model: object
-    requested_thresholds: list = None
+    model: Any
+    requested_thresholds: list | None = None
     notes: list = field(default_factory=list)
-    fit_report: object = None
+    fit_report: Any = None
 
 
 @dataclass
 class Study:
-    """Everything the report shows; ``metrics`` is its JSON-ready summary."""
+    """Everything the report shows; ``metrics`` is its JSON-ready summary.
+
+    Made by :func:`paper_study` and :func:`loop_study`, written by
+    :func:`pihyst.study.write_report`.
+
+    Parameters
+    ----------
+    mode : str
+        ``"demo"`` (the simulated beam) or ``"report"`` (a user's record).
+    title : str
+        The report's title.
+    source : str
+        Where the data comes from.
+    loop : Recording
+        The record the models were fitted to.
+    models : dict
+        Model key -> :class:`FittedModel`.
+    predictions : dict
+        Record name -> {model key: prediction}.
+    operators : dict
+        ``"classical"``/``"multislope"`` -> (u, operator outputs, thresholds).
+    metrics : dict
+        The JSON-ready summary (metrics.json).
+    records : dict
+        The other records, by name.
+    tracking : dict
+        Experiment name -> dict of arrays (desired, voltage, measured).
+    variants : list
+        The comparison repeated on the other simulated beams.
+    variant_loops : dict
+        Their loops, by beam.
+    rig : object, optional
+        The study through the emulated rig (``pihyst.study._rig_study.RigStudy``).
+    learning : object, optional
+        A learning run (``pihyst.study._learning.LearningRun``).
+
+    Examples
+    --------
+    >>> study = paper_study(dt=2.0, variants=False, progress=None)
+    >>> study.mode, sorted(study.models)
+    ('demo', ['best', 'classical', 'multislope'])
+    """
 
     mode: str                       # "demo" (simulated beam) or "report" (a user's record)
     title: str
@@ -129,12 +218,33 @@ def _quiet(call, notes):
     return out
 
 
-def signed_extremes(u, error):
+def signed_extremes(u: NDArray[np.float64],
+                    error: NDArray[np.float64]) -> dict[str, float | None]:
     """The error of largest magnitude (with its sign) in the low, middle and high third
-    of the input range, as the paper reports them."""
+    of the input range, as the paper reports them.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        The input of each sample (V).
+    error : numpy.ndarray
+        The error at each sample (µm, measured - model).
+
+    Returns
+    -------
+    dict
+        ``low``, ``middle``, ``high``: the signed extreme error of each third (None for a
+        third without samples).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> signed_extremes(np.array([0.0, 50, 100, 150]), np.array([-3.0, 1, 2, -0.5]))
+    {'low': -3.0, 'middle': 2.0, 'high': 2.0}
+    """
     lo, hi = float(np.min(u)), float(np.max(u))
     edges = lo + (hi - lo) * np.array([0.0, 1 / 3, 2 / 3, 1.0])
-    out = {}
+    out: dict[str, float | None] = {}
     for name, a, b in zip(("low", "middle", "high"), edges[:-1], edges[1:]):
         inside = (u >= a) & (u <= b)
         if not np.any(inside):
@@ -172,13 +282,40 @@ def _usable_thresholds(thresholds, span, zero_state):
     return keep, drop
 
 
-def fit_paper_models(rec, *, paper_method=True, scale=1.0, notes_prefix=""):
+def fit_paper_models(rec: "Recording", *, paper_method: bool = True,
+                     scale: float = 1.0) -> dict[str, "FittedModel"]:
     """The conventional and the multislope PI with the paper's thresholds (times
     ``scale``), fitted to ``rec``.
 
-    ``paper_method``: zero initial state and no offset, as the paper (for records that
-    start at rest at 0 V with the sensor zeroed there); otherwise the initial state is
-    found from the data and an offset is fitted (any record).
+    Parameters
+    ----------
+    rec : Recording
+        The record to fit.
+    paper_method : bool
+        Zero initial state and no offset, as the paper (for records that start at rest
+        at 0 V with the sensor zeroed there); otherwise the initial state is found from
+        the data and an offset is fitted (any record).
+    scale : float
+        Factor on the paper's thresholds (the record's span / 150 V).
+
+    Returns
+    -------
+    dict
+        ``"classical"`` and ``"multislope"`` -> :class:`FittedModel`.
+
+    Raises
+    ------
+    FitError
+        If the record cannot be fitted.
+
+    Examples
+    --------
+    >>> from pihyst.sim import make_plant
+    >>> from pihyst.sim.signals import triangle
+    >>> t, u = triangle(dt=2.0)
+    >>> rec = Recording("loop", t, u, make_plant("paper-beam").run(u, t))
+    >>> sorted(fit_paper_models(rec))
+    ['classical', 'multislope']
     """
     options = ({"initial_state": "zero", "offset": False} if paper_method else {})
     span = float(np.ptp(rec.u))
@@ -300,8 +437,9 @@ def _concat(*signals, dt):
 
 
 # ----------------------------------------------------------------------------- demo
-def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, rig=False,
-                progress=print):
+def paper_study(plant: str = "paper-beam", *, seed: int = 0, dt: float = 0.1,
+                variants: bool = True, rig: bool = False,
+                progress: Callable[[str], object] | None = print) -> "Study":
     """The paper's study on the simulated beam ``plant``.
 
     Parameters
@@ -361,7 +499,7 @@ def paper_study(plant="paper-beam", *, seed=0, dt=0.1, variants=True, rig=False,
     valid = _record(make_plant(plant, seed=seed + 2), "validation", t_v, u_v,
                     "20 ramps at 1 V/s between random levels (seed "
                     f"{seed + 100}), fitted by no model")
-    predictions = {"loop": {}, "validation": {}}
+    predictions: dict[str, dict[str, Any]] = {"loop": {}, "validation": {}}
     for key, fm in models.items():
         predictions["loop"][key] = fm.model.predict(loop.u)
         predictions["validation"][key] = fm.model.predict(valid.u)
@@ -484,12 +622,36 @@ def _demo_metrics(beam, loop, valid, models, predictions, tracking, variant_rows
 
 
 # ----------------------------------------------------------------------------- report
-def loop_study(t, u, y, *, source, progress=print):
+def loop_study(t: ArrayLike, u: ArrayLike, y: ArrayLike, *, source: str,
+               progress: Callable[[str], object] | None = print) -> "Study":
     """The fit-and-compare study on a user's own record (no simulator).
 
     The paper's thresholds are scaled to the record's input span and measured from the
     bottom of its range; the initial state is found from the data and an offset is
     fitted (the record may start anywhere, the sensor zero is arbitrary).
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times (s).
+    u : array_like
+        Voltages (V).
+    y : array_like
+        Displacements (µm).
+    source : str
+        Where the record comes from (its file), for the report.
+    progress : callable or None
+        Receives one line per step.
+
+    Returns
+    -------
+    Study
+        The study, for :func:`pihyst.study.write_report`.
+
+    Raises
+    ------
+    FitError
+        If the record cannot be fitted.
 
     Examples
     --------

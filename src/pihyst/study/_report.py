@@ -20,6 +20,8 @@ import io
 import json
 import os
 import re
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +29,9 @@ from pihyst._atomic import write_atomically
 from pihyst.io import save_model, write_columns
 from pihyst.io._csv import sidecar_path
 from pihyst.study import _plot as plot
+
+if TYPE_CHECKING:
+    from pihyst.study._paper_study import Study
 
 MODEL_ORDER = ("classical", "multislope", "best")
 
@@ -476,14 +481,41 @@ def render_html(study, figs, files, command, paper=True):
 
 
 # ----------------------------------------------------------------------------- entry
-def write_report(study, out_dir, *, command="", progress=None, figure_formats=(),
-                 paper=None):
+def write_report(study: "Study", out_dir: "str | os.PathLike[str]", *, command: str = "",
+                 progress: Callable[[str], object] | None = None,
+                 figure_formats: Sequence[str] = (), paper: bool | None = None) -> list[str]:
     """Write the report folder ``out_dir`` (created if needed) for a
     :class:`pihyst.study.Study`; returns the names of the files written.
 
     Figures are numbered in page order and written as PNG, and also in each of
     ``figure_formats`` ("svg", "pdf"). ``paper``: show the paper's numbers beside the
     study's (default: for the demo, not for a user's record).
+
+    Parameters
+    ----------
+    study : Study
+        What :func:`pihyst.study.paper_study` or :func:`pihyst.study.loop_study`
+        returned.
+    out_dir : str or os.PathLike
+        The report folder.
+    command : str
+        The command that made the study, shown in the report.
+    progress : callable, optional
+        Receives one line per step.
+    figure_formats : sequence of str
+        Also write every figure in these formats (``"svg"``, ``"pdf"``).
+    paper : bool, optional
+        Show the paper's numbers (default: for the demo only).
+
+    Returns
+    -------
+    list of str
+        The names of the files written, in ``out_dir``.
+
+    Raises
+    ------
+    OSError
+        If the folder or a file cannot be written.
 
     Examples
     --------
