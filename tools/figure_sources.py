@@ -1,0 +1,149 @@
+"""The sources of the figures quoted in README.md and docs/ (docs/figures.toml names
+them; tools/check_figures.py checks the text against them).
+
+Each source computes its figures with the current code and returns them as a nested
+dict; a placeholder ``{a.b}`` of a quote names ``values["a"]["b"]``. Quick sources take
+well under a second; slow ones (the demo's study, fits of the measured sets) run in the
+slow tests and under ``check_figures.py --all``.
+"""
+
+import json
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+SOURCES = {}
+
+
+@dataclass
+class Source:
+    name: str
+    compute: Callable
+    slow: bool
+    doc: str
+
+    def available_from(self, options):
+        """Whether the figures can be had quickly from a file named in ``options``."""
+        return self.name == "demo" and bool(options.get("demo_metrics"))
+
+    def values(self, options):
+        return self.compute(options)
+
+
+def source(slow=False):
+    def register(fn):
+        SOURCES[fn.__name__] = Source(fn.__name__, fn, slow, (fn.__doc__ or "").strip())
+        return fn
+    return register
+
+
+def _triangle():
+    """The paper's drive as the README's example builds it: 0 -> 150 -> 0 V, 1 V steps."""
+    return np.r_[np.arange(0, 151), np.arange(149, -1, -1)].astype(float)
+
+
+@source()
+def paper_models(options):
+    """The paper's Table 1 models (examples/paper_table1_*.json) on its triangle from the
+    zero state: the displacement at 150 V and back at 0 V."""
+    import pihyst
+
+    u = _triangle()
+    out = {}
+    for key in ("classical", "multislope"):
+        model = pihyst.load_model(f"{_repo()}/examples/paper_table1_{key}.json")
+        y = model.predict(u)
+        out[key] = {"peak": float(y[150]), "end": float(y[-1]),
+                    "thresholds": [float(r) for r in model.thresholds],
+                    "weights": [float(w) for w in model.weights]}
+    c = out["classical"]
+    # what the r = 10 and r = 30 operators hold back at 0 V: w * r, summed
+    out["classical"]["held_at_zero"] = float(sum(w * r for r, w in
+                                                 zip(c["thresholds"][1:3], c["weights"][1:3])))
+    out["classical"]["top_weight"] = c["weights"][-1]
+    return out
+
+
+@source()
+def multislope_shape(options):
+    """The multislope operator of the paper's shape (U = 150, a = 0.8, b = 1.2, h = 0.5):
+    the largest valid threshold, and the r = 40 operator's kinks and holds, found by
+    running the operator on a fine 0 -> 150 -> 0 V grid (not from the formulas)."""
+    import pihyst
+    from pihyst.exceptions import InvalidModelError
+
+    U, a, h = 150.0, 0.8, 0.5
+    limit = (1 - a) * U / (1 - a * h)
+    try:                                   # the code agrees: just above the limit is refused
+        pihyst.MultislopePI([0.0, limit * 1.001], [1.0, 1.0])
+        refused = False
+    except InvalidModelError:
+        refused = True
+    if not refused:
+        raise AssertionError("a multislope threshold above (1 - a)U/(1 - ah) was accepted")
+    step = 0.01
+    up = np.arange(0.0, U + step / 2, step)
+    n = up.size
+    u = np.r_[up, up[-2::-1]]
+    y = pihyst.MultislopePI([40.0], [1.0]).predict(u)
+    slope = np.round(np.diff(y) / np.diff(u), 6)     # slope[i]: from u[i] to u[i + 1]
+    changes = [i for i in range(1, slope.size) if slope[i] != slope[i - 1]]
+    rising = [float(u[i]) for i in changes if i < n - 1 and u[i] > 40.0]
+    falling = [float(u[i]) for i in changes if i > n - 1]
+    # the hold after a reversal at M = 100 V: the voltage drop before the output moves
+    top = 100.0
+    up_m = np.arange(0.0, top + step / 2, step)
+    u_m = np.r_[up_m, up_m[-2::-1]]
+    y_m = pihyst.MultislopePI([40.0], [1.0]).predict(u_m)
+    m = up_m.size
+    moved = np.flatnonzero(np.abs(y_m[m:] - y_m[m - 1]) > 1e-9)[0]
+    r0 = pihyst.MultislopePI([0.0], [1.0])
+    rise0, fall0 = (float(np.ravel(e)[0]) for e in r0.envelopes(75.0)[:2])
+    return {"limit_V": limit,
+            "r0_at_75": {"R": rise0, "F": fall0},
+            "r40": {"rising_kink_V": rising[0], "hold_end_V": falling[0],
+                    "falling_kink_V": falling[1], "top": float(y[n - 1]),
+                    "end": float(y[-1]),
+                    "hold_after_100_V": float(top - u_m[m + moved - 1])}}
+
+
+@source()
+def paper(options):
+    """The paper's published numbers as pihyst records them (pihyst.paper), which the
+    report prints beside its own."""
+    from pihyst.paper import published
+    return published()
+
+
+@source(slow=True)
+def demo(options):
+    """pihyst demo's figures (seed 0, the paper beam): its metrics.json, from the file
+    given (--demo-metrics) or computed by the study itself (without the other beams and
+    the rig, which no headline figure depends on)."""
+    path = options.get("demo_metrics")
+    if path:
+        with open(path, encoding="utf-8") as f:
+            metrics = json.load(f)
+    else:
+        from pihyst.study import paper_study
+        metrics = paper_study(seed=0, variants=False, rig=False, progress=None).metrics
+    return _demo_derived(metrics)
+
+
+def _demo_derived(metrics):
+    """The metrics plus the ratios the text quotes."""
+    val = metrics["validation"]
+    rev = metrics["tracking"]["reversals"]["errors"]
+    metrics["derived"] = {
+        "validation_multislope_over_best": val["multislope"]["mean_abs"] / val["best"]["mean_abs"],
+        "validation_classical_over_best": val["classical"]["mean_abs"] / val["best"]["mean_abs"],
+        "reversals_multislope_mean_abs": rev["multislope"]["mean_abs"],
+        "reversals_best_mean_abs": rev["best"]["mean_abs"],
+    }
+    return metrics
+
+
+def _repo():
+    from pathlib import Path
+    return Path(__file__).resolve().parents[1]

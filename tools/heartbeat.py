@@ -1,0 +1,111 @@
+"""Run a command and pass its output through, saying what it is doing whenever it has been
+silent for a while (default 10 s): the README's set-up commands (make demo, make test) never
+leave the user looking at a silent terminal for longer than that.
+
+    python3 tools/heartbeat.py [--every SECONDS] [--label TEXT] -- COMMAND [ARG ...]
+
+The heartbeat line names the work in progress where it can be seen: the file a C compiler
+is compiling, else the newest program the command started (read from /proc on Linux;
+elsewhere only the time). The exit status is the command's. Standard library only: it
+runs before the virtual environment exists.
+"""
+
+import argparse
+import os
+import select
+import subprocess
+import sys
+import time
+
+
+def _children(pid):
+    """Process ids started by ``pid``, directly or not (Linux /proc; empty elsewhere)."""
+    try:
+        names = os.listdir("/proc")
+    except OSError:
+        return []
+    parent = {}
+    for name in names:
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat", encoding="ascii", errors="replace") as f:
+                stat = f.read()
+        except OSError:
+            continue
+        # pid (comm) state ppid ...: comm may hold spaces and parentheses
+        fields = stat[stat.rfind(")") + 2:].split()
+        parent[int(name)] = int(fields[1])
+    found, frontier = [], [pid]
+    while frontier:
+        p = frontier.pop()
+        kids = [c for c, pp in parent.items() if pp == p]
+        found += kids
+        frontier += kids
+    return found
+
+
+def _argv(pid):
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return [a.decode(errors="replace") for a in f.read().split(b"\0") if a]
+    except OSError:
+        return []
+
+
+def doing(pid):
+    """A few words on what the command ``pid`` is doing now ('' when nothing is known)."""
+    procs = [(c, _argv(c)) for c in _children(pid)]
+    procs = [(c, a) for c, a in procs if a]
+    for _, argv in procs:            # a C compiler at work: name its source file
+        if os.path.basename(argv[0]) in ("cc1", "cc1plus"):
+            sources = [a for a in argv[1:] if a.endswith((".c", ".cpp", ".i"))]
+            if sources:
+                return f"compiling {os.path.relpath(sources[0])}"
+    if not procs:
+        return ""
+    _, argv = max(procs)              # the newest process started
+    words = [os.path.basename(argv[0])] + [a for a in argv[1:3] if len(a) < 60]
+    return "running " + " ".join(words)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--every", type=float, default=10.0, metavar="SECONDS")
+    p.add_argument("--label", default="make", help="prefix of the heartbeat lines")
+    p.add_argument("command", nargs=argparse.REMAINDER)
+    args = p.parse_args(argv)
+    command = args.command[1:] if args.command[:1] == ["--"] else args.command
+    if not command:
+        p.error("no command given")
+    out = sys.stdout.buffer
+    start = last = time.monotonic()
+    at_line_start = True
+    # Python programs below write at once rather than when a pipe's buffer fills
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
+    fd = proc.stdout.fileno()
+    while True:
+        ready, _, _ = select.select([fd], [], [], 1.0)
+        now = time.monotonic()
+        if ready:
+            chunk = os.read(fd, 65536)
+            if not chunk:
+                break
+            out.write(chunk)
+            out.flush()
+            at_line_start = chunk.endswith((b"\n", b"\r"))
+            last = now
+        elif now - last >= args.every:
+            what = doing(proc.pid)
+            line = (f"{args.label}: ... {what or 'still working'} "
+                    f"({now - start:.0f} s since '{' '.join(command)[:60]}' started)\n")
+            out.write((b"" if at_line_start else b"\n") + line.encode())
+            out.flush()
+            at_line_start = True
+            last = now
+    return proc.wait()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
