@@ -2,7 +2,7 @@
 #   make demo   - the main job: the paper's study on the simulated beam
 #   make test   - C tests under sanitizers, then the Python test suite
 # Both create .venv and install pihyst into it on first use. Each long step runs under
-# tools/heartbeat.py, which passes its output through and, after 10 s of silence, prints
+# tools/heartbeat.py, which passes its output through and, after 8 s of silence, prints
 # a line saying what is running (the file gcc is compiling, the program started).
 PYTHON ?= python3
 VENV = .venv

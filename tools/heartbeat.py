@@ -1,12 +1,12 @@
 """Run a command and pass its output through, saying what it is doing whenever it has been
-silent for a while (default 10 s): the README's set-up commands (make demo, make test) never
+silent for a while (8 s by default): the README's set-up commands (make demo, make test) never
 leave the user looking at a silent terminal for longer than that.
 
     python3 tools/heartbeat.py [--every SECONDS] [--label TEXT] -- COMMAND [ARG ...]
 
 The heartbeat line names the work in progress where it can be seen: the file a C compiler
-is compiling, else the newest program the command started (read from /proc on Linux;
-elsewhere only the time). The exit status is the command's. Standard library only: it
+is compiling, else the newest program the command started (read from /proc on Linux),
+else the command's last line of output. The exit status is the command's. Standard library only: it
 runs before the virtual environment exists.
 """
 
@@ -71,7 +71,8 @@ def doing(pid):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--every", type=float, default=10.0, metavar="SECONDS")
+    p.add_argument("--every", type=float, default=8.0, metavar="SECONDS",
+                   help="the longest silence (default 8 s: a line at least every 10 s)")
     p.add_argument("--label", default="make", help="prefix of the heartbeat lines")
     p.add_argument("command", nargs=argparse.REMAINDER)
     args = p.parse_args(argv)
@@ -79,14 +80,16 @@ def main(argv=None):
     if not command:
         p.error("no command given")
     out = sys.stdout.buffer
+    name = " ".join([os.path.basename(command[0])] + command[1:2])    # "pip install"
     start = last = time.monotonic()
     at_line_start = True
+    last_line = ""
     # Python programs below write at once rather than when a pipe's buffer fills
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
     fd = proc.stdout.fileno()
     while True:
-        ready, _, _ = select.select([fd], [], [], 1.0)
+        ready, _, _ = select.select([fd], [], [], min(1.0, args.every / 3))
         now = time.monotonic()
         if ready:
             chunk = os.read(fd, 65536)
@@ -95,11 +98,14 @@ def main(argv=None):
             out.write(chunk)
             out.flush()
             at_line_start = chunk.endswith((b"\n", b"\r"))
+            lines = [x.strip() for x in chunk.decode(errors="replace").replace("\r", "\n")
+                     .split("\n") if x.strip() and not x.startswith(f"{args.label}: ...")]
+            last_line = lines[-1] if lines else last_line
             last = now
         elif now - last >= args.every:
-            what = doing(proc.pid)
+            what = doing(proc.pid) or (f"still at: {last_line[:70]}" if last_line else "")
             line = (f"{args.label}: ... {what or 'still working'} "
-                    f"({now - start:.0f} s since '{' '.join(command)[:60]}' started)\n")
+                    f"({now - start:.0f} s into {name})\n")
             out.write((b"" if at_line_start else b"\n") + line.encode())
             out.flush()
             at_line_start = True
