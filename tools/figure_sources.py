@@ -151,6 +151,43 @@ def demo(options):
     return _demo_derived(metrics)
 
 
+@source(slow=True)
+def p885_pair(options):
+    """The P-885 pair as benchmarks/bench_identify.py judges it: pihyst.fit on
+    Model_Vi_Do.dat (default, and delay=0), each family's model predicting the
+    uncompensated stretch of Test_Vi_Do_Di.dat with its own delay (RMS with the mean
+    removed), and its held-back RMS; the sets found by pihyst.io.datasets' rule."""
+    import warnings
+
+    from pihyst import fit
+    from pihyst.exceptions import PihystWarning
+    from pihyst.io import datasets
+
+    root = datasets.data_root()
+    if root is None:
+        raise LookupError("the measured data sets are not here ($PIHYST_DATA or "
+                          "../shared/data; make data)")
+    u, y = datasets.p885(root)
+    ut, yt = datasets.p885_test(root)
+    a, z = datasets.P885_TEST_UNCOMPENSATED
+    out = {}
+    for label, delay in (("default", "auto"), ("delay0", 0)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            res = fit(u, y, delay=delay)
+        rep = res.report.to_dict()
+        entry = {"delay": rep["data"]["delay"]["samples"], "families": {}}
+        for f in res.report.families:
+            e = yt[a:z] - res.models[f["family"]].predict(ut)[a:z]
+            row = {"n_operators": f["n_operators"], "test": float(np.sqrt(np.mean(
+                (e - e.mean()) ** 2))), "held_back": f["errors"]["held_back"]["rms"]}
+            entry["families"][f["family"]] = row
+            if f["chosen"]:
+                entry.update(row, chosen=f["family"])
+        out[label] = entry
+    return out
+
+
 def _demo_derived(metrics):
     """The metrics plus the ratios the text quotes."""
     val = metrics["validation"]

@@ -80,10 +80,11 @@ def main(argv=None):
     if not command:
         p.error("no command given")
     out = sys.stdout.buffer
-    name = " ".join([os.path.basename(command[0])] + command[1:2])    # "pip install"
+    # "pip install", "python -m pytest"
+    name = " ".join([os.path.basename(command[0])] + command[1:3 if command[1:2] == ["-m"] else 2])
     start = last = time.monotonic()
     at_line_start = True
-    last_line = ""
+    last_line = current = ""
     # Python programs below write at once rather than when a pipe's buffer fills
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
@@ -98,9 +99,12 @@ def main(argv=None):
             out.write(chunk)
             out.flush()
             at_line_start = chunk.endswith((b"\n", b"\r"))
-            lines = [x.strip() for x in chunk.decode(errors="replace").replace("\r", "\n")
-                     .split("\n") if x.strip() and not x.startswith(f"{args.label}: ...")]
+            # the line being written (pytest's dots come a few at a time), else the last
+            current = (current + chunk.decode(errors="replace")).replace("\r", "\n")
+            lines = [x.strip() for x in current.split("\n")
+                     if x.strip() and not x.startswith(f"{args.label}: ...")]
             last_line = lines[-1] if lines else last_line
+            current = current.rsplit("\n", 1)[-1][-500:]
             last = now
         elif now - last >= args.every:
             what = doing(proc.pid) or (f"still at: {last_line[:70]}" if last_line else "")
