@@ -57,7 +57,8 @@ data:
 # every figure quoted in README.md and docs/ against the code that produces it
 # (docs/figures.toml; the demo's figures from out/demo/metrics.json when it exists)
 figures: install
-	$(HEARTBEAT) $(BIN)/python tools/check_figures.py --all
+	$(HEARTBEAT) $(BIN)/python tools/check_figures.py --all \
+	    $(if $(wildcard out/demo/metrics.json),--demo-metrics out/demo/metrics.json)
 
 # docs/demo-report.png: headless Chromium's screenshot of out/demo/report.html
 screenshot: demo

@@ -140,21 +140,27 @@ def check_entry(entry, values, text, line_of):
 
 def check(entries, *, slow=False, options=None):
     """Check ``entries`` whose source is quick (and slow ones too when ``slow``); returns
-    (number of figures checked, mismatches, names of the sources skipped)."""
+    (number of figures checked, mismatches, {source skipped: why})."""
     from figure_sources import SOURCES  # tools/ on sys.path (main() puts it there)
 
     options = options or {}
-    texts, checked, problems, skipped, cache = {}, 0, [], set(), {}
+    texts, checked, problems, skipped, cache = {}, 0, [], {}, {}
     for entry in entries:
         if entry.source not in SOURCES:
             raise RegistryError(f"unknown source {entry.source!r} (tools/figure_sources.py "
                                 f"has {', '.join(sorted(SOURCES))})")
         src = SOURCES[entry.source]
         if src.slow and not slow and not src.available_from(options):
-            skipped.add(entry.source)
+            skipped[entry.source] = "slow (--all)"
+            continue
+        if entry.source in skipped:
             continue
         if entry.source not in cache:
-            cache[entry.source] = src.values(options)
+            try:
+                cache[entry.source] = src.values(options)
+            except LookupError as err:          # what it needs is not here (the data sets)
+                skipped[entry.source] = str(err)
+                continue
         if entry.file not in texts:
             texts[entry.file] = (REPO / entry.file).read_text(encoding="utf-8")
         text = texts[entry.file]
@@ -164,7 +170,7 @@ def check(entries, *, slow=False, options=None):
 
         problems += check_entry(entry, cache[entry.source], text, line_of)
         checked += len(entry.pattern()[1])
-    return checked, problems, sorted(skipped)
+    return checked, problems, skipped
 
 
 # --------------------------------------------------------------------------- coverage
@@ -215,7 +221,7 @@ def main(argv=None):
     for problem in problems:
         print(problem)
     print(f"check_figures: {n} figures checked, {len(problems)} not true"
-          + (f"; slow sources skipped: {', '.join(skipped)} (--all)" if skipped else ""))
+          + "".join(f"; {name} skipped: {why}" for name, why in sorted(skipped.items())))
     return 1 if problems else 0
 
 

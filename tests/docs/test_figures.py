@@ -50,7 +50,9 @@ def test_the_quick_figures_are_true(checker, entries):
 @pytest.mark.slow
 def test_the_slow_figures_are_true(checker, entries):
     n, problems, skipped = checker.check(entries, slow=True)
-    assert not skipped
+    # only what needs the measured data sets may be left out, and only without them
+    from pihyst.io import datasets
+    assert not skipped or (datasets.data_root() is None and set(skipped) <= {"p885_pair"})
     assert not problems, "\n".join(map(str, problems))
 
 
