@@ -89,32 +89,37 @@ def main(argv=None):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
     fd = proc.stdout.fileno()
-    while True:
-        ready, _, _ = select.select([fd], [], [], min(1.0, args.every / 3))
-        now = time.monotonic()
-        if ready:
-            chunk = os.read(fd, 65536)
-            if not chunk:
-                break
-            out.write(chunk)
-            out.flush()
-            at_line_start = chunk.endswith((b"\n", b"\r"))
-            # the line being written (pytest's dots come a few at a time), else the last
-            current = (current + chunk.decode(errors="replace")).replace("\r", "\n")
-            lines = [x.strip() for x in current.split("\n")
-                     if x.strip() and not x.startswith(f"{args.label}: ...")]
-            last_line = lines[-1] if lines else last_line
-            current = current.rsplit("\n", 1)[-1][-500:]
-            last = now
-        elif now - last >= args.every:
-            what = doing(proc.pid) or (f"still at: {last_line[:70]}" if last_line else "")
-            line = (f"{args.label}: ... {what or 'still working'} "
-                    f"({now - start:.0f} s into {name})\n")
-            out.write((b"" if at_line_start else b"\n") + line.encode())
-            out.flush()
-            at_line_start = True
-            last = now
-    return proc.wait()
+    try:
+        while True:
+            ready, _, _ = select.select([fd], [], [], min(1.0, args.every / 3))
+            now = time.monotonic()
+            if ready:
+                chunk = os.read(fd, 65536)
+                if not chunk:
+                    break
+                out.write(chunk)
+                out.flush()
+                at_line_start = chunk.endswith((b"\n", b"\r"))
+                # the line being written (pytest's dots come a few at a time), else the last
+                current = (current + chunk.decode(errors="replace")).replace("\r", "\n")
+                lines = [x.strip() for x in current.split("\n")
+                         if x.strip() and not x.startswith(f"{args.label}: ...")]
+                last_line = lines[-1] if lines else last_line
+                current = current.rsplit("\n", 1)[-1][-500:]
+                last = now
+            elif now - last >= args.every:
+                what = doing(proc.pid) or (f"still at: {last_line[:70]}" if last_line else "")
+                line = (f"{args.label}: ... {what or 'still working'} "
+                        f"({now - start:.0f} s into {name})\n")
+                out.write((b"" if at_line_start else b"\n") + line.encode())
+                out.flush()
+                at_line_start = True
+                last = now
+    except KeyboardInterrupt:      # Ctrl-C reached the command too: let it end, quietly
+        out.write(proc.stdout.read())
+        out.flush()
+    status = proc.wait()
+    return 128 - status if status < 0 else status    # killed by signal N: 128 + N
 
 
 if __name__ == "__main__":

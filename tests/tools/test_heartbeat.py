@@ -46,3 +46,20 @@ def test_it_names_the_program_the_command_started():
     code = "import subprocess; subprocess.run(['sleep', '1.2'])"
     proc = run(code)
     assert "running sleep 1.2" in proc.stdout
+
+
+def test_ctrl_c_ends_both_quietly_with_the_commands_status():
+    import os
+    import signal
+    import time
+    proc = subprocess.Popen([sys.executable, str(HEARTBEAT), "--", sys.executable, "-c",
+                             "import time; print('up', flush=True); time.sleep(30)"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    assert proc.stdout.readline() == "up\n"
+    time.sleep(0.3)
+    os.killpg(proc.pid, signal.SIGINT)          # as the terminal sends it, to the group
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130               # the command's: ended by SIGINT
+    assert err == ""                            # no traceback of the heartbeat's own
+    assert "KeyboardInterrupt" in out           # the command's last words pass through
