@@ -139,15 +139,15 @@ def paper(options):
 @source(slow=True)
 def demo(options):
     """pihyst demo's figures (seed 0, the paper beam): its metrics.json, from the file
-    given (--demo-metrics) or computed by the study itself (without the other beams and
-    the rig, which no headline figure depends on)."""
+    given (--demo-metrics) or computed by the study itself (without the other beams,
+    which no quoted figure depends on)."""
     path = options.get("demo_metrics")
     if path:
         with open(path, encoding="utf-8") as f:
             metrics = json.load(f)
     else:
         from pihyst.study import paper_study
-        metrics = paper_study(seed=0, variants=False, rig=False, progress=None).metrics
+        metrics = paper_study(seed=0, variants=False, rig=True, progress=None).metrics
     return _demo_derived(metrics)
 
 
@@ -217,6 +217,44 @@ def tracking_beams(options):
             uncompensated.append(100 * np.mean(np.abs(measured - y_d)) / span)
     return {"compensated_pct": {"min": min(compensated), "max": max(compensated)},
             "uncompensated_pct": {"min": min(uncompensated), "max": max(uncompensated)}}
+
+
+@source(slow=True)
+def rig_commands(options):
+    """The rig commands of the README and docs/rig.md as written (emulated instruments,
+    virtual time): record the loop, fit it, track examples/rig/desired_triangle.csv open
+    loop and with --feedback 1,10; the tracking errors as the command prints them."""
+    import contextlib
+    import io
+    import os
+    import re
+    import tempfile
+
+    from pihyst.cli import main
+
+    config = str(_repo() / "examples" / "rig" / "emulated.toml")
+    desired = str(_repo() / "examples" / "rig" / "desired_triangle.csv")
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        def run(*args):
+            buf = io.StringIO()
+            with contextlib.redirect_stdout(buf):
+                status = main(list(args))
+            if status != 0:
+                raise RuntimeError(f"pihyst {' '.join(args)}: exit status {status}")
+            return buf.getvalue()
+
+        loop, model = os.path.join(tmp, "loop.csv"), os.path.join(tmp, "model.json")
+        run("rig", "record", "--config", config, "-o", loop)
+        run("fit", loop, "-o", model)
+        for key, extra in (("open_loop", ()), ("feedback", ("--feedback", "1,10"))):
+            text = run("rig", "track", model, desired, "--config", config, *extra,
+                       "-o", os.path.join(tmp, f"{key}.csv"))
+            m = re.search(r"mean absolute ([\d.e-]+) µm.*; RMS ([\d.e-]+) µm; max "
+                          r"([\d.e-]+) µm", text)
+            out[key] = {"mean_abs": float(m.group(1)), "rms": float(m.group(2)),
+                        "max_abs": float(m.group(3))}
+    return out
 
 
 def _demo_derived(metrics):
