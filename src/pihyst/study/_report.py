@@ -106,8 +106,6 @@ class _Figures:
     def add(self, key, title, caption, fig, paper_figure=None):
         n = self._number(paper_figure)
         name = f"fig{n}_{key}.png"
-        if any(item[1] == name for item in self.items):
-            raise ValueError(f"two figures numbered {n}")
         if self.paper:
             title = title.removesuffix(" (pihyst)")
             title += (f" (the paper's {paper_figure}, reproduced)" if paper_figure
