@@ -252,6 +252,8 @@ def rig_commands(options):
                        "-o", os.path.join(tmp, f"{key}.csv"))
             m = re.search(r"mean absolute ([\d.e-]+) µm.*; RMS ([\d.e-]+) µm; max "
                           r"([\d.e-]+) µm", text)
+            if m is None:
+                raise RuntimeError(f"pihyst rig track printed no tracking error: {text!r}")
             out[key] = {"mean_abs": float(m.group(1)), "rms": float(m.group(2)),
                         "max_abs": float(m.group(3))}
     return out
