@@ -26,9 +26,7 @@ INTERACTIVE = ("--gui",)
 GIVEN = ("run.lvm", "run.tdms", "loop.xlsx", "drec.dat", "loop.csv", "records/", "raw/",
          "options.json")
 
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(not (REPO / ".git").exists() or shutil.which("git") is None,
-                                 reason="runs from a git checkout")]
+pytestmark = pytest.mark.skipif(not README.exists(), reason="runs from a source checkout")
 
 
 def readme_commands(text):
@@ -116,6 +114,9 @@ def fresh_clone(dest):
     return dest
 
 
+@pytest.mark.slow
+@pytest.mark.skipif(not (REPO / ".git").exists() or shutil.which("git") is None,
+                    reason="copies the tracked files of a git checkout")
 def test_every_readme_command_runs_as_written(tmp_path):
     from pihyst.io import datasets
     data = datasets.data_root()
