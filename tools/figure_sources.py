@@ -151,6 +151,20 @@ def demo(options):
     return _demo_derived(metrics)
 
 
+@source()
+def p885_data(options):
+    """The P-885 identification record as it is (Model_Vi_Do.dat, column 5): the range of
+    the sensor's absolute readings (µm)."""
+    from pihyst.io import datasets
+
+    root = datasets.data_root()
+    if root is None:
+        raise LookupError("the measured data sets are not here ($PIHYST_DATA or "
+                          "../shared/data; make data)")
+    y = np.loadtxt(root / datasets.P885_DIR / "Model_Vi_Do.dat", usecols=4)
+    return {"sensor_min_um": float(y.min()), "sensor_max_um": float(y.max())}
+
+
 @source(slow=True)
 def p885_pair(options):
     """The P-885 pair as benchmarks/bench_identify.py judges it: pihyst.fit on
