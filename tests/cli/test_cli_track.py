@@ -36,7 +36,7 @@ def test_track_writes_measured_and_errors(tmp_path, capsys, desired):
     assert np.all((cols["voltage_V"] >= 0) & (cols["voltage_V"] <= 150))
     text = capsys.readouterr().out
     mae = np.mean(np.abs(cols["error_um"]))
-    assert f"mean absolute {mae:.4g} um" in text and "% of the desired range" in text
+    assert f"mean absolute {mae:.4g} µm" in text and "% of the desired range" in text
     assert "saturated: 0 of" in text
 
 

@@ -184,7 +184,7 @@ def test_record_fit_track(tmp_path, capsys, cfg):
     assert main(["rig", "track", str(model), str(desired), "--config", str(cfg),
                  "--feedback", "0.3,2", "-o", str(run)]) == 0
     out = capsys.readouterr().out
-    assert "tracking error with feedback" in out and "% of the range 35 um" in out
+    assert "tracking error with feedback" in out and "% of the range 35 µm" in out
     assert main(["rig", "check", "--config", str(cfg)]) == 0
     assert "0 V sent, output off, readback 0.000 V" in capsys.readouterr().out
 

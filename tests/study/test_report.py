@@ -23,10 +23,11 @@ def test_every_promised_file_is_written(demo):
     expected = {"report.html", "metrics.json", "loop.csv", "identification.csv",
                 "validation.csv", "tracking_triangle.csv", "tracking_reversals.csv",
                 "model_classical.json", "model_multislope.json", "model_best.json",
-                "fig1_loop.png", "fig2_fit_errors.png", "fig3_classical_operators.png",
-                "fig4_multislope_operators.png", "fig5_validation.png", "fig6_voltages.png",
-                "fig7_tracking.png", "fig8_tracking_reversals.png", "fig9_variants.png",
-                "fig10_beams.png"}
+                # numbered as the paper's figures they reproduce; pihyst's own A1, A2, ...
+                "fig7_loop.png", "fig8_fit_errors.png", "fig4_classical_operators.png",
+                "fig5_multislope_operators.png", "figA1_validation.png", "fig11_voltages.png",
+                "fig12_tracking.png", "figA2_tracking_reversals.png", "figA3_variants.png",
+                "figA4_beams.png"}
     # each CSV's description in its sidecar (the CSV itself is plain)
     expected |= {f"{n}.json" for n in expected if n.endswith(".csv")
                  and f"{n}.json" in names}
@@ -34,6 +35,21 @@ def test_every_promised_file_is_written(demo):
     assert names == expected
     assert not [n for n in names if n.startswith(".pihyst-")]
     assert lines == ["drawing the figures ...", "writing data, models and metrics ..."]
+
+
+def test_figures_reproducing_the_papers_carry_its_numbers(demo):
+    _, out, files, _ = demo
+    text = (out / "report.html").read_text(encoding="utf-8")
+    titles = re.findall(r"<figcaption><b>(Figure [^<]*)</b>", text)
+    assert len(titles) == len([n for n in files if n.endswith(".png")])
+    for title in titles:
+        number = re.match(r"Figure (\w+)\. ", title).group(1)
+        reproduced = re.search(r"the paper's Fig\. (\d+), reproduced", title)
+        if reproduced:
+            assert number == reproduced.group(1), title
+        else:
+            assert number.startswith("A") and "not in the paper" in title, title
+    assert len(set(titles)) == len(titles)
 
 
 def test_pngs_are_images_readable_by_others(demo):
@@ -76,11 +92,11 @@ def test_html_shows_every_metric_beside_the_papers(demo):
     assert f'{m["fit"]["multislope"]["mean_abs"]:.4g}' in text
     assert f'{m["tracking"]["triangle"]["errors"]["multislope"]["mean_abs"]:.4g}' in text
     assert "never moves: left out" in text
-    for fig in ("Fig. 4", "Fig. 5", "Fig. 7", "Fig. 8", "Fig. 11", "Fig. 12"):
-        assert f"(the paper's {fig})" in text
-    # numbered in the order of the page
-    numbers = [int(n) for n in re.findall(r"<figcaption><b>Figure (\d+)\.", text)]
-    assert numbers == list(range(1, 11))
+    for fig in ("4", "5", "7", "8", "11", "12"):
+        assert f"Figure {fig}. " in text and f"(the paper's Fig. {fig}, reproduced)" in text
+    # pihyst's own figures numbered A1, A2, ... in the order of the page
+    added = [n for n in re.findall(r"<figcaption><b>Figure (A\d+)\.", text)]
+    assert added == [f"A{k}" for k in range(1, 5)]
     assert " um" not in text.split("<details>")[0]
 
 
@@ -129,9 +145,10 @@ def test_report_command_on_a_simulated_record(tmp_path, capsys):
     assert main(["report", str(data), "--out", str(out), "--paper", "--figure-format", "svg",
                  "--figure-format", "pdf"]) == 0
     text = (out / "report.html").read_text(encoding="utf-8")
-    assert "paper's beam" in text and "(the paper's Fig. 7)" in text
-    assert (out / "fig1_loop.svg").read_text().lstrip().startswith("<?xml")
-    assert (out / "fig2_fit_errors.pdf").read_bytes().startswith(b"%PDF")
+    assert "paper's beam" in text
+    assert "Figure 7. Measured loop and fitted models (the paper's Fig. 7, reproduced)" in text
+    assert (out / "fig7_loop.svg").read_text().lstrip().startswith("<?xml")
+    assert (out / "fig8_fit_errors.pdf").read_bytes().startswith(b"%PDF")
 
 
 def test_report_default_folder_is_next_to_the_data(tmp_path):

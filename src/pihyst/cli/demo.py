@@ -68,19 +68,19 @@ def run(args):
     paper = study.metrics["paper"]
     print(f"pihyst demo: wrote {len(files)} files to {args.out} in "
           f"{time.perf_counter() - t0:.1f} s; open {os.path.join(args.out, 'report.html')}")
-    print(f"  fit mean |error|: conventional PI {h['fit_mean_abs_classical_um']:.4f} um "
+    print(f"  fit mean |error|: conventional PI {h['fit_mean_abs_classical_um']:.4f} µm "
           f"(paper {paper['fit']['classical']['mean_abs']}), multislope PI "
-          f"{h['fit_mean_abs_multislope_um']:.4f} um (paper "
+          f"{h['fit_mean_abs_multislope_um']:.4f} µm (paper "
           f"{paper['fit']['multislope']['mean_abs']}): {h['fit_improvement_pct']:.1f} % less "
           f"(paper {paper['fit']['improvement_pct']} %)")
     print(f"  tracking with the multislope inverse: mean |error| "
-          f"{h['tracking_mean_abs_multislope_um']:.4f} um (paper "
-          f"{paper['tracking']['mean_abs']}), RMS {h['tracking_rms_multislope_um']:.4f} um "
+          f"{h['tracking_mean_abs_multislope_um']:.4f} µm (paper "
+          f"{paper['tracking']['mean_abs']}), RMS {h['tracking_rms_multislope_um']:.4f} µm "
           f"(paper {paper['tracking']['rms']:.4f}), {h['tracking_mean_abs_pct_of_range']:.2f} "
           f"% of the range")
     if study.rig is not None:
         o, f = study.rig.tracking["open_loop"], study.rig.tracking["feedback"]
         print(f"  through the emulated instruments: mean |error| open loop {o['mean_abs']:.4f} "
-              f"um, with feedback {f['mean_abs']:.4f} um; busy "
+              f"µm, with feedback {f['mean_abs']:.4f} µm; busy "
               f"{study.rig.timing['record']['busy_mean_ms']:.1f} ms per tick at "
               f"{study.rig.rate_hz:g} Hz")

@@ -287,7 +287,7 @@ class _Dask:
 def _progress(outcome):
     if outcome.ok:
         rms = outcome.held_back_rms
-        rms = f", held-back RMS {rms:.4g} um" if rms is not None else ""
+        rms = f", held-back RMS {rms:.4g} µm" if rms is not None else ""
         print(f"  {outcome.record}: {outcome.family}, {outcome.model.n_operators} operators"
               f"{rms} ({outcome.seconds:.2f} s)", flush=True)
     else:

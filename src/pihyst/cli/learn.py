@@ -89,7 +89,7 @@ def _mode(text):
 def _noise(text):
     value = number(text)
     if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be a number >= 0 (um), got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be a number >= 0 (µm), got {text!r}")
     return value
 
 
@@ -138,11 +138,11 @@ def print_learning(res, noise_um=None):
     noise = res.noise_um if noise_um is None else noise_um
     for j, (e, ok, kind) in enumerate(zip(res.rms, res.accepted, res.kinds)):
         mark = "" if ok else "  (undone)"
-        print(f"trial {j:3d} {kind:<5} RMS error {e:.4g} um = {e / noise:.2f} x noise"
+        print(f"trial {j:3d} {kind:<5} RMS error {e:.4g} µm = {e / noise:.2f} x noise"
               f"{mark}")
-    print(f"best: trial {res.best_trial}, {res.rms[res.best_trial]:.4g} um ("
+    print(f"best: trial {res.best_trial}, {res.rms[res.best_trial]:.4g} µm ("
           f"{res.rms[0] / res.rms[res.best_trial]:.1f} x below trial 0); noise estimated "
-          f"{res.noise_um:.3g} um; stopped: {res.reason}")
+          f"{res.noise_um:.3g} µm; stopped: {res.reason}")
 
 
 # ----------------------------------------------------------------------------- run

@@ -92,5 +92,5 @@ def run(args):
     print(f"pihyst report: wrote {len(files)} files to {out} in "
           f"{time.perf_counter() - t0:.1f} s; open {os.path.join(out, 'report.html')}")
     print("  mean |error|: " + ", ".join(
-        f"{study.models[k].label} {fit[k]['mean_abs']:.4g}"
+        f"{study.models[k].label} {fit[k]['mean_abs']:.4g} µm"
         for k in ("classical", "multislope", "best")))

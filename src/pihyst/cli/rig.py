@@ -90,7 +90,7 @@ def register(sub):
     t.add_argument("model", metavar="MODEL.json")
     t.add_argument("desired", metavar="DESIRED.csv", help="CSV with time_s, displacement_um")
     t.add_argument("--feedback", metavar="KP,KI[,KD]", default=None,
-                   help="PID gains on the error in um (KP in V/um, KI in V/(um s), KD in V s/um), "
+                   help="PID gains on the error in µm (KP in V/µm, KI in V/(µm s), KD in V s/µm), "
                         "e.g. 1,10")
     add_frame_options(t)
     _common(t)
@@ -267,7 +267,7 @@ def run_check(args):
                 pass
     print(f"supply: {rig.supply.describe()}: 0 V sent, output off"
           + ("" if readback is None else f", readback {readback:.3f} V"))
-    value = f"{reading.value:.4f} um" if reading.valid else f"no value ({reading.status})"
+    value = f"{reading.value:.4f} µm" if reading.valid else f"no value ({reading.status})"
     print(f"sensor: {rig.sensor.describe()}: {value}")
 
 
@@ -313,7 +313,7 @@ def run_record(args):
     y = result.column("displacement_um", phase="run")
     y = y[np.isfinite(y)]
     if y.size:
-        print(f"recorded {y.size} ticks: displacement {y.min():.4g} .. {y.max():.4g} um")
+        print(f"recorded {y.size} ticks: displacement {y.min():.4g} .. {y.max():.4g} µm")
     _report(result, args, rig)
 
 
@@ -369,11 +369,11 @@ def run_track(args):
     if ok.any():
         span = float(np.ptp(desired))
         s = metrics.error_summary(ref[ok], y[ok], span)
-        pct = f" = {s['mean_abs_pct']:.2f} % of the range {span:.4g} um" if span > 0 else ""
+        pct = f" = {s['mean_abs_pct']:.2f} % of the range {span:.4g} µm" if span > 0 else ""
         mode = "with feedback" if gains else "open loop"
         print(f"tracking error {mode} (measured - desired, {int(ok.sum())} ticks): mean "
-              f"absolute {s['mean_abs']:.4g} um{pct}; RMS {s['rms']:.4g} um; max "
-              f"{s['max_abs']:.4g} um")
+              f"absolute {s['mean_abs']:.4g} µm{pct}; RMS {s['rms']:.4g} µm; max "
+              f"{s['max_abs']:.4g} µm")
     _report(result, args, rig)
 
 

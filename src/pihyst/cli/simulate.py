@@ -106,4 +106,4 @@ def run(args):
                   comments=[f"pihyst {__version__} simulate ({options})", plant.describe()])
     print(f"wrote {u.size} samples ({t[-1]:g} s) to {args.output}: {args.signal} "
           f"{args.u_min:g}..{u_max:g} V on {plant.name}, displacement "
-          f"{y.min():.4g} .. {y.max():.4g} um")
+          f"{y.min():.4g} .. {y.max():.4g} µm")

@@ -102,7 +102,7 @@ def run(args):
     result = (PreviewRun(compensator, compensator.delay).feed(target, at.get("t"), last=True)
               if compensator.delay else compensator.run(target, **at))
     check_reach(args, result.n_saturated, y_d.size, args.desired,
-                f"the desired displacement spans [{y_d.min():.4g}, {y_d.max():.4g}] um"
+                f"the desired displacement spans [{y_d.min():.4g}, {y_d.max():.4g}] µm"
                 + ("" if args.relative else " in the model's frame; a trajectory from the "
                    "actuator's rest point: --relative"))
     # (the beam's and the model's output in the user's frame)
@@ -118,10 +118,10 @@ def run(args):
     span = float(y_d.max() - y_d.min())
     mae = float(np.mean(np.abs(error)))
     rms = float(np.sqrt(np.mean(error ** 2)))
-    share = f" = {100 * mae / span:.2f} % of the desired range {span:.4g} um" if span > 0 else ""
+    share = f" = {100 * mae / span:.2f} % of the desired range {span:.4g} µm" if span > 0 else ""
     print(f"wrote {y_d.size} samples to {args.output}: {args.plant} driven by the inverse of "
           f"{args.model} (voltage {result.voltage.min():.4g} .. {result.voltage.max():.4g} V)")
-    print(f"tracking error (measured - desired): mean absolute {mae:.4g} um{share}; "
-          f"RMS {rms:.4g} um; largest {float(np.max(np.abs(error))):.4g} um")
+    print(f"tracking error (measured - desired): mean absolute {mae:.4g} µm{share}; "
+          f"RMS {rms:.4g} µm; largest {float(np.max(np.abs(error))):.4g} µm")
     print(f"saturated: {result.n_saturated} of {y_d.size} samples"
           + ("" if max_step is None else f"; slew-limited: {result.n_slew_limited}"))

@@ -25,7 +25,7 @@ def register(sub):
     p = sub.add_parser(
         "validate", help="judge a model on a record: errors overall and per cycle",
         description="Predict the voltage of DATA with MODEL.json and compare with the "
-                    "measured displacement: mean absolute, RMS and largest error in um and "
+                    "measured displacement: mean absolute, RMS and largest error in µm and "
                     "in % of the measured range, overall, with the output offset re-fitted "
                     "to this record's sensor zero, and per input cycle.",
         epilog="example: pihyst fit loop1.csv -o model.json && pihyst validate model.json "

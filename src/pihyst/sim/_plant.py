@@ -227,7 +227,7 @@ class Plant:
         parts.append(f"creep {100 * self.creep_per_decade:g} % per time decade (first-order "
                      f"lags 0.1-3000 s driven by the hysteretic output)"
                      if self._creep else "no creep")
-        parts.append(f"sensor noise sigma {self.noise_um:g} um" if self.noise_um
+        parts.append(f"sensor noise sigma {self.noise_um:g} µm" if self.noise_um
                      else "no sensor noise")
         parts.append(f"second-order beam dynamics ({self.dynamics[0]:g} Hz, damping "
                      f"{self.dynamics[1]:g})" if self.dynamics
@@ -252,7 +252,7 @@ _VARIANTS = {
         lambda: Preisach(U_MAX, [(52.61, -0.7544, 0.5377)], reversible=(20.0, 4.65)),
         0.01,
         "Preisach hysteresis (asymmetric density mu = A exp(p alpha + q beta) plus a "
-        "reversible part) calibrated to the paper's PZT-5H beam: about 45 um at 150 V, a "
+        "reversible part) calibrated to the paper's PZT-5H beam: about 45 µm at 150 V, a "
         "lens-shaped loop about 20 % of the range wide that closes at the origin."),
     "lens": (
         lambda: Preisach(U_MAX, [(95.0, -3.6, 3.1)], reversible=(26.0,)),

@@ -152,7 +152,7 @@ def random_plant(seed: int, *, dynamics: bool = False) -> tuple[Plant, dict[str,
     desc.update({"creep_per_decade": creep, "noise_um": noise, "rate_hz": rate,
                  "range_um": rise, "seed": int(seed)})
     summary = (f"random {desc['kind']} actuator (seed {seed}): creep "
-               f"{100 * creep:.2g} %/decade, noise {noise:.3g} um, {rate:.0f} Hz")
+               f"{100 * creep:.2g} %/decade, noise {noise:.3g} µm, {rate:.0f} Hz")
     options: dict[str, Any] = dict(creep_per_decade=creep, noise_um=noise, quantum_V=SUPPLY_STEP_V,
                    seed=int(seed), summary=summary)
     if not dynamics:

@@ -509,7 +509,7 @@ def paper_study(plant: str = "paper-beam", *, seed: int = 0, dt: float = 0.1,
     peak = float(loop.y[np.argmax(loop.u)])
     t_d, y_d = triangle(u_max=0.98 * peak, dt=dt)
     tracking = {"triangle": _track(plant, seed + 3, models, t_d, y_d, peak, u_max,
-                                   "0 -> 98 % of the recorded peak -> 0 um, 300 s")}
+                                   "0 -> 98 % of the recorded peak -> 0 µm, 300 s")}
 
     prog.step("tracking a trajectory with reversals inside the range")
     t_r, y_r = random_ramps(u_max=0.9 * peak, n_ramps=12, rate=2 * peak / 300.0, dt=dt,

@@ -83,19 +83,38 @@ def _list(values, digits=4):
 
 # ----------------------------------------------------------------------------- figures
 class _Figures:
-    """Figures in page order, numbered as added: (key, file name, title, caption, PNG
-    bytes, paper's figure or None); ``extra`` holds each figure in the other formats
-    asked for (SVG, PDF) by file name."""
+    """Figures in page order: (key, file name, title, caption, PNG bytes, paper's figure
+    or None); ``extra`` holds each figure in the other formats asked for (SVG, PDF) by
+    file name.
+
+    Beside the paper (``paper``), a figure that reproduces one of the paper's carries
+    its number ("Figure 7", ``fig7_loop.png`` for the paper's Fig. 7) and the others,
+    pihyst's additions, are numbered A1, A2, ... in page order; without the paper, every
+    figure is numbered 1, 2, ... in page order.
+    """
 
     def __init__(self, formats=(), paper=True):
         self.items = []
         self.formats = tuple(formats)
         self.paper = paper
         self.extra = {}
+        self._added = 0
+
+    def _number(self, paper_figure):
+        if not self.paper:
+            return str(len(self.items) + 1)
+        if paper_figure:
+            return paper_figure.removeprefix("Fig. ")
+        self._added += 1
+        return f"A{self._added}"
 
     def add(self, key, title, caption, fig, paper_figure=None):
-        n = len(self.items) + 1
+        n = self._number(paper_figure)
         name = f"fig{n}_{key}.png"
+        if self.paper:
+            title = title.removesuffix(" (pihyst)")
+            title += (f" (the paper's {paper_figure}, reproduced)" if paper_figure
+                      else " (added by pihyst; not in the paper)")
         self.items.append((key, name, f"Figure {n}. {title}", caption, plot.figure_png(fig),
                            paper_figure))
         for fmt in self.formats:
@@ -107,11 +126,9 @@ class _Figures:
         return any(item[0] == key for item in self.items)
 
     def html(self, key):
-        for k, fname, title, caption, png, paper_figure in self.items:
+        for k, fname, title, caption, png, _ in self.items:
             if k == key:
                 data = base64.b64encode(png).decode("ascii")
-                if paper_figure and self.paper:
-                    title += f" (the paper's {paper_figure})"
                 return (f'<figure id="{html.escape(fname)}"><img src="data:image/png;base64,'
                         f'{data}" alt="{html.escape(title)}"><figcaption><b>'
                         f'{html.escape(title, quote=False)}.</b> {caption}</figcaption>'

@@ -153,7 +153,7 @@ def rig_study(plant="paper-beam", *, seed=0, rate_hz=10.0, gains=(1.0, 10.0), pe
         say("rig: tracking the triangular trajectory open loop (the multislope inverse)")
         run("open_loop", FeedforwardProgram(model, desired, 0.0, 150.0, max_step,
                                             "triangle 0 -> 98 % of the recorded peak -> 0"))
-        say(f"rig: tracking with feedback (Kp {gains[0]:g} V/um, Ki {gains[1]:g} V/(um s))")
+        say(f"rig: tracking with feedback (Kp {gains[0]:g} V/µm, Ki {gains[1]:g} V/(µm s))")
         run("feedback", FeedbackProgram(model, desired, 0.0, 150.0, dt, *gains,
                                         max_step=max_step,
                                         description="triangle 0 -> 98 % of the recorded "
@@ -215,7 +215,7 @@ def rig_html(study, figure_html=""):
                             t["overruns"], "end of the program"]))
     timing = head + "".join(rows) + "</tbody></table>"
     track = ["<table class=\"data\"><thead><tr><th>through the rig</th><th>mean |error| "
-             "(um)</th><th>RMS (um)</th><th>max |error| (um)</th><th>mean, % of range</th>"
+             "(µm)</th><th>RMS (µm)</th><th>max |error| (µm)</th><th>mean, % of range</th>"
              "</tr></thead><tbody>"]
     for run in ("open_loop", "feedback"):
         e = study.tracking[run]
@@ -232,8 +232,8 @@ def rig_html(study, figure_html=""):
         f"{study.rate_hz:g} Hz in virtual time (bytes take their time on the emulated "
         f"wire; the runs take the time of their computation). The loop was recorded, the "
         f"paper's multislope PI (0, 20, 30, 40) fitted to the logged loop, and the "
-        f"triangle tracked open loop and with PI feedback (gains {gains}, V/um and "
-        f"V/(um s)). Logs: <code>rig_record.csv</code>, <code>rig_open_loop.csv</code>, "
+        f"triangle tracked open loop and with PI feedback (gains {gains}, V/µm and "
+        f"V/(µm s)). Logs: <code>rig_record.csv</code>, <code>rig_open_loop.csv</code>, "
         f"<code>rig_feedback.csv</code>.</p>",
         "<h3>Loop timing</h3>",
         "<p>Busy time is the wire time of a tick's exchanges plus the instruments' "

@@ -1,0 +1,292 @@
+"""The sources of the figures quoted in README.md and docs/ (docs/figures.toml names
+them; tools/check_figures.py checks the text against them).
+
+Each source computes its figures with the current code and returns them as a nested
+dict; a placeholder ``{a.b}`` of a quote names ``values["a"]["b"]``. Quick sources take
+well under a second; slow ones (the demo's study, fits of the measured sets) run in the
+slow tests and under ``check_figures.py --all``.
+"""
+
+import json
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+SOURCES = {}
+
+
+@dataclass
+class Source:
+    name: str
+    compute: Callable
+    slow: bool
+    doc: str
+
+    def available_from(self, options):
+        """Whether the figures can be had quickly from a file named in ``options``."""
+        return self.name == "demo" and bool(options.get("demo_metrics"))
+
+    def values(self, options):
+        return self.compute(options)
+
+
+def source(slow=False):
+    def register(fn):
+        SOURCES[fn.__name__] = Source(fn.__name__, fn, slow, (fn.__doc__ or "").strip())
+        return fn
+    return register
+
+
+def _triangle():
+    """The paper's drive as the README's example builds it: 0 -> 150 -> 0 V, 1 V steps."""
+    return np.r_[np.arange(0, 151), np.arange(149, -1, -1)].astype(float)
+
+
+@source()
+def paper_models(options):
+    """The paper's Table 1 models (examples/paper_table1_*.json) on its triangle from the
+    zero state: the displacement at 150 V and back at 0 V."""
+    import pihyst
+
+    u = _triangle()
+    out = {}
+    for key in ("classical", "multislope"):
+        model = pihyst.load_model(f"{_repo()}/examples/paper_table1_{key}.json")
+        y = model.predict(u)
+        out[key] = {"peak": float(y[150]), "end": float(y[-1]),
+                    "thresholds": [float(r) for r in model.thresholds],
+                    "weights": [float(w) for w in model.weights]}
+    c = out["classical"]
+    # what the r = 10 and r = 30 operators hold back at 0 V: w * r, summed
+    out["classical"]["held_at_zero"] = float(sum(w * r for r, w in
+                                                 zip(c["thresholds"][1:3], c["weights"][1:3])))
+    out["classical"]["top_weight"] = c["weights"][-1]
+    from pihyst.paper import BEAM_MAX_DISPLACEMENT_UM
+    out["beam_stroke"] = BEAM_MAX_DISPLACEMENT_UM
+    return out
+
+
+@source()
+def multislope_shape(options):
+    """The multislope operator of the paper's shape (U = 150, a = 0.8, b = 1.2, h = 0.5):
+    the largest valid threshold, and the r = 40 operator's kinks and holds, found by
+    running the operator on a fine 0 -> 150 -> 0 V grid (not from the formulas)."""
+    import pihyst
+    from pihyst.exceptions import InvalidModelError
+
+    U, a, h = 150.0, 0.8, 0.5
+    limit = (1 - a) * U / (1 - a * h)
+    try:                                   # the code agrees: just above the limit is refused
+        pihyst.MultislopePI([0.0, limit * 1.001], [1.0, 1.0])
+        refused = False
+    except InvalidModelError:
+        refused = True
+    if not refused:
+        raise AssertionError("a multislope threshold above (1 - a)U/(1 - ah) was accepted")
+    step = 0.01
+    up = np.arange(0.0, U + step / 2, step)
+    n = up.size
+    u = np.r_[up, up[-2::-1]]
+    y = pihyst.MultislopePI([40.0], [1.0]).predict(u)
+    slope = np.round(np.diff(y) / np.diff(u), 6)     # slope[i]: from u[i] to u[i + 1]
+    changes = [i for i in range(1, slope.size) if slope[i] != slope[i - 1]]
+    rising = [float(u[i]) for i in changes if i < n - 1 and u[i] > 40.0]
+    falling = [float(u[i]) for i in changes if i > n - 1]
+    # the hold after a reversal at M = 100 V: the voltage drop before the output moves
+    top = 100.0
+    up_m = np.arange(0.0, top + step / 2, step)
+    u_m = np.r_[up_m, up_m[-2::-1]]
+    y_m = pihyst.MultislopePI([40.0], [1.0]).predict(u_m)
+    m = up_m.size
+    moved = np.flatnonzero(np.abs(y_m[m:] - y_m[m - 1]) > 1e-9)[0]
+    r0 = pihyst.MultislopePI([0.0], [1.0])
+    rise0, fall0 = (float(np.ravel(e)[0]) for e in r0.envelopes(75.0)[:2])
+    return {"limit_V": limit,
+            "r0_at_75": {"R": rise0, "F": fall0},
+            "r40": {"rising_kink_V": rising[0], "hold_end_V": falling[0],
+                    "falling_kink_V": falling[1], "top": float(y[n - 1]),
+                    "end": float(y[-1]),
+                    "hold_after_100_V": float(top - u_m[m + moved - 1])}}
+
+
+@source()
+def paper_beam(options):
+    """The simulated paper-beam (seed 0) on the paper's 0-150-0 V, 300 s triangle: its
+    displacement at 150 V and back at 0 V, and the loop's largest width (falling minus
+    rising branch at the same voltage) in % of the range."""
+    from pihyst.sim import make_plant
+    from pihyst.sim.signals import triangle
+
+    t, u = triangle(u_max=150.0, dt=0.5)
+    y = make_plant("paper-beam", seed=0).run(u, t)
+    top = int(np.argmax(u))
+    grid = np.arange(0.0, 151.0)
+    rising = np.interp(grid, u[:top + 1], y[:top + 1])
+    falling = np.interp(grid, u[top:][::-1], y[top:][::-1])
+    return {"peak_um": float(y[top]), "end_um": float(y[-1]),
+            "width_pct": float(100 * np.max(falling - rising) / np.ptp(y))}
+
+
+@source()
+def paper(options):
+    """The paper's published numbers as pihyst records them (pihyst.paper), which the
+    report prints beside its own."""
+    from pihyst.paper import published
+    return published()
+
+
+@source(slow=True)
+def demo(options):
+    """pihyst demo's figures (seed 0, the paper beam): its metrics.json, from the file
+    given (--demo-metrics) or computed by the study itself (without the other beams,
+    which no quoted figure depends on)."""
+    path = options.get("demo_metrics")
+    if path:
+        with open(path, encoding="utf-8") as f:
+            metrics = json.load(f)
+    else:
+        from pihyst.study import paper_study
+        metrics = paper_study(seed=0, variants=False, rig=True, progress=None).metrics
+    return _demo_derived(metrics)
+
+
+@source()
+def p885_data(options):
+    """The P-885 identification record as it is (Model_Vi_Do.dat, column 5): the range of
+    the sensor's absolute readings (µm)."""
+    from pihyst.io import datasets
+
+    root = datasets.data_root()
+    if root is None:
+        raise LookupError("the measured data sets are not here ($PIHYST_DATA or "
+                          "../shared/data; make data)")
+    y = np.loadtxt(root / datasets.P885_DIR / "Model_Vi_Do.dat", usecols=4)
+    return {"sensor_min_um": float(y.min()), "sensor_max_um": float(y.max())}
+
+
+@source(slow=True)
+def p885_pair(options):
+    """The P-885 pair as benchmarks/bench_identify.py judges it: pihyst.fit on
+    Model_Vi_Do.dat (default, and delay=0), each family's model predicting the
+    uncompensated stretch of Test_Vi_Do_Di.dat with its own delay (RMS with the mean
+    removed), and its held-back RMS; the sets found by pihyst.io.datasets' rule."""
+    import warnings
+
+    from pihyst import fit
+    from pihyst.exceptions import PihystWarning
+    from pihyst.io import datasets
+
+    root = datasets.data_root()
+    if root is None:
+        raise LookupError("the measured data sets are not here ($PIHYST_DATA or "
+                          "../shared/data; make data)")
+    u, y = datasets.p885(root)
+    ut, yt = datasets.p885_test(root)
+    a, z = datasets.P885_TEST_UNCOMPENSATED
+    out = {}
+    for label, delay in (("default", "auto"), ("delay0", 0)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            res = fit(u, y, delay=delay)
+        rep = res.report.to_dict()
+        entry = {"delay": rep["data"]["delay"]["samples"], "families": {}}
+        for f in res.report.families:
+            e = yt[a:z] - res.models[f["family"]].predict(ut)[a:z]
+            row = {"n_operators": f["n_operators"], "test": float(np.sqrt(np.mean(
+                (e - e.mean()) ** 2))), "held_back": f["errors"]["held_back"]["rms"]}
+            entry["families"][f["family"]] = row
+            if f["chosen"]:
+                entry.update(row, chosen=f["family"])
+        out[label] = entry
+    return out
+
+
+@source(slow=True)
+def tracking_beams(options):
+    """Feedforward tracking on every simulated beam as tests/inverse/test_tracking.py
+    runs it (seed 1, the default fit of a decaying-triangles record; a triangle and a
+    trajectory with minor loops within 2-95 % of the model's rise): the mean absolute
+    error in % of the desired range, compensated and without compensation (a voltage
+    proportional to the desired displacement); smallest and largest over the beams."""
+    import pihyst
+    from pihyst.sim import PLANT_NAMES, make_plant, signals
+
+    compensated, uncompensated = [], []
+    for name in PLANT_NAMES:
+        beam = make_plant(name, seed=1)
+        t, u = signals.decaying_triangles()
+        model = pihyst.fit(u, beam.run(u, t)).model
+        y = model.predict(np.linspace(*model.input_range, 301))
+        lo, hi = y[0] + 0.02 * (y[-1] - y[0]), y[0] + 0.95 * (y[-1] - y[0])
+        gain = (model.predict([model.input_range[1]])[0] - model.predict([0.0])[0]) / 150.0
+        for t, y_d in (signals.triangle(u_min=lo, u_max=hi, n_cycles=2),
+                       signals.decaying_triangles(u_min=lo, u_max=hi)):
+            span = y_d.max() - y_d.min()
+            beam.reset()
+            measured = beam.run(pihyst.compensate(model, y_d).voltage, t)
+            compensated.append(100 * np.mean(np.abs(measured - y_d)) / span)
+            beam.reset()
+            measured = beam.run(np.clip((y_d - y_d[0]) / gain, 0, 150), t)
+            uncompensated.append(100 * np.mean(np.abs(measured - y_d)) / span)
+    return {"compensated_pct": {"min": min(compensated), "max": max(compensated)},
+            "uncompensated_pct": {"min": min(uncompensated), "max": max(uncompensated)}}
+
+
+@source(slow=True)
+def rig_commands(options):
+    """The rig commands of the README and docs/rig.md as written (emulated instruments,
+    virtual time): record the loop, fit it, track examples/rig/desired_triangle.csv open
+    loop and with --feedback 1,10; the tracking errors as the command prints them."""
+    import contextlib
+    import io
+    import os
+    import re
+    import tempfile
+
+    from pihyst.cli import main
+
+    config = str(_repo() / "examples" / "rig" / "emulated.toml")
+    desired = str(_repo() / "examples" / "rig" / "desired_triangle.csv")
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        def run(*args):
+            buf = io.StringIO()
+            with contextlib.redirect_stdout(buf):
+                status = main(list(args))
+            if status != 0:
+                raise RuntimeError(f"pihyst {' '.join(args)}: exit status {status}")
+            return buf.getvalue()
+
+        loop, model = os.path.join(tmp, "loop.csv"), os.path.join(tmp, "model.json")
+        run("rig", "record", "--config", config, "-o", loop)
+        run("fit", loop, "-o", model)
+        for key, extra in (("open_loop", ()), ("feedback", ("--feedback", "1,10"))):
+            text = run("rig", "track", model, desired, "--config", config, *extra,
+                       "-o", os.path.join(tmp, f"{key}.csv"))
+            m = re.search(r"mean absolute ([\d.e-]+) µm.*; RMS ([\d.e-]+) µm; max "
+                          r"([\d.e-]+) µm", text)
+            if m is None:
+                raise RuntimeError(f"pihyst rig track printed no tracking error: {text!r}")
+            out[key] = {"mean_abs": float(m.group(1)), "rms": float(m.group(2)),
+                        "max_abs": float(m.group(3))}
+    return out
+
+
+def _demo_derived(metrics):
+    """The metrics plus the ratios the text quotes."""
+    val = metrics["validation"]
+    rev = metrics["tracking"]["reversals"]["errors"]
+    metrics["derived"] = {
+        "validation_multislope_over_best": val["multislope"]["mean_abs"] / val["best"]["mean_abs"],
+        "validation_classical_over_best": val["classical"]["mean_abs"] / val["best"]["mean_abs"],
+        "reversals_multislope_mean_abs": rev["multislope"]["mean_abs"],
+        "reversals_best_mean_abs": rev["best"]["mean_abs"],
+        "validation_best_mean_abs": val["best"]["mean_abs"],
+    }
+    return metrics
+
+
+def _repo():
+    from pathlib import Path
+    return Path(__file__).resolve().parents[1]
