@@ -59,6 +59,12 @@ FSM_POLY_ORDER = 16     # na = nb per output of the polynomial fit
 FSM_ORDERS = range(8, 65, 4)
 PUBLISHED = {"100mV": {"BLA": None, "LFR": 0.0866}, "300mV": {"BLA": 0.228, "LFR": 0.169}}
 PERIOD = 8192
+FSM_ONE_MODEL_ORDERS = range(24, 65, 8)
+#: the published single models for all levels (SOURCE.md): nonlinear LFR, and the BLA
+#: fitted on all levels
+PUBLISHED_ONE_MODEL = {"100mV": {"LFR": 0.0866, "BLA": 0.252},
+                       "200mV": {"LFR": 0.131, "BLA": 0.179},
+                       "300mV": {"LFR": 0.169, "BLA": 0.658}}
 
 
 def fsm_records(root, level, part):
@@ -118,6 +124,48 @@ def fsm(polynomial=False):
             fit_time = "" if elapsed is None else f"  fit {elapsed:.0f} s"
             print(f"    {name:<16} ch1 {per[0]:.3f}  ch2 {per[1]:.3f}  ch3 {per[2]:.3f}"
                   f"  all {np.sqrt(np.mean(err ** 2)):.3f} um{fit_time}")
+
+
+def fsm_one_model():
+    """One model for all levels: fitted on the 100 mV and 300 mV training records together
+    (12 realisations; the order chosen by validation on realisations 5 and 6 of each
+    level), judged on each level's test records."""
+    root = datasets.data_root()
+    if root is None or not (root / FSM_DIR).is_dir():
+        print(f"FSM data not found ({FSM_DIR} in $PIHYST_DATA or ../shared/data): skipped")
+        return
+    levels = ("100mV", "300mV")
+    train = [r for level in levels for r in fsm_records(root, level, "train")]
+    tests = {level: fsm_records(root, level, "test") for level in levels}
+    n = len(train) // len(levels)
+    held = tuple(i * n + r for i in range(len(levels)) for r in (n - 2, n - 1))
+    t0 = time.perf_counter()
+    lin, sel = fit_state_space(train, PERIOD, orders=FSM_ONE_MODEL_ORDERS, validation=held,
+                               return_selection=True)
+    t_lin = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ham = fit_hammerstein_ss(train, PERIOD, linear=lin, refinements=2, max_nfev=10)
+    t_ham = time.perf_counter() - t0 + t_lin
+    print(f"\nFSM, one model for all levels (fitted on 100 mV and 300 mV together): order "
+          f"{sel.chosen} chosen (validation RMS "
+          + " ".join(f"{o}: {e:.3f}" for o, e in zip(sel.orders, sel.errors)) + ")")
+    print("    hysteresis weights per input: " + "  ".join(
+        np.array2string(H.weights, precision=3) for H in ham.hysteresis))
+    print(f"    {'model':<22}" + "".join(f"{lv:>9}" for lv in PUBLISHED_ONE_MODEL)
+          + "  (test RMS, all outputs, um; 200 mV: no data here)")
+    for name, fields in (("published NL-LFR", "LFR"), ("published BLA, all lvls", "BLA")):
+        print(f"    {name:<22}" + "".join(f"{PUBLISHED_ONE_MODEL[lv][fields]:9.3f}"
+                                          for lv in PUBLISHED_ONE_MODEL))
+    for name, predict, elapsed in ((f"state space {lin.order}", lin.predict, t_lin),
+                                   ("hammerstein", ham.predict, t_ham)):
+        cells = []
+        for lv in PUBLISHED_ONE_MODEL:
+            if lv not in tests:
+                cells.append(f"{'-':>9}")
+                continue
+            err = np.vstack([predict(u)[PERIOD:] - y[PERIOD:] for u, y in tests[lv]])
+            cells.append(f"{np.sqrt(np.mean(err ** 2)):9.3f}")
+        print(f"    {name:<22}" + "".join(cells) + f"   fit {elapsed:.0f} s")
 
 
 def sweep(fs, duration, f0, f1, level, amplitude, envelope=True):
@@ -200,6 +248,10 @@ def beam_tracking(fs=2000.0, na=2, nb=3):
 if __name__ == "__main__":
     import sys
     print(__doc__.split("\n\n")[0])
+    if "--one-model" in sys.argv[1:]:
+        fsm_one_model()
+        sys.exit(0)
     fsm(polynomial="--polynomial" in sys.argv[1:])
+    fsm_one_model()
     beam()
     beam_tracking()

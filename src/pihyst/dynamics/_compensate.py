@@ -13,6 +13,15 @@ no zeros outside the unit circle. It looks d + n_u samples ahead, so it needs th
 trajectory in advance (offline, or with that much preview); the trajectory is held at
 its ends. The hysteresis output h_d is then inverted by :func:`pihyst.compensate`, whose
 voltage and slew limits hold for every output whatever h_d is.
+
+For a periodic trajectory (one period of N samples, repeated) the stable inverse needs no
+approximation: on every harmonic k of the period (rfft line, z_k = exp(2 pi i k / N))
+
+    H_d(k) = R(k) / G(z_k),
+
+the non-causal inverse of the unstable zeros being as periodic as the rest (the whole
+period is the preview). Lines where |G| is below ``1e-9`` of its largest value (a zero
+on the unit circle) are left out.
 """
 
 import numpy as np
@@ -48,16 +57,36 @@ def zpetc(a, b, r, settle=None):
     return h[pre + lead:pre + lead + r.size]
 
 
-def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None):
+def periodic_inverse_dynamics(a, b, r):
+    """H_d of the module notes for one period ``r`` of a periodic reference (SISO)."""
+    from pihyst.dynamics._linear import response
+    r = np.asarray(r, dtype=float)
+    G = response(np.asarray(a, dtype=float), np.atleast_2d(np.asarray(b, dtype=float)),
+                 r.size)[:, 0]
+    R = np.fft.rfft(r)
+    usable = np.abs(G) > 1e-9 * np.abs(G).max()
+    H = np.where(usable, R / np.where(usable, G, 1.0), 0.0)
+    return np.fft.irfft(H, r.size)
+
+
+def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None,
+                           periodic=False):
     """Voltages that make a SISO :class:`HammersteinModel` follow ``desired``: the
-    ZPETC prefilter, then the hysteresis inverse from the model's zero operator state.
-    Returns (voltage, h_desired, result of :func:`pihyst.compensate`)."""
+    ZPETC prefilter (``periodic``: ``desired`` is one period of a repeated trajectory,
+    inverted exactly per harmonic), then the hysteresis inverse from the hysteresis
+    model's initial state (``periodic``: run over two periods, the second returned, from
+    which the hysteresis memory repeats). Returns (voltage, h_desired, result of
+    :func:`pihyst.compensate`)."""
     if model.n_inputs != 1 or model.n_outputs != 1:
         raise InvalidArgumentError(f"compensate_hammerstein needs a single-input "
                                    f"single-output model, got {model.n_inputs} input(s) and "
                                    f"{model.n_outputs} output(s)")
     H = model.hysteresis[0]
-    h_d = zpetc(model.a[0], model.b[0][0], desired)
-    res = compensate(H, h_d, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
-                     initial_state=np.zeros(H.n_operators))
-    return res.voltage, h_d, res
+    if not periodic:
+        h_d = zpetc(model.a[0], model.b[0][0], desired)
+        res = compensate(H, h_d, u_min=u_min, u_max=u_max, slew_rate=slew_rate)
+        return res.voltage, h_d, res
+    desired = np.asarray(desired, dtype=float)
+    h_d = periodic_inverse_dynamics(model.a[0], model.b[0][0], desired)
+    res = compensate(H, np.tile(h_d, 2), u_min=u_min, u_max=u_max, slew_rate=slew_rate)
+    return res.voltage[h_d.size:], h_d, res
