@@ -31,9 +31,14 @@ simulated beam with its 54 Hz mode.
    static compensator (pihyst.fit on a quasi-static 300 s triangle, exact inverse),
    (b) the Hammerstein model's hysteresis (times the static gain of its dynamics)
    inverted alone, (c) the Hammerstein
-   compensation (ZPETC inverse of the dynamics + hysteresis inverse); 0-150 V limits.
+   compensation (ZPETC inverse of the dynamics + hysteresis inverse), (d) the static
+   model of (a) followed by the beam's dynamics measured as the ratio of one drive shape
+   played at 2-10 Hz to the same at 0.1 Hz (pihyst.dynamics.fit_dynamics, unit static
+   gain), compensated the same way; 0-150 V limits.
 
 Run: PIHYST_DATA=/path/to/data python benchmarks/bench_fsm.py [--polynomial]
+     [--one-model | --beam-tracking]  (only the one-model FSM table, or only item 2's
+     tracking table)
 """
 
 import time
@@ -44,6 +49,7 @@ from pihyst import compensate, fit
 from pihyst.dynamics import (
     compensate_hammerstein,
     estimate_bla,
+    fit_dynamics,
     fit_hammerstein,
     fit_hammerstein_ss,
     fit_linear,
@@ -52,7 +58,7 @@ from pihyst.dynamics import (
 )
 from pihyst.io import datasets
 from pihyst.sim import make_plant
-from pihyst.sim.signals import triangle
+from pihyst.sim.signals import band_limited_triangle, triangle
 
 FSM_DIR = "fsm-cubespec-piezo-mirror"
 FSM_POLY_ORDER = 16     # na = nb per output of the polynomial fit
@@ -217,6 +223,26 @@ def beam(orders=((2, 3), (4, 4))):
                   f"{hm:6.2f} %")
 
 
+BEAM_ID_SLOW_HZ = 0.1
+BEAM_ID_RATES = (2.0, 5.0, 8.0, 10.0, 4.0)       # Hz; the last chooses the order
+BEAM_ID_HARMONICS = 15
+
+
+def beam_dynamics(static, fs=2000.0):
+    """``static`` followed by the beam's dynamics (pihyst.dynamics.fit_dynamics: one drive
+    shape, a triangle's first BEAM_ID_HARMONICS harmonics over 5-145 V, played from rest
+    at BEAM_ID_SLOW_HZ (4 periods) and at BEAM_ID_RATES (20 s), the last period kept)."""
+    def period(rate, seconds):
+        _, u = band_limited_triangle(5.0, 145.0, period_s=1 / rate,
+                                     max_hz=(BEAM_ID_HARMONICS + 0.5) * rate, dt=1 / fs)
+        uu = np.tile(u, max(2, int(np.ceil(seconds * rate))))
+        y = make_plant("paper-beam", seed=20 + int(rate * 10), dynamics=True).run(
+            uu, np.arange(uu.size) / fs)
+        return u, y[-u.size:]
+    return fit_dynamics(static, period(BEAM_ID_SLOW_HZ, 40.0),
+                        [period(rate, 20.0) for rate in BEAM_ID_RATES])
+
+
 def beam_tracking(fs=2000.0, na=2, nb=3):
     ham = fit_hammerstein(beam_records(fs), na, nb, n_operators=6,
                           input_range=[(0.0, 150.0)], refinements=3)
@@ -226,10 +252,13 @@ def beam_tracking(fs=2000.0, na=2, nb=3):
     tq, uq = triangle()
     yq = make_plant("paper-beam", seed=2).run(uq, tq)
     static = fit(uq, yq).model
+    on_static = beam_dynamics(static, fs)
     span = np.ptp(yq)                  # the beam's quasi-static range
     lo, hi = yq.min() + 0.25 * span, yq.min() + 0.75 * span
     print(f"\nSimulated beam: tracking sines {lo:.1f}-{hi:.1f} um, RMS error in % of the "
-          f"quasi-static range ({span:.1f} um); static model: {static.family}")
+          f"quasi-static range ({span:.1f} um), and the first harmonic's amplitude error in "
+          f"% of the desired one [brackets]; static model: {static.family}; static + "
+          f"dynamics: na {on_static.a[0].size - 1}, nb {on_static.b[0].shape[1]}")
     for f in (1, 5, 10, 20, 30, 50):
         ts = np.arange(0.0, 1.0 + 3 / f, 1 / fs)
         r = lo + (hi - lo) * (1 - np.cos(2 * np.pi * f * ts)) / 2
@@ -238,11 +267,16 @@ def beam_tracking(fs=2000.0, na=2, nb=3):
         volts = {"static": compensate(static, r).voltage,
                  "hyst. only": compensate(H_static, r, initial_state=np.zeros(
                      H.n_operators)).voltage,
-                 "hammerstein": compensate_hammerstein(ham, r)[0]}
+                 "hammerstein": compensate_hammerstein(ham, r)[0],
+                 "static + dynamics": compensate_hammerstein(on_static, r)[0]}
+        line = np.exp(-2j * np.pi * f * ts[k])
         for name, v in volts.items():
             meas = make_plant("paper-beam", seed=7, dynamics=True).run(v, ts)
-            out[name] = 100 * np.sqrt(np.mean((meas[k] - r[k]) ** 2)) / span
-        print(f"  {f:>2} Hz  " + "   ".join(f"{n} {e:6.2f} %" for n, e in out.items()))
+            first = np.mean(meas[k] * line) / np.mean(r[k] * line) - 1
+            out[name] = (100 * np.sqrt(np.mean((meas[k] - r[k]) ** 2)) / span,
+                         100 * (abs(1 + first) - 1))
+        print(f"  {f:>2} Hz  " + "   ".join(f"{n} {e:6.2f} % [{a:+5.1f}]"
+                                            for n, (e, a) in out.items()))
 
 
 if __name__ == "__main__":
@@ -250,6 +284,9 @@ if __name__ == "__main__":
     print(__doc__.split("\n\n")[0])
     if "--one-model" in sys.argv[1:]:
         fsm_one_model()
+        sys.exit(0)
+    if "--beam-tracking" in sys.argv[1:]:
+        beam_tracking()
         sys.exit(0)
     fsm(polynomial="--polynomial" in sys.argv[1:])
     fsm_one_model()

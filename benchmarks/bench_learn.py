@@ -12,12 +12,13 @@ same band-limited triangle, settled; with creep that is less than the settled lo
 - the static inverse: the default ``pihyst.fit`` model (fitted with creep on a slow
   record, 1 s decaying triangles at 200 Hz) inverted exactly, played periodically
   (the learning's trial 0);
-- the Hammerstein inverse (no learning): that model followed by dynamics identified on
-  the stage (``pihyst.dynamics.fit_dynamics``: four periodic triangle scans, 10-140 V at
-  20, 50, 100 and 200 Hz with harmonics up to 5 kHz, and one at 150 Hz held back to
-  choose the order; unit static gain, so the static model keeps the gain at rest), the
-  dynamics inverted exactly per harmonic of the scan, then the same periodic hysteresis
-  inverse (with creep) as the static inverse's;
+- the Hammerstein inverse (no learning): that model followed by dynamics measured on
+  the stage (``pihyst.dynamics.fit_dynamics``: one drive shape, a triangle's first 15
+  harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
+  to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
+  the hysteresis does not enter; unit static gain, so the static model keeps the gain at
+  rest), the dynamics inverted exactly per harmonic of the scan, then the same periodic
+  hysteresis inverse (with creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -118,25 +119,25 @@ def fitted_model(make):
     return pihyst.fit(u, stage.run(u), t=t).model
 
 
-#: identification scans (Hz; the last chooses the order), their span (V), band (Hz), period
-ID_RATES = (20.0, 50.0, 100.0, 200.0, 150.0)
+#: identification: one drive shape (a triangle's first ID_HARMONICS harmonics, ID_SPAN_V)
+#: at a slow rate and at faster ones (Hz; the last chooses the order)
+ID_SLOW_HZ = 1.0
+ID_RATES = (20.0, 50.0, 100.0, 200.0, 80.0)
 ID_SPAN_V = (10.0, 140.0)
-ID_MAX_HZ = 5000.0
-ID_PERIOD = 2000
+ID_HARMONICS = 15
 
 
 def hammerstein_model(make, model):
-    """``model`` followed by the stage's dynamics (``fit_dynamics`` on periodic triangle
-    scans: ID_RATES, each repeated to ID_PERIOD samples, the stage settled on it)."""
-    records = []
-    for rate in ID_RATES:
-        _, u = band_limited_triangle(*ID_SPAN_V, period_s=1 / rate, max_hz=ID_MAX_HZ,
-                                     dt=1 / CLOCK_HZ)
-        u = np.tile(u, ID_PERIOD // u.size)
+    """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
+    triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
+    stage settled on each; one period each)."""
+    def period(rate):
+        _, u = band_limited_triangle(*ID_SPAN_V, period_s=1 / rate,
+                                     max_hz=(ID_HARMONICS + 0.5) * rate, dt=1 / CLOCK_HZ)
         stage = make(CLOCK_HZ)
         stage.settle_on(u)
-        records.append((u, stage.run_periodic(u)))
-    return fit_dynamics(model, records, ID_PERIOD, validation=-1)
+        return u, stage.run_periodic(u)
+    return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES])
 
 
 def scan(make, rate_hz, fmode):

@@ -1,27 +1,40 @@
 """Linear dynamics after a given static model: a Hammerstein model whose hysteresis is a
-model fitted on slow records (``pihyst.fit``, any family) and whose dynamics are
-identified on fast periodic records (docs/theory/hammerstein.md, "Dynamics after a
-static model").
+model fitted on slow records (``pihyst.fit``, any family) and whose dynamics are measured
+by playing one periodic drive shape at several rates (docs/theory/hammerstein.md,
+"Dynamics after a static model").
 
-For periodic records (u, y), in steady state over their last period of N samples, with
-h = H[u] the static model's output over that period (run over two periods from its
-initial state: the hysteresis memory then repeats; without its creep and delay, which
-the dynamics measure), the dynamics
+Why not fit the dynamics on y against the static model's output H[u]: the static model is
+not exact (its loop's width and slope on the drive used are off by a few per cent), and a
+fit of G on (H[u], y) takes that error for dynamics: a phase lag half the true one on a
+resonant stage, a gain 12 % off on a beam's minor loops, poles fitted to it between the
+lines the records excite. The inverse built on such a G then undoes errors the static
+inverse did not make, and is worse than the static inverse at low rates.
 
-    y = G(q) h,   G = B(q^-1) / A(q^-1),
+The ratio of two rates does not see the hysteresis. Play one period u(theta) of a drive
+shape (phase theta = t / T) at a slow rate and at faster ones, each in periodic steady
+state. A rate-independent hysteresis gives the same output per phase at every rate, so
+its harmonics H_k are the same in every record, and on harmonic k
 
-are fitted line by line of the period's DFT by the output-error fit of
-:func:`pihyst.dynamics._linear.fit_oe_periodic`, for each candidate order (na, nb) on all
-records but one; the first order (the simplest) whose output error on the held-back
-record is within 1 % of the best wins, and is refitted on all records. Then
+    Y_slow,k = G(k f_slow) H_k ~= H_k     (k f_slow far below the dynamics),
+    Y_f,k    = G(k f) H_k,
+
+    =>  Y_f,k = G(k f) Y_slow,k,                                    (ratio model)
+
+whatever H is: neither the static model nor its error enters. G = B(q^-1) / A(q^-1) is
+fitted to these by the output-error fit of :func:`pihyst.dynamics._linear.fit_oe_periodic`
+(the harmonics of every fast record placed on the lines of a common period that all their
+periods divide; nothing on the others), with G(1) = 1 as one more data point: the DC
+line, weighted like all the harmonics together. Each candidate order (na, nb) is fitted on
+all fast records but one; the first (simplest) whose output error on the held-back one is
+within ``tolerance`` of the best wins and is refitted on all. Then
 
     B <- B A(1) / B(1):   G(1) = 1.
 
-The static model holds the gain at rest; the dynamics only add what changes with rate.
-As the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d -> r),
-so it cannot be worse than the static inverse there, whatever the fit's error at DC
-(creep, the hysteresis model's error on the fast records, noise).
+The static model holds the gain at rest; the dynamics add only what changes with rate. As
+the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d -> r).
 """
+
+import math
 
 import numpy as np
 
@@ -29,8 +42,11 @@ from pihyst.dynamics._hammerstein import HammersteinModel
 from pihyst.dynamics._linear import fit_oe_periodic, response
 from pihyst.exceptions import InvalidArgumentError
 
-#: (na, nb) tried: a mode, a mode and a lag, two modes, each with one or two zeros more
+#: (na, nb) tried: a mode, a mode and a lag, two modes, each with a zero or two more
 DEFAULT_ORDERS = ((2, 2), (2, 3), (4, 4), (4, 5), (6, 6))
+SHAPE_TOLERANCE = 1e-3     # of the largest drive harmonic: the records' shapes must agree
+HARMONIC_FLOOR = 1e-3      # drive harmonics below this (of the largest) are not used
+MAX_COMMON_PERIOD = 1_000_000
 
 
 def _plain(model):
@@ -42,18 +58,49 @@ def _plain(model):
     return model
 
 
-def _spectra(H, records, period):
+def _one_period(record, i):
+    u, y = (np.asarray(v, dtype=float).ravel() for v in record)
+    if u.size != y.size or u.size < 4:
+        raise InvalidArgumentError(f"record {i}: {u.size} input and {y.size} output "
+                                   f"samples; need one period (at least 4) of both")
+    return u, y
+
+
+def _harmonics(slow):
+    """The drive harmonics k used (those above HARMONIC_FLOOR of the largest, k >= 1)."""
+    U = np.fft.rfft(slow[0])[1:]
+    return 1 + np.flatnonzero(np.abs(U) > HARMONIC_FLOOR * np.abs(U).max())
+
+
+def _ratio_spectra(slow, fast, ks, period):
+    """(V, Y) per fast record on the lines of ``period``: V = Y_slow,k, Y = Y_f,k."""
+    U0, Y0 = (np.fft.rfft(v)[ks] / v.size for v in slow)
     out = []
-    for i, (u, y) in enumerate(records):
-        u, y = np.asarray(u, dtype=float).ravel(), np.asarray(y, dtype=float).ravel()
-        if u.size != y.size or u.size < period or u.size % period:
-            raise InvalidArgumentError(f"record {i}: {u.size} input and {y.size} output "
-                                       f"samples; need as many of both, a whole number of "
-                                       f"periods of {period}")
-        last = u[-period:]
-        h = H.predict(np.tile(last, 2))[period:]
-        out.append((np.fft.rfft(h)[:, None], np.fft.rfft(y[-period:])))
+    for i, (u, y) in enumerate(fast):
+        n = u.size
+        if ks.max() >= n / 2:
+            raise InvalidArgumentError(f"record {i}: {n} samples per period hold no "
+                                       f"harmonic {ks.max()} of the drive (need more than "
+                                       f"{2 * ks.max()})")
+        U, Y = np.fft.rfft(u)[ks] / n, np.fft.rfft(y)[ks] / n
+        if np.max(np.abs(U - U0)) > SHAPE_TOLERANCE * np.abs(U0).max():
+            raise InvalidArgumentError(f"record {i}: not the slow record's drive shape "
+                                       f"(its harmonics differ by more than "
+                                       f"{SHAPE_TOLERANCE:g} of the largest)")
+        V_line = np.zeros(period // 2 + 1, complex)
+        Y_line = np.zeros(period // 2 + 1, complex)
+        V_line[ks * (period // n)] = Y0
+        Y_line[ks * (period // n)] = Y
+        out.append((V_line[:, None], Y_line))
     return out
+
+
+def _unit_dc(spectra, period):
+    """G(1) = 1 as data: the DC line, weighted like all the harmonics together."""
+    w = math.sqrt(sum(float(np.sum(np.abs(V) ** 2)) for V, _ in spectra))
+    V, Y = np.zeros(period // 2 + 1, complex), np.zeros(period // 2 + 1, complex)
+    V[0] = Y[0] = w
+    return (V[:, None], Y)
 
 
 def _output_error(a, b, spectra, period):
@@ -61,30 +108,42 @@ def _output_error(a, b, spectra, period):
     return float(sum(np.sum(np.abs(Y - G * V[:, 0]) ** 2) for V, Y in spectra))
 
 
-def fit_dynamics(static, records, period, *, orders=DEFAULT_ORDERS, validation=-1,
+def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
                  tolerance=0.01):
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
-    unit-static-gain dynamics fitted on ``records`` (module notes).
+    unit-static-gain dynamics measured by the ratio of rates (module notes).
 
-    ``records``: list of (u, y), each a whole number of periods of ``period`` samples of a
-    periodic drive, the last period in steady state. ``validation``: the index of the
-    record that chooses the order (fitted on the others, then refitted on all): the first
-    of ``orders`` whose output error there is within ``tolerance`` of the best (or
-    within 1e-9 of the output: noise-free data); None takes the first of ``orders``."""
-    if period < 4:
-        raise InvalidArgumentError(f"period must be at least 4 samples, got {period}")
-    H = _plain(static)
-    spectra = _spectra(H, records, int(period))
+    ``slow``: (u, y), one period of the drive at a rate far below the dynamics (its
+    harmonics where G ~ 1), in periodic steady state; ``fast``: a list of (u, y), one period
+    each of the same drive shape at faster rates (the same harmonics, another number of
+    samples per period). ``validation``: the index of the fast record that chooses the
+    order (the first of ``orders`` whose output error there is within ``tolerance`` of the
+    best, or within 1e-9 of the output: noise-free data); None takes the first of
+    ``orders``."""
+    slow = _one_period(slow, "slow")
+    fast = [_one_period(r, i) for i, r in enumerate(fast)]
+    if not fast:
+        raise InvalidArgumentError("fast: at least one record at a faster rate")
     orders = [tuple(int(v) for v in o) for o in orders]
     if not orders or any(na < 1 or nb < 1 for na, nb in orders):
         raise InvalidArgumentError(f"orders must be (na, nb) pairs of positive integers, "
                                    f"got {orders!r}")
+    ks = _harmonics(slow)
+    if ks.size == 0:
+        raise InvalidArgumentError("slow: the drive is constant (no harmonic to measure)")
+    period = math.lcm(*(u.size for u, _ in fast))
+    if period > MAX_COMMON_PERIOD:
+        sizes = ", ".join(str(u.size) for u, _ in fast)
+        raise InvalidArgumentError(f"the fast records' periods ({sizes} samples) have no "
+                                   f"common multiple up to {MAX_COMMON_PERIOD:,} samples")
+    spectra = _ratio_spectra(slow, fast, ks, period)
     if validation is not None and len(orders) > 1:
         if len(spectra) < 2:
-            raise InvalidArgumentError("choosing the order needs at least two records "
+            raise InvalidArgumentError("choosing the order needs at least two fast records "
                                        "(one held back); give validation=None")
         held = spectra[validation]
         fit_on = [s for i, s in enumerate(spectra) if i != validation % len(spectra)]
+        fit_on.append(_unit_dc(fit_on, period))
         errors = np.sqrt([_output_error(*fit_oe_periodic(fit_on, na, nb, period), [held],
                                         period) for na, nb in orders])
         floor = 1e-9 * np.sqrt(np.sum(np.abs(held[1]) ** 2))
@@ -92,9 +151,8 @@ def fit_dynamics(static, records, period, *, orders=DEFAULT_ORDERS, validation=-
                                            + floor)[0])]
     else:
         na, nb = orders[0]
-    a, b = fit_oe_periodic(spectra, na, nb, period)
+    a, b = fit_oe_periodic(spectra + [_unit_dc(spectra, period)], na, nb, period)
     gain = float(np.sum(b) / np.sum(a))
     if not abs(gain) > 1e-12:
-        raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0): "
-                                   "the records do not excite the static model's output")
-    return HammersteinModel(hysteresis=(H,), a=(a,), b=(b / gain,))
+        raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0)")
+    return HammersteinModel(hysteresis=(_plain(static),), a=(a,), b=(b / gain,))
