@@ -83,17 +83,23 @@ def test_fit_dynamics_recovers_the_dynamics_with_unit_static_gain(gain):
     assert np.max(np.abs(fitted - true)) < 1e-3 * np.max(np.abs(true))
 
 
-def test_the_static_model_does_not_enter_the_dynamics():
+def test_the_static_model_does_not_enter_the_poles():
     """The ratio of rates cancels the hysteresis: a wrong static model (another loop)
-    gives the same dynamics."""
+    gives the same poles, and without the numerator's refit the same dynamics; the
+    numerator refitted on the wrong model's output keeps unit static gain."""
     H, a = static_model(), mode()
     b = np.array([0.0, 0.5, 0.9])
     slow, fast = rate_records(H, a, b)
     wrong = ClassicalPI([0, 40], [0.6, 0.3], input_range=(0.0, 150.0))
-    right = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None)
-    other = fit_dynamics(wrong, slow, fast, orders=((2, 3),), validation=None)
+    right = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None,
+                         numerator_on_static=False)
+    other = fit_dynamics(wrong, slow, fast, orders=((2, 3),), validation=None,
+                         numerator_on_static=False)
     assert np.array_equal(right.a[0], other.a[0]) and np.array_equal(right.b[0], other.b[0])
     assert other.hysteresis[0] == wrong
+    refit = fit_dynamics(wrong, slow, fast, orders=((2, 3),), validation=None)
+    assert np.array_equal(refit.a[0], right.a[0]) and np.allclose(refit.static_gain(), 1.0)
+    assert not np.allclose(refit.b[0], right.b[0])
 
 
 def test_the_hammerstein_inverse_becomes_the_static_inverse_at_low_rates():

@@ -28,6 +28,14 @@ line, weighted like all the harmonics together. Each candidate order (na, nb) is
 all fast records but one; the first (simplest) whose output error on the held-back one is
 within ``tolerance`` of the best wins and is refitted on all. Then
 
+The poles are the stage's. With them fixed, B is refitted on the static model's own
+output over the same records (``numerator_on_static``, the default): on each record's
+drive harmonics Y_k A(z_k) = B(z_k) H_k, H_k the harmonics of H[u], linear least squares
+in b. The numerator then also takes what the static model gets wrong at these rates as
+a linear correction (a loop too wide by a converter delay the slow fit absorbed acts as
+a phase lead; the ratio model, which does not see the static model, would expose it),
+while the poles, measured without the static model, cannot move to fit it. Then
+
     B <- B A(1) / B(1):   G(1) = 1.
 
 The static model holds the gain at rest; the dynamics add only what changes with rate. As
@@ -108,8 +116,26 @@ def _output_error(a, b, spectra, period):
     return float(sum(np.sum(np.abs(Y - G * V[:, 0]) ** 2) for V, Y in spectra))
 
 
+def _numerator_on_static(H, a, nb, records):
+    """B with A fixed, fitted on the static model's output: on the drive harmonics k of
+    each record (u, y), Y_k A(z_k) = B(z_k) H_k with H_k of h = H[u] over a settled period,
+    linear least squares in b (z_k = exp(-2 pi i k / n))."""
+    rows, target = [], []
+    for u, y in records:
+        n = u.size
+        h = H.predict(np.tile(u, 2))[n:]
+        U = np.fft.rfft(u)[1:(n + 1) // 2]
+        k = 1 + np.flatnonzero(np.abs(U) > HARMONIC_FLOOR * np.abs(U).max())
+        z = np.exp(-2j * np.pi * np.outer(k, np.arange(max(a.size, nb))) / n)
+        M = z[:, :nb] * (np.fft.rfft(h)[k] / (z[:, :a.size] @ a))[:, None] / n
+        Y = np.fft.rfft(y)[k] / n
+        rows += [M.real, M.imag]
+        target += [Y.real, Y.imag]
+    return np.linalg.lstsq(np.vstack(rows), np.concatenate(target), rcond=None)[0][None, :]
+
+
 def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
-                 tolerance=0.01):
+                 tolerance=0.01, numerator_on_static=True):
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
     unit-static-gain dynamics measured by the ratio of rates (module notes).
 
@@ -119,7 +145,8 @@ def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
     samples per period). ``validation``: the index of the fast record that chooses the
     order (the first of ``orders`` whose output error there is within ``tolerance`` of the
     best, or within 1e-9 of the output: noise-free data); None takes the first of
-    ``orders``."""
+    ``orders``. ``numerator_on_static``: then refit B, the poles kept, on the static
+    model's output (module notes)."""
     slow = _one_period(slow, "slow")
     fast = [_one_period(r, i) for i, r in enumerate(fast)]
     if not fast:
@@ -152,7 +179,10 @@ def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
     else:
         na, nb = orders[0]
     a, b = fit_oe_periodic(spectra + [_unit_dc(spectra, period)], na, nb, period)
+    H = _plain(static)
+    if numerator_on_static:
+        b = _numerator_on_static(H, a, nb, [slow] + fast)
     gain = float(np.sum(b) / np.sum(a))
     if not abs(gain) > 1e-12:
         raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0)")
-    return HammersteinModel(hysteresis=(_plain(static),), a=(a,), b=(b / gain,))
+    return HammersteinModel(hysteresis=(H,), a=(a,), b=(b / gain,))
