@@ -49,7 +49,6 @@ import numpy as np
 
 from pihyst import compensate, fit
 from pihyst.dynamics import (
-    HammersteinModel,
     compensate_hammerstein,
     estimate_bla,
     fit_dynamics,
@@ -257,13 +256,14 @@ def beam_tracking(fs=2000.0, na=2, nb=3):
     static = fit(uq, yq).model
     classical = fit(uq, yq, family="classical").model
     on_static = beam_dynamics(static, fs)
-    on_classical = HammersteinModel(hysteresis=(classical,), a=on_static.a, b=on_static.b)
+    on_classical = beam_dynamics(classical, fs)
     span = np.ptp(yq)                  # the beam's quasi-static range
     lo, hi = yq.min() + 0.25 * span, yq.min() + 0.75 * span
     print(f"\nSimulated beam: tracking sines {lo:.1f}-{hi:.1f} um, RMS error in % of the "
           f"quasi-static range ({span:.1f} um); static: pihyst.fit's choice "
           f"({static.family}), classical: pihyst.fit(family='classical'); + dynamics: "
-          f"fit_dynamics, na {on_static.a[0].size - 1}, nb {on_static.b[0].shape[1]}")
+          f"fit_dynamics, na {on_static.a[0].size - 1}, nb {on_static.b[0].shape[1]}, "
+          f"{on_classical.a[0].size - 1}, {on_classical.b[0].shape[1]}")
     names = ("static", "hyst. only", "hammerstein", "static + dyn.", "classical",
              "classical + dyn.")
     print("  Hz " + "".join(f"{n:>18}" for n in names))
