@@ -16,6 +16,8 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
 - :func:`compensate_hammerstein`: zero-phase error tracking inverse of the dynamics (for
   a periodic trajectory, the exact inverse per harmonic), then the exact hysteresis
   inverse with voltage and slew limits (SISO);
+- :func:`compensate_mimo`: the same for a square MIMO StateSpaceHammerstein and a
+  periodic trajectory (the dynamics inverted per harmonic);
 - :func:`load_hammerstein`: a HammersteinModel from its JSON file
   (:meth:`HammersteinModel.save`).
 """
@@ -23,6 +25,7 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
 from pihyst.dynamics._bla import FrequencyResponse, estimate_bla
 from pihyst.dynamics._compensate import (
     compensate_hammerstein,
+    compensate_mimo,
     periodic_inverse_dynamics,
     zpetc,
 )
@@ -40,7 +43,8 @@ from pihyst.dynamics._on_static import fit_dynamics
 from pihyst.dynamics._statespace import StateSpace, fsid
 
 __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "StateSpace",
-           "StateSpaceHammerstein", "compensate_hammerstein", "default_thresholds",
+           "StateSpaceHammerstein", "compensate_hammerstein", "compensate_mimo",
+           "default_thresholds",
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
            "fit_state_space", "fsid", "load_hammerstein", "periodic_inverse_dynamics",
            "predict_linear", "zpetc"]

@@ -22,6 +22,13 @@ approximation: on every harmonic k of the period (rfft line, z_k = exp(2 pi i k 
 the non-causal inverse of the unstable zeros being as periodic as the rest (the whole
 period is the preview). Lines where |G| is below ``1e-9`` of its largest value (a zero
 on the unit circle) are left out.
+
+A square MIMO :class:`StateSpaceHammerstein` (as many inputs as outputs) is compensated
+the same way for a periodic trajectory of all outputs, R(k) a vector per line:
+
+    H_d(k) = G(z_k)^-1 R(k)       (least squares where G(z_k) is singular),
+
+then each input's hysteresis inverted on its own (its own limits and slew).
 """
 
 import numpy as np
@@ -67,6 +74,55 @@ def periodic_inverse_dynamics(a, b, r):
     usable = np.abs(G) > 1e-9 * np.abs(G).max()
     H = np.where(usable, R / np.where(usable, G, 1.0), 0.0)
     return np.fft.irfft(H, r.size)
+
+
+def periodic_inverse_mimo(model, r):
+    """H_d of the module notes for one period ``r`` (N, p) of all outputs of a square
+    state-space Hammerstein model: (N, m)."""
+    r = np.asarray(r, dtype=float)
+    R = np.fft.rfft(r, axis=0)
+    w = 2 * np.pi * np.arange(R.shape[0]) / r.shape[0]
+    G = model.dynamics.response(w)
+    H = np.stack([np.linalg.lstsq(G[k], R[k], rcond=None)[0] for k in range(R.shape[0])])
+    return np.fft.irfft(H, n=r.shape[0], axis=0)
+
+
+def _per_input(value, m, name):
+    """``value`` (None, one number or one per input) as a list of m."""
+    if value is None:
+        return [None] * m
+    values = np.atleast_1d(np.asarray(value, dtype=float))
+    if values.size == 1:
+        values = np.repeat(values, m)
+    if values.shape != (m,):
+        raise InvalidArgumentError(f"{name}: one value or one per input ({m}), got "
+                                   f"{values.size}")
+    return [float(v) for v in values]
+
+
+def compensate_mimo(model, desired, *, u_min=None, u_max=None, slew_rate=None):
+    """Voltages (N, m) that make a square :class:`StateSpaceHammerstein` follow one period
+    ``desired`` (N, p) of a repeated trajectory: the dynamics inverted per harmonic, then
+    each input's hysteresis inverted over two periods (the second returned), within its
+    limits and slew (``u_min``, ``u_max``, ``slew_rate``: one value or one per input).
+    Returns (voltage, h_desired, results of :func:`pihyst.compensate` per input)."""
+    m, p = model.n_inputs, model.n_outputs
+    if m != p:
+        raise InvalidArgumentError(f"compensate_mimo needs as many inputs as outputs, got "
+                                   f"{m} input(s) and {p} output(s)")
+    desired = np.asarray(desired, dtype=float)
+    if desired.ndim != 2 or desired.shape[1] != p or desired.shape[0] < 2:
+        raise InvalidArgumentError(f"desired must be (N, {p}): one column per output, got "
+                                   f"shape {desired.shape}")
+    lows, highs = _per_input(u_min, m, "u_min"), _per_input(u_max, m, "u_max")
+    slews = _per_input(slew_rate, m, "slew_rate")
+    h_d = periodic_inverse_mimo(model, desired)
+    n = desired.shape[0]
+    results = [compensate(H, np.tile(h_d[:, i], 2), u_min=lows[i], u_max=highs[i],
+                          slew_rate=slews[i])
+               for i, H in enumerate(model.hysteresis)]
+    voltage = np.column_stack([res.voltage[n:] for res in results])
+    return voltage, h_d, results
 
 
 def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None,
