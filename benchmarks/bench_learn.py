@@ -10,8 +10,10 @@ The scan covers 80 % of the range the stage reaches at that rate (driven 0-150 V
 same band-limited triangle, settled; with creep that is less than the settled loop).
 
 - the static inverse: the default ``pihyst.fit`` model (fitted with creep on a slow
-  record, 1 s decaying triangles at 200 Hz) inverted exactly, played periodically
-  (the learning's trial 0);
+  record, 1 s decaying triangles at 200 Hz) inverted exactly (its periodic inverse, with
+  creep), played periodically on a stage settled on it ("static"); the learning's trial
+  0 is the same inverse on a stage settled on the plain inverse ("t0": the learning's
+  own figures, the gain against it);
 - the Hammerstein inverse (no learning): that model followed by dynamics measured on
   the stage (``pihyst.dynamics.fit_dynamics``: one drive shape, a triangle's first 15
   harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
@@ -196,13 +198,13 @@ def run_stage(make, fmode, rates, learn=True, numerator_on_static=True):
     for rate in rates:
         desired = scan(make, rate, fmode)
         ham_rms, ham_out = inverse_error(make, model, ham, desired)
+        static_rms, static_out = inverse_error(make, model, None, desired)
         if not learn:
-            static_rms, static_out = inverse_error(make, model, None, desired)
             rows.append((rate, desired.size, static_rms, ham_rms, static_out + ham_out))
             continue
         stage = make(CLOCK_HZ)
         player = CheckedStage(stage)
-        player.outside += ham_out
+        player.outside += ham_out + static_out
         t0 = time.perf_counter()
         start = compensate(model.replace(creep=None), desired, u_min=U_MIN, u_max=U_MAX)
         stage.settle_on(start.voltage)
@@ -210,7 +212,7 @@ def run_stage(make, fmode, rates, learn=True, numerator_on_static=True):
                              u_max=U_MAX, trials=TRIALS)
         replay = rms(player(res.voltage) - desired)
         rows.append((rate, desired.size, res, replay, player.outside, player.sent,
-                     time.perf_counter() - t0, ham_rms))
+                     time.perf_counter() - t0, ham_rms, static_rms))
     return rows, ham
 
 
@@ -257,17 +259,17 @@ def main():
                       f"{ham_rms / static_rms:6.3f}")
                 checks.append((tuned, rate, None, None, outside, static_rms, ham_rms, fmode))
             continue
-        print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} "
+        print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'t0':>7} "
               + " ".join(f"{'t' + str(j):>6}" for j in range(1, TRIALS + 1))
               + f" {'replay':>7} {'/noise':>6} {'gain':>6} {'V out':>5} {'s':>5}  stop")
-        for rate, n, res, replay, outside, _, secs, ham_rms in rows:
+        for rate, n, res, replay, outside, _, secs, ham_rms, static_rms in rows:
             improvement = res.rms[0] / replay
-            print(f"{rate:8.4g} {n:6d} {res.rms[0]:7.4f} {ham_rms:7.4f} "
+            print(f"{rate:8.4g} {n:6d} {static_rms:7.4f} {ham_rms:7.4f} {res.rms[0]:7.4f} "
                   + " ".join(f"{e:6.4f}" for e in res.rms[1:])
                   + " " * 7 * (TRIALS - res.rms.size + 1)
                   + f" {replay:7.4f} {replay / NOISE_UM:6.2f} {improvement:6.1f} "
                     f"{outside:5d} {secs:5.1f}  {res.reason[:40]}")
-            checks.append((tuned, rate, replay, improvement, outside, res.rms[0], ham_rms,
+            checks.append((tuned, rate, replay, improvement, outside, static_rms, ham_rms,
                            fmode))
     above = [c for c in checks if c[1] > c[7] / 20]
     below = [c for c in checks if c[1] <= c[7] / 20]
