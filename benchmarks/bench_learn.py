@@ -39,12 +39,13 @@ damping; their hysteresis scaled to the issue's stages' 45 um range unless --uns
 are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
-     [--no-learning] [--ratio-only]
+     [--no-learning] [--ratio-only] [--learn-from-hammerstein]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
      static and Hammerstein inverses only; --ratio-only: the Hammerstein model's
      dynamics from the ratio of rates alone, without the numerator's refit on the static
-     model)
+     model; --learn-from-hammerstein: learn from the Hammerstein model, its hysteresis
+     with the static model's creep, instead of the static model)
 """
 
 import sys
@@ -131,7 +132,7 @@ ID_SPAN_V = (10.0, 140.0)
 ID_HARMONICS = 15
 
 
-def hammerstein_model(make, model, numerator_on_static=True):
+def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False):
     """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
     triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
     stage settled on each; one period each)."""
@@ -142,7 +143,7 @@ def hammerstein_model(make, model, numerator_on_static=True):
         stage.settle_on(u)
         return u, stage.run_periodic(u)
     return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
-                        numerator_on_static=numerator_on_static)
+                        numerator_on_static=numerator_on_static, keep_creep=keep_creep)
 
 
 def scan(make, rate_hz, fmode):
@@ -191,9 +192,11 @@ def inverse_error(make, model, ham, desired):
     return rms(player(u) - desired), player.outside
 
 
-def run_stage(make, fmode, rates, learn=True, numerator_on_static=True):
+def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False):
     model = fitted_model(make)
     ham = hammerstein_model(make, model, numerator_on_static)
+    learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True)
+                  if from_ham else model)
     rows = []
     for rate in rates:
         desired = scan(make, rate, fmode)
@@ -208,7 +211,7 @@ def run_stage(make, fmode, rates, learn=True, numerator_on_static=True):
         t0 = time.perf_counter()
         start = compensate(model.replace(creep=None), desired, u_min=U_MIN, u_max=U_MAX)
         stage.settle_on(start.voltage)
-        res = learn_periodic(player, desired, 1 / CLOCK_HZ, model=model, u_min=U_MIN,
+        res = learn_periodic(player, desired, 1 / CLOCK_HZ, model=learn_from, u_min=U_MIN,
                              u_max=U_MAX, trials=TRIALS)
         replay = rms(player(res.voltage) - desired)
         rows.append((rate, desired.size, res, replay, player.outside, player.sent,
@@ -227,7 +230,8 @@ def main():
     checks = []
     scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
     args = [a for a in sys.argv[1:]
-            if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only")]
+            if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
+                         "--learn-from-hammerstein")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -248,7 +252,8 @@ def main():
         rates += [] if fmode / 8 in rates else [fmode / 8]
         tag = "tuned on" if tuned else "held out"
         print(f"\n{label} (seed {seed}, {tag})")
-        rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:])
+        rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
+                              "--learn-from-hammerstein" in sys.argv[1:])
         print(f"  Hammerstein: na {ham.a[0].size - 1}, nb {ham.b[0].shape[1]}; poles "
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
                           for p in np.roots(ham.a[0]) if p.imag >= 0))

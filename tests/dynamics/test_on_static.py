@@ -126,6 +126,20 @@ def test_fit_dynamics_takes_any_static_family_and_drops_creep_and_delay():
     assert np.allclose(model.a[0], a, atol=1e-4)
 
 
+def test_keep_creep_keeps_the_static_models_creep_and_not_its_delay():
+    from pihyst.model import Creep
+    H, a = static_model(), mode()
+    slow, fast = rate_records(H, a, np.array([0.0, 0.9, 0.5]))
+    creepy = H.replace(creep=Creep(tau=[0.1, 1.0], gain=[0.01, 0.01], dt=1e-3), delay=1,
+                       sample_period=1e-3)
+    kept = fit_dynamics(creepy, slow, fast, orders=((2, 3),), validation=None,
+                        keep_creep=True)
+    plain = fit_dynamics(creepy, slow, fast, orders=((2, 3),), validation=None)
+    assert kept.hysteresis[0].creep == creepy.creep and kept.hysteresis[0].delay == 0
+    assert plain.hysteresis[0].creep is None
+    assert np.array_equal(kept.a[0], plain.a[0]) and np.array_equal(kept.b[0], plain.b[0])
+
+
 def test_fit_dynamics_refuses_records_it_cannot_compare():
     H, a = static_model(), mode()
     slow, fast = rate_records(H, a, np.array([0.0, 0.9, 0.5]))

@@ -135,7 +135,7 @@ def _numerator_on_static(H, a, nb, records):
 
 
 def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
-                 tolerance=0.01, numerator_on_static=True):
+                 tolerance=0.01, numerator_on_static=True, keep_creep=False):
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
     unit-static-gain dynamics measured by the ratio of rates (module notes).
 
@@ -146,7 +146,11 @@ def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
     order (the first of ``orders`` whose output error there is within ``tolerance`` of the
     best, or within 1e-9 of the output: noise-free data); None takes the first of
     ``orders``. ``numerator_on_static``: then refit B, the poles kept, on the static
-    model's output (module notes)."""
+    model's output (module notes). ``keep_creep``: the returned model's hysteresis keeps
+    the static model's creep (for :func:`pihyst.learn.learn_periodic`, which runs it on
+    the period's time base; :meth:`HammersteinModel.predict` and
+    :func:`compensate_hammerstein` do not time it: leave it off for them). The dynamics
+    are fitted without it either way."""
     slow = _one_period(slow, "slow")
     fast = [_one_period(r, i) for i, r in enumerate(fast)]
     if not fast:
@@ -185,4 +189,6 @@ def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
     gain = float(np.sum(b) / np.sum(a))
     if not abs(gain) > 1e-12:
         raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0)")
+    if keep_creep and getattr(static, "creep", None) is not None:
+        H = static.replace(delay=0) if getattr(static, "delay", 0) else static
     return HammersteinModel(hysteresis=(H,), a=(a,), b=(b / gain,))
