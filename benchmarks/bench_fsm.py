@@ -31,9 +31,16 @@ simulated beam with its 54 Hz mode.
    static compensator (pihyst.fit on a quasi-static 300 s triangle, exact inverse),
    (b) the Hammerstein model's hysteresis (times the static gain of its dynamics)
    inverted alone, (c) the Hammerstein
-   compensation (ZPETC inverse of the dynamics + hysteresis inverse); 0-150 V limits.
+   compensation (ZPETC inverse of the dynamics + hysteresis inverse), (d) the static
+   model of (a) followed by the beam's dynamics measured as the ratio of one drive shape
+   played at 2-10 Hz to the same at 0.1 Hz (pihyst.dynamics.fit_dynamics, unit static
+   gain), compensated the same way; (e) and (f): (a) and (d) with the static model
+   pihyst.fit(family="classical") (the default before Bouc-Wen joined the families);
+   0-150 V limits.
 
 Run: PIHYST_DATA=/path/to/data python benchmarks/bench_fsm.py [--polynomial]
+     [--one-model | --beam-tracking]  (only the one-model FSM table, or only item 2's
+     tracking table)
 """
 
 import time
@@ -44,6 +51,7 @@ from pihyst import compensate, fit
 from pihyst.dynamics import (
     compensate_hammerstein,
     estimate_bla,
+    fit_dynamics,
     fit_hammerstein,
     fit_hammerstein_ss,
     fit_linear,
@@ -52,13 +60,19 @@ from pihyst.dynamics import (
 )
 from pihyst.io import datasets
 from pihyst.sim import make_plant
-from pihyst.sim.signals import triangle
+from pihyst.sim.signals import band_limited_triangle, triangle
 
 FSM_DIR = "fsm-cubespec-piezo-mirror"
 FSM_POLY_ORDER = 16     # na = nb per output of the polynomial fit
 FSM_ORDERS = range(8, 65, 4)
 PUBLISHED = {"100mV": {"BLA": None, "LFR": 0.0866}, "300mV": {"BLA": 0.228, "LFR": 0.169}}
 PERIOD = 8192
+FSM_ONE_MODEL_ORDERS = range(24, 65, 8)
+#: the published single models for all levels (SOURCE.md): nonlinear LFR, and the BLA
+#: fitted on all levels
+PUBLISHED_ONE_MODEL = {"100mV": {"LFR": 0.0866, "BLA": 0.252},
+                       "200mV": {"LFR": 0.131, "BLA": 0.179},
+                       "300mV": {"LFR": 0.169, "BLA": 0.658}}
 
 
 def fsm_records(root, level, part):
@@ -120,6 +134,48 @@ def fsm(polynomial=False):
                   f"  all {np.sqrt(np.mean(err ** 2)):.3f} um{fit_time}")
 
 
+def fsm_one_model():
+    """One model for all levels: fitted on the 100 mV and 300 mV training records together
+    (12 realisations; the order chosen by validation on realisations 5 and 6 of each
+    level), judged on each level's test records."""
+    root = datasets.data_root()
+    if root is None or not (root / FSM_DIR).is_dir():
+        print(f"FSM data not found ({FSM_DIR} in $PIHYST_DATA or ../shared/data): skipped")
+        return
+    levels = ("100mV", "300mV")
+    train = [r for level in levels for r in fsm_records(root, level, "train")]
+    tests = {level: fsm_records(root, level, "test") for level in levels}
+    n = len(train) // len(levels)
+    held = tuple(i * n + r for i in range(len(levels)) for r in (n - 2, n - 1))
+    t0 = time.perf_counter()
+    lin, sel = fit_state_space(train, PERIOD, orders=FSM_ONE_MODEL_ORDERS, validation=held,
+                               return_selection=True)
+    t_lin = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ham = fit_hammerstein_ss(train, PERIOD, linear=lin, refinements=2, max_nfev=10)
+    t_ham = time.perf_counter() - t0 + t_lin
+    print(f"\nFSM, one model for all levels (fitted on 100 mV and 300 mV together): order "
+          f"{sel.chosen} chosen (validation RMS "
+          + " ".join(f"{o}: {e:.3f}" for o, e in zip(sel.orders, sel.errors)) + ")")
+    print("    hysteresis weights per input: " + "  ".join(
+        np.array2string(H.weights, precision=3) for H in ham.hysteresis))
+    print(f"    {'model':<22}" + "".join(f"{lv:>9}" for lv in PUBLISHED_ONE_MODEL)
+          + "  (test RMS, all outputs, um; 200 mV: no data here)")
+    for name, fields in (("published NL-LFR", "LFR"), ("published BLA, all lvls", "BLA")):
+        print(f"    {name:<22}" + "".join(f"{PUBLISHED_ONE_MODEL[lv][fields]:9.3f}"
+                                          for lv in PUBLISHED_ONE_MODEL))
+    for name, predict, elapsed in ((f"state space {lin.order}", lin.predict, t_lin),
+                                   ("hammerstein", ham.predict, t_ham)):
+        cells = []
+        for lv in PUBLISHED_ONE_MODEL:
+            if lv not in tests:
+                cells.append(f"{'-':>9}")
+                continue
+            err = np.vstack([predict(u)[PERIOD:] - y[PERIOD:] for u, y in tests[lv]])
+            cells.append(f"{np.sqrt(np.mean(err ** 2)):9.3f}")
+        print(f"    {name:<22}" + "".join(cells) + f"   fit {elapsed:.0f} s")
+
+
 def sweep(fs, duration, f0, f1, level, amplitude, envelope=True):
     """Exponential sine sweep f0 -> f1 Hz about ``level`` V; with ``envelope`` a slow
     amplitude modulation makes minor loops."""
@@ -169,6 +225,26 @@ def beam(orders=((2, 3), (4, 4))):
                   f"{hm:6.2f} %")
 
 
+BEAM_ID_SLOW_HZ = 0.1
+BEAM_ID_RATES = (2.0, 5.0, 8.0, 10.0, 4.0)       # Hz; the last chooses the order
+BEAM_ID_HARMONICS = 15
+
+
+def beam_dynamics(static, fs=2000.0):
+    """``static`` followed by the beam's dynamics (pihyst.dynamics.fit_dynamics: one drive
+    shape, a triangle's first BEAM_ID_HARMONICS harmonics over 5-145 V, played from rest
+    at BEAM_ID_SLOW_HZ (4 periods) and at BEAM_ID_RATES (20 s), the last period kept)."""
+    def period(rate, seconds):
+        _, u = band_limited_triangle(5.0, 145.0, period_s=1 / rate,
+                                     max_hz=(BEAM_ID_HARMONICS + 0.5) * rate, dt=1 / fs)
+        uu = np.tile(u, max(2, int(np.ceil(seconds * rate))))
+        y = make_plant("paper-beam", seed=20 + int(rate * 10), dynamics=True).run(
+            uu, np.arange(uu.size) / fs)
+        return u, y[-u.size:]
+    return fit_dynamics(static, period(BEAM_ID_SLOW_HZ, 40.0),
+                        [period(rate, 20.0) for rate in BEAM_ID_RATES])
+
+
 def beam_tracking(fs=2000.0, na=2, nb=3):
     ham = fit_hammerstein(beam_records(fs), na, nb, n_operators=6,
                           input_range=[(0.0, 150.0)], refinements=3)
@@ -178,28 +254,46 @@ def beam_tracking(fs=2000.0, na=2, nb=3):
     tq, uq = triangle()
     yq = make_plant("paper-beam", seed=2).run(uq, tq)
     static = fit(uq, yq).model
+    classical = fit(uq, yq, family="classical").model
+    on_static = beam_dynamics(static, fs)
+    on_classical = beam_dynamics(classical, fs)
     span = np.ptp(yq)                  # the beam's quasi-static range
     lo, hi = yq.min() + 0.25 * span, yq.min() + 0.75 * span
     print(f"\nSimulated beam: tracking sines {lo:.1f}-{hi:.1f} um, RMS error in % of the "
-          f"quasi-static range ({span:.1f} um); static model: {static.family}")
+          f"quasi-static range ({span:.1f} um); static: pihyst.fit's choice "
+          f"({static.family}), classical: pihyst.fit(family='classical'); + dynamics: "
+          f"fit_dynamics, na {on_static.a[0].size - 1}, nb {on_static.b[0].shape[1]}, "
+          f"{on_classical.a[0].size - 1}, {on_classical.b[0].shape[1]}")
+    names = ("static", "hyst. only", "hammerstein", "static + dyn.", "classical",
+             "classical + dyn.")
+    print("  Hz " + "".join(f"{n:>18}" for n in names))
     for f in (1, 5, 10, 20, 30, 50):
         ts = np.arange(0.0, 1.0 + 3 / f, 1 / fs)
         r = lo + (hi - lo) * (1 - np.cos(2 * np.pi * f * ts)) / 2
         k = ts >= max(1 / f, 0.5)
-        out = {}
-        volts = {"static": compensate(static, r).voltage,
-                 "hyst. only": compensate(H_static, r, initial_state=np.zeros(
-                     H.n_operators)).voltage,
-                 "hammerstein": compensate_hammerstein(ham, r)[0]}
-        for name, v in volts.items():
+        volts = (compensate(static, r).voltage,
+                 compensate(H_static, r, initial_state=np.zeros(H.n_operators)).voltage,
+                 compensate_hammerstein(ham, r)[0],
+                 compensate_hammerstein(on_static, r)[0],
+                 compensate(classical, r).voltage,
+                 compensate_hammerstein(on_classical, r)[0])
+        errors = []
+        for v in volts:
             meas = make_plant("paper-beam", seed=7, dynamics=True).run(v, ts)
-            out[name] = 100 * np.sqrt(np.mean((meas[k] - r[k]) ** 2)) / span
-        print(f"  {f:>2} Hz  " + "   ".join(f"{n} {e:6.2f} %" for n, e in out.items()))
+            errors.append(100 * np.sqrt(np.mean((meas[k] - r[k]) ** 2)) / span)
+        print(f"  {f:>2} " + "".join(f"{e:16.2f} %" for e in errors))
 
 
 if __name__ == "__main__":
     import sys
     print(__doc__.split("\n\n")[0])
+    if "--one-model" in sys.argv[1:]:
+        fsm_one_model()
+        sys.exit(0)
+    if "--beam-tracking" in sys.argv[1:]:
+        beam_tracking()
+        sys.exit(0)
     fsm(polynomial="--polynomial" in sys.argv[1:])
+    fsm_one_model()
     beam()
     beam_tracking()

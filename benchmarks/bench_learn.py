@@ -10,8 +10,17 @@ The scan covers 80 % of the range the stage reaches at that rate (driven 0-150 V
 same band-limited triangle, settled; with creep that is less than the settled loop).
 
 - the static inverse: the default ``pihyst.fit`` model (fitted with creep on a slow
-  record, 1 s decaying triangles at 200 Hz) inverted exactly, played periodically
-  (the learning's trial 0);
+  record, 1 s decaying triangles at 200 Hz) inverted exactly (its periodic inverse, with
+  creep), played periodically on a stage settled on it ("static"); the learning's trial
+  0 is the same inverse on a stage settled on the plain inverse ("t0": the learning's
+  own figures, the gain against it);
+- the Hammerstein inverse (no learning): that model followed by dynamics measured on
+  the stage (``pihyst.dynamics.fit_dynamics``: one drive shape, a triangle's first 15
+  harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
+  to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
+  the hysteresis does not enter; unit static gain, so the static model keeps the gain at
+  rest), the dynamics inverted exactly per harmonic of the scan, then the same periodic
+  hysteresis inverse (with creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -30,8 +39,13 @@ damping; their hysteresis scaled to the issue's stages' 45 um range unless --uns
 are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
+     [--no-learning] [--ratio-only] [--learn-from-hammerstein]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
-     (default 1000) instead of the four named ones, at those rates)
+     (default 1000) instead of the four named ones, at those rates; --no-learning: the
+     static and Hammerstein inverses only; --ratio-only: the Hammerstein model's
+     dynamics from the ratio of rates alone, without the numerator's refit on the static
+     model; --learn-from-hammerstein: learn from the Hammerstein model, its hysteresis
+     with the static model's creep, instead of the static model)
 """
 
 import sys
@@ -41,9 +55,11 @@ import warnings
 import numpy as np
 
 import pihyst
+from pihyst.dynamics import fit_dynamics, periodic_inverse_dynamics
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
 from pihyst.learn import learn_periodic
+from pihyst.learn._model_parts import model_parts, periodic_inverse
 from pihyst.sim import Stage, make_stage, random_plant
 from pihyst.sim.signals import band_limited_triangle, decaying_triangles
 
@@ -108,6 +124,28 @@ def fitted_model(make):
     return pihyst.fit(u, stage.run(u), t=t).model
 
 
+#: identification: one drive shape (a triangle's first ID_HARMONICS harmonics, ID_SPAN_V)
+#: at a slow rate and at faster ones (Hz; the last chooses the order)
+ID_SLOW_HZ = 1.0
+ID_RATES = (20.0, 50.0, 100.0, 200.0, 80.0)
+ID_SPAN_V = (10.0, 140.0)
+ID_HARMONICS = 15
+
+
+def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False):
+    """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
+    triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
+    stage settled on each; one period each)."""
+    def period(rate):
+        _, u = band_limited_triangle(*ID_SPAN_V, period_s=1 / rate,
+                                     max_hz=(ID_HARMONICS + 0.5) * rate, dt=1 / CLOCK_HZ)
+        stage = make(CLOCK_HZ)
+        stage.settle_on(u)
+        return u, stage.run_periodic(u)
+    return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
+                        numerator_on_static=numerator_on_static, keep_creep=keep_creep)
+
+
 def scan(make, rate_hz, fmode):
     """One period of the band-limited triangle over 80 % of the stage's range at that
     scan: the span a settled, noise-free copy of the stage covers when driven 0-150 V by
@@ -141,26 +179,49 @@ def rms(e):
     return float(np.sqrt(np.mean(np.square(e))))
 
 
-def run_stage(make, fmode, rates):
+def inverse_error(make, model, ham, desired):
+    """RMS error of the Hammerstein inverse (``ham`` None: the static inverse, learning's
+    trial 0) played periodically on a fresh stage settled on it, and the number of its
+    voltages outside the limits."""
+    h_d = desired if ham is None else periodic_inverse_dynamics(ham.a[0], ham.b[0][0],
+                                                                  desired)
+    u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
+    stage = make(CLOCK_HZ)
+    stage.settle_on(u)
+    player = CheckedStage(stage)
+    return rms(player(u) - desired), player.outside
+
+
+def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False):
     model = fitted_model(make)
+    ham = hammerstein_model(make, model, numerator_on_static)
+    learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True)
+                  if from_ham else model)
     rows = []
     for rate in rates:
         desired = scan(make, rate, fmode)
+        ham_rms, ham_out = inverse_error(make, model, ham, desired)
+        static_rms, static_out = inverse_error(make, model, None, desired)
+        if not learn:
+            rows.append((rate, desired.size, static_rms, ham_rms, static_out + ham_out))
+            continue
         stage = make(CLOCK_HZ)
         player = CheckedStage(stage)
+        player.outside += ham_out + static_out
         t0 = time.perf_counter()
         start = compensate(model.replace(creep=None), desired, u_min=U_MIN, u_max=U_MAX)
         stage.settle_on(start.voltage)
-        res = learn_periodic(player, desired, 1 / CLOCK_HZ, model=model, u_min=U_MIN,
+        res = learn_periodic(player, desired, 1 / CLOCK_HZ, model=learn_from, u_min=U_MIN,
                              u_max=U_MAX, trials=TRIALS)
         replay = rms(player(res.voltage) - desired)
         rows.append((rate, desired.size, res, replay, player.outside, player.sent,
-                     time.perf_counter() - t0))
-    return rows
+                     time.perf_counter() - t0, ham_rms, static_rms))
+    return rows, ham
 
 
 def main():
     quick = "--quick" in sys.argv[1:]
+    learn = "--no-learning" not in sys.argv[1:]
     warnings.simplefilter("ignore", PihystWarning)
     t_all = time.perf_counter()
     print(f"stages: {CLOCK_HZ / 1000:g} kHz clock, 1 tick converter delay, sensor noise "
@@ -168,7 +229,9 @@ def main():
           f"'replay': the learned voltages played again")
     checks = []
     scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
-    args = [a for a in sys.argv[1:] if a not in ("--quick", "--unscaled")]
+    args = [a for a in sys.argv[1:]
+            if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
+                         "--learn-from-hammerstein")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -189,18 +252,41 @@ def main():
         rates += [] if fmode / 8 in rates else [fmode / 8]
         tag = "tuned on" if tuned else "held out"
         print(f"\n{label} (seed {seed}, {tag})")
-        print(f"{'rate Hz':>8} {'N':>6} {'static':>7} "
+        rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
+                              "--learn-from-hammerstein" in sys.argv[1:])
+        print(f"  Hammerstein: na {ham.a[0].size - 1}, nb {ham.b[0].shape[1]}; poles "
+              + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
+                          for p in np.roots(ham.a[0]) if p.imag >= 0))
+        if not learn:
+            print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}")
+            for rate, n, static_rms, ham_rms, outside in rows:
+                print(f"{rate:8.4g} {n:6d} {static_rms:7.4f} {ham_rms:7.4f} "
+                      f"{ham_rms / static_rms:6.3f}")
+                checks.append((tuned, rate, None, None, outside, static_rms, ham_rms, fmode))
+            continue
+        print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'t0':>7} "
               + " ".join(f"{'t' + str(j):>6}" for j in range(1, TRIALS + 1))
               + f" {'replay':>7} {'/noise':>6} {'gain':>6} {'V out':>5} {'s':>5}  stop")
-        for rate, n, res, replay, outside, _, secs in run_stage(make, fmode, rates):
+        for rate, n, res, replay, outside, _, secs, ham_rms, static_rms in rows:
             improvement = res.rms[0] / replay
-            print(f"{rate:8.4g} {n:6d} {res.rms[0]:7.4f} "
+            print(f"{rate:8.4g} {n:6d} {static_rms:7.4f} {ham_rms:7.4f} {res.rms[0]:7.4f} "
                   + " ".join(f"{e:6.4f}" for e in res.rms[1:])
                   + " " * 7 * (TRIALS - res.rms.size + 1)
                   + f" {replay:7.4f} {replay / NOISE_UM:6.2f} {improvement:6.1f} "
                     f"{outside:5d} {secs:5.1f}  {res.reason[:40]}")
-            checks.append((tuned, rate, replay, improvement, outside))
+            checks.append((tuned, rate, replay, improvement, outside, static_rms, ham_rms,
+                           fmode))
+    above = [c for c in checks if c[1] > c[7] / 20]
+    below = [c for c in checks if c[1] <= c[7] / 20]
+    print(f"\nHammerstein inverse (all stages): below the static inverse at every rate above "
+          f"fmode/20: {sum(c[6] < c[5] for c in above)} of {len(above)}; not above it at "
+          f"or below fmode/20: {sum(c[6] <= c[5] for c in below)} of {len(below)}; "
+          f"ratio to the static: {min(c[6] / c[5] for c in checks):.3f} - "
+          f"{max(c[6] / c[5] for c in checks):.3f}")
     held = [c for c in checks if not c[0]]
+    if not learn:
+        print(f"voltages outside {U_MIN:g}-{U_MAX:g} V: {sum(c[4] for c in checks)}")
+        return
     print(f"\ntargets on the held-out stages ({len({c[1] for c in held})} rates):")
     at = [c for c in held if c[1] in (10.0, 50.0, 100.0)]
     ok_noise = sum(c[2] <= 3 * NOISE_UM for c in at)

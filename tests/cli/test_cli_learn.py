@@ -67,3 +67,39 @@ def test_a_period_too_short_is_one_line(tmp_path, capsys):
     desired.write_text("displacement_um\n1\n2\n")
     assert main(["learn", "--desired", str(desired), "-o", str(tmp_path / "o.csv")]) == 2
     assert "2 samples in the period; need 4" in error_line(capsys)
+
+
+def hammerstein_file(path, hz=2000.0, damping=0.05, clock=20_000.0):
+    """A Hammerstein model file: a classical PI model, then one mode (its discrete poles,
+    unit static gain)."""
+    from pihyst.dynamics import HammersteinModel
+    from pihyst.model import ClassicalPI
+    pole = np.exp((-damping + 1j * np.sqrt(1 - damping ** 2)) * 2 * np.pi * hz / clock)
+    a = np.poly([pole, np.conj(pole)]).real
+    model = HammersteinModel(hysteresis=(ClassicalPI([0, 10, 30], [0.22, 0.06, 0.03],
+                                                     input_range=(0.0, 150.0)),),
+                             a=(a,), b=(np.array([[0.0, a.sum()]]),))
+    model.save(path)
+
+
+def test_learn_starts_from_a_hammerstein_model_file(tmp_path, capsys):
+    model, out = tmp_path / "ham.json", tmp_path / "run.csv"
+    hammerstein_file(model)
+    assert main(["learn", "--model", str(model), "--scan", "200", "--mode", "2000,0.05",
+                 "--trials", "2", "-o", str(out)]) == 0
+    data, _ = read_columns(out, ["trial", "voltage_V"])
+    assert set(data["trial"]) == {0, 1, 2}
+    assert np.all((data["voltage_V"] >= 0) & (data["voltage_V"] <= 150))
+
+
+def test_a_broken_hammerstein_file_is_one_line_and_status_2(tmp_path, capsys):
+    model, out = tmp_path / "ham.json", tmp_path / "run.csv"
+    hammerstein_file(model)
+    import json
+    d = json.loads(model.read_text())
+    d["a"][0][0] = 2.0
+    model.write_text(json.dumps(d))
+    assert main(["learn", "--model", str(model), "--scan", "200", "--mode", "2000,0.05",
+                 "-o", str(out)]) == 2
+    assert "a[0] must start with 1" in error_line(capsys)
+    assert not out.exists()

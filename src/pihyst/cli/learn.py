@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from pihyst.cli.errors import UsageError, check_output, count, number, positive_number, seed
-from pihyst.io import load_model, read_columns, write_columns
+from pihyst.io import load_model, read_columns, read_model_dict, write_columns
 from pihyst.sim import PLANT_NAMES
 
 #: Longest period learned (samples): a 1 Hz scan at 100 kHz.
@@ -42,8 +42,9 @@ def register(sub):
         epilog="example: pihyst learn --model model.json --scan 100 --mode 800,0.04 "
                "-o run.csv")
     p.add_argument("--model", metavar="MODEL.json", default=None,
-                   help="static model to start from and to invert (default: none, the "
-                        "voltages themselves are learned)")
+                   help="model to start from and to invert: a static model, or a SISO "
+                        "Hammerstein model (pihyst.dynamics; its dynamics inverted too) "
+                        "(default: none, the voltages themselves are learned)")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--scan", type=positive_number, metavar="HZ",
                       help="a band-limited triangle at HZ lines per second (harmonics below "
@@ -94,6 +95,28 @@ def _noise(text):
 
 
 # ----------------------------------------------------------------------------- shared
+def load_learning_model(path):
+    """A static model file or a Hammerstein one (``"family": "hammerstein"``)."""
+    d = read_model_dict(path)
+    if isinstance(d, dict) and d.get("family") == "hammerstein":
+        from pihyst.dynamics import load_hammerstein
+        return load_hammerstein(path)
+    return load_model(path)
+
+
+def starting_voltages(model, desired, u_min, u_max):
+    """Trial 0's drive for settling the stage: the model's inverse (a Hammerstein model's
+    with its dynamics inverted per harmonic), or the middle of the range."""
+    from pihyst.dynamics import HammersteinModel, compensate_hammerstein
+    from pihyst.inverse import compensate
+    if model is None:
+        return np.full(desired.size, (u_min + u_max) / 2)
+    if isinstance(model, HammersteinModel):
+        return compensate_hammerstein(model, desired, u_min=u_min, u_max=u_max,
+                                      periodic=True)[0]
+    return compensate(model, desired, u_min=u_min, u_max=u_max).voltage
+
+
 def desired_period(path, rate_hz):
     """One period of displacement_um from ``path``, at ``rate_hz`` (resampled when the
     file has time_s: the period is then its time span plus one step)."""
@@ -163,7 +186,6 @@ def _scan(args, stage_range, fmode):
 
 
 def run(args):
-    from pihyst.inverse import compensate
     from pihyst.learn import learn_periodic
     from pihyst.sim import make_stage
     if not args.u_min < args.u_max or not (0 <= args.u_min and args.u_max <= 150):
@@ -173,7 +195,7 @@ def run(args):
     if max(hz for hz, _ in modes) >= args.clock / 2:
         raise UsageError(f"--mode: every mode must be below half the --clock "
                          f"({args.clock / 2:g} Hz)")
-    model = load_model(args.model) if args.model else None
+    model = load_learning_model(args.model) if args.model else None
     check_output(args.output)
 
     def stage(noise=args.noise, creep=True):
@@ -186,9 +208,7 @@ def run(args):
     else:
         desired = desired_period(args.desired, args.clock)
     plant = stage()
-    start = (compensate(model, desired, u_min=args.u_min, u_max=args.u_max).voltage
-             if model is not None else np.full(desired.size, (args.u_min + args.u_max) / 2))
-    plant.settle_on(start)
+    plant.settle_on(starting_voltages(model, desired, args.u_min, args.u_max))
     res = learn_periodic(plant.run_periodic, desired, 1 / args.clock, model=model,
                          u_min=args.u_min, u_max=args.u_max, slew_rate=args.slew,
                          trials=args.trials, bandwidth_hz=args.bandwidth, seed=args.seed,

@@ -9,14 +9,26 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   then those MIMO dynamics;
 - :func:`fit_hammerstein` / :class:`HammersteinModel`: classical PI per input, then
   A_j(q) y_j = sum_i B_ji(q) h_i per output (any records, e.g. sweeps);
+- :func:`fit_dynamics`: a given static model (``pihyst.fit``, any family) followed by
+  unit-static-gain dynamics fitted on periodic records (a SISO HammersteinModel);
 - :func:`fit_linear` / :func:`predict_linear`: the same polynomial structure on the
   input itself;
-- :func:`compensate_hammerstein`: zero-phase error tracking inverse of the dynamics,
-  then the exact hysteresis inverse with voltage and slew limits (SISO).
+- :func:`compensate_hammerstein`: zero-phase error tracking inverse of the dynamics (for
+  a periodic trajectory, the exact inverse per harmonic), then the exact hysteresis
+  inverse with voltage and slew limits (SISO);
+- :func:`compensate_mimo`: the same for a square MIMO StateSpaceHammerstein and a
+  periodic trajectory (the dynamics inverted per harmonic);
+- :func:`load_hammerstein`: a HammersteinModel from its JSON file
+  (:meth:`HammersteinModel.save`).
 """
 
 from pihyst.dynamics._bla import FrequencyResponse, estimate_bla
-from pihyst.dynamics._compensate import compensate_hammerstein, zpetc
+from pihyst.dynamics._compensate import (
+    compensate_hammerstein,
+    compensate_mimo,
+    periodic_inverse_dynamics,
+    zpetc,
+)
 from pihyst.dynamics._fit_state_space import OrderSelection, fit_state_space
 from pihyst.dynamics._hammerstein import (
     HammersteinModel,
@@ -25,10 +37,14 @@ from pihyst.dynamics._hammerstein import (
     fit_linear,
     predict_linear,
 )
+from pihyst.dynamics._hammerstein_io import load_hammerstein
 from pihyst.dynamics._hammerstein_ss import StateSpaceHammerstein, fit_hammerstein_ss
+from pihyst.dynamics._on_static import fit_dynamics
 from pihyst.dynamics._statespace import StateSpace, fsid
 
 __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "StateSpace",
-           "StateSpaceHammerstein", "compensate_hammerstein", "default_thresholds",
-           "estimate_bla", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
-           "fit_state_space", "fsid", "predict_linear", "zpetc"]
+           "StateSpaceHammerstein", "compensate_hammerstein", "compensate_mimo",
+           "default_thresholds",
+           "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
+           "fit_state_space", "fsid", "load_hammerstein", "periodic_inverse_dynamics",
+           "predict_linear", "zpetc"]

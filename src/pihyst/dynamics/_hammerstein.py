@@ -26,8 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst.dynamics._linear import fit_oe, fit_oe_periodic, response, simulate
-from pihyst.exceptions import InvalidArgumentError
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 from pihyst.model import ClassicalPI
+
+FAMILY = "hammerstein"
 
 
 def _lfilter():
@@ -42,12 +44,15 @@ def _operators(model, u):
 
 @dataclass(frozen=True)
 class HammersteinModel:
-    """Static hysteresis per input (``hysteresis``, ClassicalPI models) followed by
-    ``a[j]`` / ``b[j][i]`` linear dynamics per output (q^-1 polynomials)."""
+    """Static hysteresis per input (``hysteresis``: pihyst models with an exact inverse,
+    ClassicalPI from :func:`fit_hammerstein`, any family from :func:`fit_dynamics`)
+    followed by ``a[j]`` / ``b[j][i]`` linear dynamics per output (q^-1 polynomials)."""
 
     hysteresis: tuple
     a: tuple
     b: tuple
+
+    family = FAMILY
 
     @property
     def n_inputs(self):
@@ -58,10 +63,9 @@ class HammersteinModel:
         return len(self.a)
 
     def hysteresis_output(self, u):
-        """h_i = H_i(u_i) from the zero operator state; u of shape (N, m)."""
+        """h_i = H_i(u_i) from each hysteresis model's initial state; u of shape (N, m)."""
         u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        return np.column_stack([H.predict(u[:, i], initial_state=np.zeros(H.n_operators))
-                                for i, H in enumerate(self.hysteresis)])
+        return np.column_stack([H.predict(u[:, i]) for i, H in enumerate(self.hysteresis)])
 
     def predict(self, u):
         """Outputs (N, p) for inputs u (N, m), simulated from rest."""
@@ -69,18 +73,77 @@ class HammersteinModel:
         return np.column_stack([simulate(self.a[j], np.asarray(self.b[j]), h)
                                 for j in range(self.n_outputs)])
 
+    def static_gain(self):
+        """B_ji(1) / A_j(1) per output and input: (p, m)."""
+        return np.array([np.sum(np.atleast_2d(b), axis=1) / np.sum(a)
+                         for a, b in zip(self.a, self.b)])
+
     def to_dict(self):
-        return {"family": "hammerstein",
+        return {"family": FAMILY,
                 "hysteresis": [H.to_dict() for H in self.hysteresis],
                 "a": [np.asarray(a).tolist() for a in self.a],
-                "b": [np.asarray(b).tolist() for b in self.b]}
+                "b": [np.atleast_2d(b).tolist() for b in self.b]}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d, source="model"):
+        """The model of a dict of :meth:`to_dict`'s keys; a broken one raises
+        InvalidModelError naming ``source`` and the key."""
         from pihyst.model import PIModel
-        return cls(hysteresis=tuple(PIModel.from_dict(h) for h in d["hysteresis"]),
-                   a=tuple(np.asarray(a, dtype=float) for a in d["a"]),
-                   b=tuple(np.asarray(b, dtype=float) for b in d["b"]))
+        if not isinstance(d, dict) or d.get("family") != FAMILY:
+            family = d.get("family") if isinstance(d, dict) else None
+            raise InvalidModelError(f"{source}: key 'family' must be {FAMILY!r}; got "
+                                    f"{family!r:.40}")
+        for key in ("hysteresis", "a", "b"):
+            if not isinstance(d.get(key), list) or not d[key]:
+                raise InvalidModelError(f"{source}: key {key!r} must be a non-empty list")
+        hysteresis = tuple(PIModel.from_dict(h, f"{source}: hysteresis[{i}]")
+                           if isinstance(h, dict) else _bad(source, f"hysteresis[{i}]",
+                                                            "an object")
+                           for i, h in enumerate(d["hysteresis"]))
+        m = len(hysteresis)
+        if len(d["a"]) != len(d["b"]):
+            raise InvalidModelError(f"{source}: 'a' and 'b' need one entry per output, got "
+                                    f"{len(d['a'])} and {len(d['b'])}")
+        a, b = [], []
+        for j, (aj, bj) in enumerate(zip(d["a"], d["b"])):
+            aj = _finite_array(aj, source, f"a[{j}]", 1)
+            if aj[0] != 1.0:
+                raise InvalidModelError(f"{source}: a[{j}] must start with 1 (A(q) = 1 + "
+                                        f"a_1 q^-1 + ...), got {aj[0]:g}")
+            if np.any(np.abs(np.roots(aj)) >= 1.0):
+                raise InvalidModelError(f"{source}: a[{j}] has roots on or outside the unit "
+                                        f"circle (unstable dynamics)")
+            bj = _finite_array(bj, source, f"b[{j}]", 2)
+            if bj.shape[0] != m:
+                raise InvalidModelError(f"{source}: b[{j}] needs one row per input ({m}), "
+                                        f"got {bj.shape[0]}")
+            a.append(aj)
+            b.append(bj)
+        return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b))
+
+    def save(self, path):
+        """Write the model as JSON to ``path`` (the file appears only once complete)."""
+        import json
+
+        from pihyst._atomic import write_atomically
+        write_atomically(path, json.dumps(self.to_dict(), indent=2) + "\n")
+
+
+def _bad(source, key, what):
+    raise InvalidModelError(f"{source}: {key} must be {what}")
+
+
+def _finite_array(value, source, key, ndim):
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        _bad(source, key, f"a {'list' if ndim == 1 else 'list of lists'} of numbers")
+    if ndim == 2 and arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != ndim or arr.size == 0 or not np.all(np.isfinite(arr)):
+        _bad(source, key, f"a non-empty {'list' if ndim == 1 else 'list of lists'} of "
+                          f"finite numbers")
+    return arr
 
 
 def _as_records(records):
@@ -146,7 +209,7 @@ def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_ra
         c, s = (allu.max(0) + allu.min(0)) / 2, np.ptp(allu, axis=0)
         input_range = [(c[i] - 0.75 * s[i], c[i] + 0.75 * s[i]) for i in range(m)]
     bases = [ClassicalPI(thresholds[i], np.ones(len(thresholds[i])),
-                         input_range=input_range[i]) for i in range(m)]
+                         input_range=input_range[i]) for i in range(m)]   # zero state
     K = [b.n_operators for b in bases]
     phis = [[_operators(bases[i], u[:, i]) for i in range(m)] for u, _ in recs]
 

@@ -11,10 +11,11 @@ naming the file, line and column.
 
 from pihyst.exceptions import CSVError, RecordError
 from pihyst.io._csv import ColumnWriter, column_number, read_columns, write_columns
-from pihyst.io._model_files import load_model, save_model
+from pihyst.io._model_files import load_model, read_model_dict, save_model
 from pihyst.io._records import Record, RecordReader, open_record, read_record
 from pihyst.io._validation import Validation, validate_model
 
 __all__ = ["CSVError", "ColumnWriter", "Record", "RecordError", "RecordReader",
-           "column_number", "load_model", "open_record", "read_columns", "read_record",
+           "column_number", "load_model", "open_record", "read_columns", "read_model_dict",
+           "read_record",
            "save_model", "validate_model", "Validation", "write_columns"]

@@ -44,6 +44,16 @@ def load_model(path_or_dict):
     """
     if isinstance(path_or_dict, dict):
         return PIModel.from_dict(path_or_dict)
+    path = os.fspath(path_or_dict) if isinstance(path_or_dict, (str, os.PathLike)) else None
+    return PIModel.from_dict(read_model_dict(path_or_dict), source=path)
+
+
+def read_model_dict(path_or_dict):
+    """The dict a JSON model file holds (any family, e.g. ``hammerstein`` for
+    :func:`pihyst.dynamics.load_hammerstein`), its file errors reported as one line;
+    a dict is returned as it is."""
+    if isinstance(path_or_dict, dict):
+        return path_or_dict
     try:
         path = os.fspath(path_or_dict)
     except TypeError:
@@ -55,7 +65,7 @@ def load_model(path_or_dict):
         raise InvalidModelError(f"{path}: cannot read model: {err.strerror}") from None
     except RecordError as err:      # a stream too large or too slow, a folder
         raise InvalidModelError(f"{path}: cannot read model: {err.message}") from None
-    return PIModel.from_dict(_parse_json(raw, path), source=path)
+    return _parse_json(raw, path)
 
 
 def _parse_json(raw, path):

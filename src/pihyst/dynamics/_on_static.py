@@ -1,0 +1,194 @@
+"""Linear dynamics after a given static model: a Hammerstein model whose hysteresis is a
+model fitted on slow records (``pihyst.fit``, any family) and whose dynamics are measured
+by playing one periodic drive shape at several rates (docs/theory/hammerstein.md,
+"Dynamics after a static model").
+
+Why not fit the dynamics on y against the static model's output H[u]: the static model is
+not exact (its loop's width and slope on the drive used are off by a few per cent), and a
+fit of G on (H[u], y) takes that error for dynamics: a phase lag half the true one on a
+resonant stage, a gain 12 % off on a beam's minor loops, poles fitted to it between the
+lines the records excite. The inverse built on such a G then undoes errors the static
+inverse did not make, and is worse than the static inverse at low rates.
+
+The ratio of two rates does not see the hysteresis. Play one period u(theta) of a drive
+shape (phase theta = t / T) at a slow rate and at faster ones, each in periodic steady
+state. A rate-independent hysteresis gives the same output per phase at every rate, so
+its harmonics H_k are the same in every record, and on harmonic k
+
+    Y_slow,k = G(k f_slow) H_k ~= H_k     (k f_slow far below the dynamics),
+    Y_f,k    = G(k f) H_k,
+
+    =>  Y_f,k = G(k f) Y_slow,k,                                    (ratio model)
+
+whatever H is: neither the static model nor its error enters. G = B(q^-1) / A(q^-1) is
+fitted to these by the output-error fit of :func:`pihyst.dynamics._linear.fit_oe_periodic`
+(the harmonics of every fast record placed on the lines of a common period that all their
+periods divide; nothing on the others), with G(1) = 1 as one more data point: the DC
+line, weighted like all the harmonics together. Each candidate order (na, nb) is fitted on
+all fast records but one; the first (simplest) whose output error on the held-back one is
+within ``tolerance`` of the best wins and is refitted on all. Then
+
+The poles are the stage's. With them fixed, B is refitted on the static model's own
+output over the same records (``numerator_on_static``, the default): on each record's
+drive harmonics Y_k A(z_k) = B(z_k) H_k, H_k the harmonics of H[u], linear least squares
+in b. The numerator then also takes what the static model gets wrong at these rates as
+a linear correction (a loop too wide by a converter delay the slow fit absorbed acts as
+a phase lead; the ratio model, which does not see the static model, would expose it),
+while the poles, measured without the static model, cannot move to fit it. Then
+
+    B <- B A(1) / B(1):   G(1) = 1.
+
+The static model holds the gain at rest; the dynamics add only what changes with rate. As
+the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d -> r).
+"""
+
+import math
+
+import numpy as np
+
+from pihyst.dynamics._hammerstein import HammersteinModel
+from pihyst.dynamics._linear import fit_oe_periodic, response
+from pihyst.exceptions import InvalidArgumentError
+
+#: (na, nb) tried: a mode, a mode and a lag, two modes, each with a zero or two more
+DEFAULT_ORDERS = ((2, 2), (2, 3), (4, 4), (4, 5), (6, 6))
+SHAPE_TOLERANCE = 1e-3     # of the largest drive harmonic: the records' shapes must agree
+HARMONIC_FLOOR = 1e-3      # drive harmonics below this (of the largest) are not used
+MAX_COMMON_PERIOD = 1_000_000
+
+
+def _plain(model):
+    """The static model without creep and input delay (the dynamics measure both)."""
+    if getattr(model, "creep", None) is not None:
+        model = model.replace(creep=None)
+    if getattr(model, "delay", 0):
+        model = model.replace(delay=0)
+    return model
+
+
+def _one_period(record, i):
+    u, y = (np.asarray(v, dtype=float).ravel() for v in record)
+    if u.size != y.size or u.size < 4:
+        raise InvalidArgumentError(f"record {i}: {u.size} input and {y.size} output "
+                                   f"samples; need one period (at least 4) of both")
+    return u, y
+
+
+def _harmonics(slow):
+    """The drive harmonics k used (those above HARMONIC_FLOOR of the largest, k >= 1)."""
+    U = np.fft.rfft(slow[0])[1:]
+    return 1 + np.flatnonzero(np.abs(U) > HARMONIC_FLOOR * np.abs(U).max())
+
+
+def _ratio_spectra(slow, fast, ks, period):
+    """(V, Y) per fast record on the lines of ``period``: V = Y_slow,k, Y = Y_f,k."""
+    U0, Y0 = (np.fft.rfft(v)[ks] / v.size for v in slow)
+    out = []
+    for i, (u, y) in enumerate(fast):
+        n = u.size
+        if ks.max() >= n / 2:
+            raise InvalidArgumentError(f"record {i}: {n} samples per period hold no "
+                                       f"harmonic {ks.max()} of the drive (need more than "
+                                       f"{2 * ks.max()})")
+        U, Y = np.fft.rfft(u)[ks] / n, np.fft.rfft(y)[ks] / n
+        if np.max(np.abs(U - U0)) > SHAPE_TOLERANCE * np.abs(U0).max():
+            raise InvalidArgumentError(f"record {i}: not the slow record's drive shape "
+                                       f"(its harmonics differ by more than "
+                                       f"{SHAPE_TOLERANCE:g} of the largest)")
+        V_line = np.zeros(period // 2 + 1, complex)
+        Y_line = np.zeros(period // 2 + 1, complex)
+        V_line[ks * (period // n)] = Y0
+        Y_line[ks * (period // n)] = Y
+        out.append((V_line[:, None], Y_line))
+    return out
+
+
+def _unit_dc(spectra, period):
+    """G(1) = 1 as data: the DC line, weighted like all the harmonics together."""
+    w = math.sqrt(sum(float(np.sum(np.abs(V) ** 2)) for V, _ in spectra))
+    V, Y = np.zeros(period // 2 + 1, complex), np.zeros(period // 2 + 1, complex)
+    V[0] = Y[0] = w
+    return (V[:, None], Y)
+
+
+def _output_error(a, b, spectra, period):
+    G = response(a, b, period)[:, 0]
+    return float(sum(np.sum(np.abs(Y - G * V[:, 0]) ** 2) for V, Y in spectra))
+
+
+def _numerator_on_static(H, a, nb, records):
+    """B with A fixed, fitted on the static model's output: on the drive harmonics k of
+    each record (u, y), Y_k A(z_k) = B(z_k) H_k with H_k of h = H[u] over a settled period,
+    linear least squares in b (z_k = exp(-2 pi i k / n))."""
+    rows, target = [], []
+    for u, y in records:
+        n = u.size
+        h = H.predict(np.tile(u, 2))[n:]
+        U = np.fft.rfft(u)[1:(n + 1) // 2]
+        k = 1 + np.flatnonzero(np.abs(U) > HARMONIC_FLOOR * np.abs(U).max())
+        z = np.exp(-2j * np.pi * np.outer(k, np.arange(max(a.size, nb))) / n)
+        M = z[:, :nb] * (np.fft.rfft(h)[k] / (z[:, :a.size] @ a))[:, None] / n
+        Y = np.fft.rfft(y)[k] / n
+        rows += [M.real, M.imag]
+        target += [Y.real, Y.imag]
+    return np.linalg.lstsq(np.vstack(rows), np.concatenate(target), rcond=None)[0][None, :]
+
+
+def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
+                 tolerance=0.01, numerator_on_static=True, keep_creep=False):
+    """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
+    unit-static-gain dynamics measured by the ratio of rates (module notes).
+
+    ``slow``: (u, y), one period of the drive at a rate far below the dynamics (its
+    harmonics where G ~ 1), in periodic steady state; ``fast``: a list of (u, y), one period
+    each of the same drive shape at faster rates (the same harmonics, another number of
+    samples per period). ``validation``: the index of the fast record that chooses the
+    order (the first of ``orders`` whose output error there is within ``tolerance`` of the
+    best, or within 1e-9 of the output: noise-free data); None takes the first of
+    ``orders``. ``numerator_on_static``: then refit B, the poles kept, on the static
+    model's output (module notes). ``keep_creep``: the returned model's hysteresis keeps
+    the static model's creep (for :func:`pihyst.learn.learn_periodic`, which runs it on
+    the period's time base; :meth:`HammersteinModel.predict` and
+    :func:`compensate_hammerstein` do not time it: leave it off for them). The dynamics
+    are fitted without it either way."""
+    slow = _one_period(slow, "slow")
+    fast = [_one_period(r, i) for i, r in enumerate(fast)]
+    if not fast:
+        raise InvalidArgumentError("fast: at least one record at a faster rate")
+    orders = [tuple(int(v) for v in o) for o in orders]
+    if not orders or any(na < 1 or nb < 1 for na, nb in orders):
+        raise InvalidArgumentError(f"orders must be (na, nb) pairs of positive integers, "
+                                   f"got {orders!r}")
+    ks = _harmonics(slow)
+    if ks.size == 0:
+        raise InvalidArgumentError("slow: the drive is constant (no harmonic to measure)")
+    period = math.lcm(*(u.size for u, _ in fast))
+    if period > MAX_COMMON_PERIOD:
+        sizes = ", ".join(str(u.size) for u, _ in fast)
+        raise InvalidArgumentError(f"the fast records' periods ({sizes} samples) have no "
+                                   f"common multiple up to {MAX_COMMON_PERIOD:,} samples")
+    spectra = _ratio_spectra(slow, fast, ks, period)
+    if validation is not None and len(orders) > 1:
+        if len(spectra) < 2:
+            raise InvalidArgumentError("choosing the order needs at least two fast records "
+                                       "(one held back); give validation=None")
+        held = spectra[validation]
+        fit_on = [s for i, s in enumerate(spectra) if i != validation % len(spectra)]
+        fit_on.append(_unit_dc(fit_on, period))
+        errors = np.sqrt([_output_error(*fit_oe_periodic(fit_on, na, nb, period), [held],
+                                        period) for na, nb in orders])
+        floor = 1e-9 * np.sqrt(np.sum(np.abs(held[1]) ** 2))
+        na, nb = orders[int(np.flatnonzero(errors <= (1 + tolerance) * errors.min()
+                                           + floor)[0])]
+    else:
+        na, nb = orders[0]
+    a, b = fit_oe_periodic(spectra + [_unit_dc(spectra, period)], na, nb, period)
+    H = _plain(static)
+    if numerator_on_static:
+        b = _numerator_on_static(H, a, nb, [slow] + fast)
+    gain = float(np.sum(b) / np.sum(a))
+    if not abs(gain) > 1e-12:
+        raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0)")
+    if keep_creep and getattr(static, "creep", None) is not None:
+        H = static.replace(delay=0) if getattr(static, "delay", 0) else static
+    return HammersteinModel(hysteresis=(H,), a=(a,), b=(b / gain,))

@@ -1,0 +1,204 @@
+"""Dynamics after a given static model (fit_dynamics), the periodic stable inverse, and
+Hammerstein model files."""
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.signal import lfilter
+
+from pihyst.dynamics import (
+    HammersteinModel,
+    compensate_hammerstein,
+    fit_dynamics,
+    load_hammerstein,
+    periodic_inverse_dynamics,
+)
+from pihyst.dynamics._linear import response
+from pihyst.exceptions import InvalidArgumentError, InvalidModelError
+from pihyst.inverse import compensate
+from pihyst.model import BoucWenModel, ClassicalPI
+
+N = 1000
+
+
+def mode(r=0.97, theta=0.2):
+    return np.poly([r * np.exp(1j * theta), r * np.exp(-1j * theta)]).real
+
+
+def periodic_output(a, b, h, periods=60):
+    """The last period of B/A driven by h repeated (steady state)."""
+    return lfilter(b, a, np.tile(h, periods))[-h.size:]
+
+
+def static_model():
+    return ClassicalPI([0, 15, 30, 45], [0.3, 0.25, 0.15, 0.1], input_range=(0.0, 150.0))
+
+
+def shape(n, harmonics=9):
+    """One period of n samples of a triangle's first harmonics over 10-140 V."""
+    k = np.arange(1, harmonics + 1, 2)
+    t = np.arange(n)
+    x = -np.cos(2 * np.pi * np.outer(t, k) / n) @ (1.0 / k ** 2)
+    return 10 + 130 * (x - x.min()) / np.ptp(x)
+
+
+def rate_records(H, a, b, gain=1.0, fast=(100, 200, 250, 400, 500)):
+    """The slow period (4000 samples, far below the dynamics: there y = G(1) h) and fast
+    periods of the same shape through the Hammerstein system H, B/A, times ``gain``."""
+    def h(n):
+        u = shape(n)
+        return u, H.predict(np.tile(u, 2))[n:]
+    u0, h0 = h(4000)
+    slow = (u0, gain * np.sum(b) / np.sum(a) * h0)
+    return slow, [(u, gain * periodic_output(a, b, hh)) for u, hh in map(h, fast)]
+
+
+@pytest.mark.parametrize("b", [[0.0, 0.9, 0.5], [0.0, 0.5, 0.9]])   # zero inside, outside
+def test_the_periodic_inverse_is_exact(b):
+    a = mode()
+    t = np.arange(N)
+    ref = 20 + 10 * np.sin(2 * np.pi * 3 * t / N) + 2 * np.cos(2 * np.pi * 40 * t / N)
+    h = periodic_inverse_dynamics(a, b, ref)
+    assert np.max(np.abs(periodic_output(a, b, h, 200) - ref)) < 1e-9 * np.ptp(ref)
+
+
+@pytest.mark.parametrize("gain", [1.0, 0.9])
+def test_fit_dynamics_recovers_the_dynamics_with_unit_static_gain(gain):
+    """Noise-free records of a known Hammerstein system: the dynamics come back, scaled to
+    unit static gain whatever gain the records add (the static model keeps the gain); to
+    the aliasing of the hysteresis output's high harmonics, which differs with the
+    samples per period."""
+    H, a = static_model(), mode()
+    b = np.array([0.0, 0.9, 0.5])
+    slow, fast = rate_records(H, a, b, gain)
+    model = fit_dynamics(H, slow, fast, orders=((2, 2), (2, 3), (4, 4)))
+    assert np.allclose(model.static_gain(), 1.0)
+    assert model.a[0].size == 3 and model.b[0].shape == (1, 3)
+    assert np.allclose(model.a[0], a, atol=1e-5)
+    true = response(a, b[None, :] * a.sum() / b.sum(), 1000)[:, 0]
+    fitted = response(model.a[0], model.b[0], 1000)[:, 0]
+    assert np.max(np.abs(fitted - true)) < 1e-3 * np.max(np.abs(true))
+
+
+def test_the_static_model_does_not_enter_the_poles():
+    """The ratio of rates cancels the hysteresis: a wrong static model (another loop)
+    gives the same poles, and without the numerator's refit the same dynamics; the
+    numerator refitted on the wrong model's output keeps unit static gain."""
+    H, a = static_model(), mode()
+    b = np.array([0.0, 0.5, 0.9])
+    slow, fast = rate_records(H, a, b)
+    wrong = ClassicalPI([0, 40], [0.6, 0.3], input_range=(0.0, 150.0))
+    right = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None,
+                         numerator_on_static=False)
+    other = fit_dynamics(wrong, slow, fast, orders=((2, 3),), validation=None,
+                         numerator_on_static=False)
+    assert np.array_equal(right.a[0], other.a[0]) and np.array_equal(right.b[0], other.b[0])
+    assert other.hysteresis[0] == wrong
+    refit = fit_dynamics(wrong, slow, fast, orders=((2, 3),), validation=None)
+    assert np.array_equal(refit.a[0], right.a[0]) and np.allclose(refit.static_gain(), 1.0)
+    assert not np.allclose(refit.b[0], right.b[0])
+
+
+def test_the_hammerstein_inverse_becomes_the_static_inverse_at_low_rates():
+    """Unit static gain: on a slow periodic trajectory the Hammerstein inverse's
+    voltages are the static inverse's (to the dynamics' effect at that rate)."""
+    H, a = static_model(), mode()
+    model = HammersteinModel(hysteresis=(H,), a=(a,),
+                             b=(np.array([[0.0, 0.9, 0.5]]) * a.sum() / 1.4,))
+    t = np.arange(20 * N)
+    desired = 20 + 10 * np.sin(2 * np.pi * t / t.size)
+    u_ham = compensate_hammerstein(model, desired, periodic=True)[0]
+    u_static = compensate(H, np.tile(desired, 2)).voltage[t.size:]
+    assert np.max(np.abs(u_ham - u_static)) < 0.01 * np.ptp(u_static)
+
+
+def test_fit_dynamics_takes_any_static_family_and_drops_creep_and_delay():
+    bw = BoucWenModel(beta=0.02, gamma=0.01, n=1.0, hysteretic=0.2, linear=0.25,
+                      input_range=(0.0, 150.0), delay=2, sample_period=1e-3)
+    a = mode()
+    b = np.array([0.0, 0.9, 0.5])
+    slow, fast = rate_records(bw.replace(delay=0), a, b)
+    model = fit_dynamics(bw, slow, fast, orders=((2, 3),), validation=None)
+    assert model.hysteresis[0].family == "bouc-wen" and model.hysteresis[0].delay == 0
+    assert np.allclose(model.a[0], a, atol=1e-4)
+
+
+def test_keep_creep_keeps_the_static_models_creep_and_not_its_delay():
+    from pihyst.model import Creep
+    H, a = static_model(), mode()
+    slow, fast = rate_records(H, a, np.array([0.0, 0.9, 0.5]))
+    creepy = H.replace(creep=Creep(tau=[0.1, 1.0], gain=[0.01, 0.01], dt=1e-3), delay=1,
+                       sample_period=1e-3)
+    kept = fit_dynamics(creepy, slow, fast, orders=((2, 3),), validation=None,
+                        keep_creep=True)
+    plain = fit_dynamics(creepy, slow, fast, orders=((2, 3),), validation=None)
+    assert kept.hysteresis[0].creep == creepy.creep and kept.hysteresis[0].delay == 0
+    assert plain.hysteresis[0].creep is None
+    assert np.array_equal(kept.a[0], plain.a[0]) and np.array_equal(kept.b[0], plain.b[0])
+
+
+def test_fit_dynamics_refuses_records_it_cannot_compare():
+    H, a = static_model(), mode()
+    slow, fast = rate_records(H, a, np.array([0.0, 0.9, 0.5]))
+    with pytest.raises(InvalidArgumentError, match="record 0: not the slow record's drive"):
+        fit_dynamics(H, slow, [(shape(100, 3), fast[0][1])], validation=None)
+    with pytest.raises(InvalidArgumentError, match="record 0: 12 samples per period hold"):
+        fit_dynamics(H, slow, [(shape(12), np.ones(12))], validation=None)
+    with pytest.raises(InvalidArgumentError, match="at least two fast records"):
+        fit_dynamics(H, slow, fast[:1])
+    with pytest.raises(InvalidArgumentError, match="record 1: 5 input and 4 output"):
+        fit_dynamics(H, slow, [fast[0], (np.ones(5), np.ones(4))], validation=None)
+    with pytest.raises(InvalidArgumentError, match="the drive is constant"):
+        fit_dynamics(H, (np.ones(100), np.ones(100)), fast, validation=None)
+
+
+def test_hammerstein_files_round_trip(tmp_path):
+    H, a = static_model(), mode()
+    model = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.9, 0.5]]),))
+    path = tmp_path / "ham.json"
+    model.save(path)
+    back = load_hammerstein(path)
+    u = np.linspace(0, 150, 300)
+    assert np.array_equal(back.predict(u), model.predict(u))
+    assert json.loads(path.read_text())["family"] == "hammerstein"
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda d: d.update(family="classical"), "key 'family' must be 'hammerstein'"),
+    (lambda d: d.update(a=[]), "key 'a' must be a non-empty list"),
+    (lambda d: d.update(a=[[2.0, 0.1]]), "a[0] must start with 1"),
+    (lambda d: d.update(a=[[1.0, -2.5, 1.5]]), "unstable"),
+    (lambda d: d.update(b=[[["x"]]]), "b[0] must be a list of lists of numbers"),
+    (lambda d: d.update(b=[[[0.1], [0.2]]]), "b[0] needs one row per input (1)"),
+    (lambda d: d["hysteresis"][0].update(thresholds=[0, 30, 15, 45]), "hysteresis[0]"),
+])
+def test_broken_hammerstein_files_are_one_line_errors(tmp_path, change, message):
+    d = HammersteinModel(hysteresis=(static_model(),), a=(mode(),),
+                         b=(np.array([[0.0, 0.9, 0.5]]),)).to_dict()
+    change(d)
+    path = tmp_path / "ham.json"
+    path.write_text(json.dumps(d))
+    with pytest.raises(InvalidModelError, match=r"ham\.json: ") as err:
+        load_hammerstein(path)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_invalid_json_reports_line_and_column(tmp_path):
+    path = tmp_path / "ham.json"
+    path.write_text('{"family": "hammerstein",\n "a": [1, }')
+    with pytest.raises(InvalidModelError, match=r"ham\.json:2:"):
+        load_hammerstein(path)
+
+
+@settings(max_examples=20, deadline=None)
+@given(desired=st.lists(st.floats(-1e3, 1e3), min_size=8, max_size=120),
+       lo=st.floats(0, 60), width=st.floats(1, 90))
+def test_periodic_compensation_stays_within_the_limits(desired, lo, width):
+    a = mode()
+    model = HammersteinModel(hysteresis=(static_model(),), a=(a,),
+                             b=(np.array([[0.0, 0.5, 0.9]]) * a.sum() / 1.4,))
+    u = compensate_hammerstein(model, desired, u_min=lo, u_max=lo + width, periodic=True)[0]
+    assert u.size == len(desired) and np.all((u >= lo) & (u <= lo + width))
