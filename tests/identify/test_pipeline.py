@@ -218,3 +218,29 @@ def test_a_long_records_creep_rows_have_the_whole_records_operator_outputs(monke
         assert (a, b) == (0, u.size) and sel is fitted
         np.testing.assert_array_equal(long, chunked) if free else \
             np.testing.assert_allclose(long, chunked, rtol=1e-13, atol=1e-13)
+
+
+def test_a_record_of_much_travel_is_windowed_for_bouc_wen_and_the_shape_search():
+    """Bouc-Wen and the multislope shape search run on a long record's first cycles within
+    FAMILY_TRAVEL ranges of input travel (their cost grows with the travel); a record
+    that travels less is used whole."""
+    from pihyst.identify._boucwen import FAMILY_TRAVEL, travel_window
+
+    rng = np.random.default_rng(5)
+    levels = np.r_[0.0, 150.0, 0.0, rng.uniform(0, 150, 1500)]
+    u = np.concatenate([np.linspace(a, b, 20, endpoint=False)
+                        for a, b in zip(levels[:-1], levels[1:])])
+    y = ClassicalPI([0, 30], [0.2, 0.1]).predict(u)
+    options = FitOptions.from_arguments()
+    rec = options.frame(u, y, "cycled")
+    stop = travel_window(rec, FAMILY_TRAVEL)
+    assert stop is not None and stop < u.size
+    path = np.cumsum(np.abs(np.diff(rec.v[:stop]))) / rec.S
+    assert FAMILY_TRAVEL <= path[-1] < 1.5 * FAMILY_TRAVEL
+    assert stop in {z for a, z, r in rec.layout.segments}          # at a cycle's end
+    window = rec.shifted(0, stop)
+    assert window.has_held_back and window.layout.count("fit") > 0
+    short = options.frame(u[:4000], y[:4000], "cycled")
+    assert travel_window(short, FAMILY_TRAVEL) is None
+    result = pihyst.fit(u, y, family="bouc-wen")
+    assert any("ranges of input travel" in n for n in result.report.family("bouc-wen")["notes"])

@@ -103,6 +103,13 @@ def first_reversal(v):
 # extremum: z at a kept sample depends only on the extrema before it (rate-independent),
 # so the kept samples' errors are exact; each sample costs a few microseconds in Python
 FAMILY_SAMPLES = 20_000
+# ... and on its first cycles within this many ranges of input travel: z is integrated
+# in substeps of the travel, so a model's every pass costs in proportion to it (a 10^6-
+# sample record of level ramps travels 1,700 ranges: 0.9 s per prediction of a shape
+# there, 4 s per fit). Every record the population and the measured sets judge the fit
+# on travels at most 100 ranges (P-885 80, SmartHysteresis 69, the population 6) and is
+# fitted whole; the cut keeps fitted and held-back cycles (else the whole record).
+FAMILY_TRAVEL = 200.0
 
 
 def _nnls(X, y):
@@ -514,6 +521,22 @@ class _ShapeSearch:
         return out
 
 
+def travel_window(rec, travel):
+    """The end of the first cycles of the framed record ``rec`` within ``travel`` ranges
+    of input travel, when its input travels further and those cycles include every role
+    of the record (fitted, held back); else None (the whole record)."""
+    path = np.cumsum(np.abs(np.diff(rec.v))) / rec.S
+    if path.size == 0 or path[-1] <= travel:
+        return None
+    reach = int(np.searchsorted(path, travel)) + 1
+    stop = next((z for a, z, role in rec.layout.segments if z >= reach), None)
+    if stop is None or stop >= rec.u.size:
+        return None
+    inside = {r for a, z, r in rec.layout.segments if z <= stop} - {"settle"}
+    everywhere = {r for *_, r in rec.layout.segments} - {"settle"}
+    return stop if inside == everywhere else None
+
+
 def family_fit(family, fitter, rival_rms=None):
     """The Bouc-Wen family fitted on ``fitter``'s record, cut as for every family: a
     :class:`~pihyst.identify._family_result.FamilyFit` for the comparison in
@@ -535,8 +558,13 @@ def family_fit(family, fitter, rival_rms=None):
     if unsupported:
         raise FitError(f"bouc-wen has no operators to choose and fits its own offset and "
                        f"state: drop {', '.join(unsupported)}")
-    # a long record: fitted and judged on FAMILY_SAMPLES samples and every input extremum
-    # judged there too (the PI families are judged on all)
+    # a long record: fitted and judged on its first FAMILY_TRAVEL ranges of input travel,
+    # on FAMILY_SAMPLES samples and every input extremum (the PI families are judged on all)
+    stop = travel_window(rec, FAMILY_TRAVEL)
+    if stop is not None:
+        fitter = fitter.windowed(stop, note=lambda kept, n: (
+            f"fitted and judged on the first {kept} of {n} samples ({FAMILY_TRAVEL:g} ranges "
+            f"of input travel)"))
     on = fitter.subsampled(FAMILY_SAMPLES, note=lambda kept, n: (
         f"fitted on {kept} of {n} samples (evenly spaced, and every input extremum); "
         f"errors on those samples"))

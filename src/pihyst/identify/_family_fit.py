@@ -269,6 +269,14 @@ class FamilyFitter:
             self.note(note(rec.u.size, self.rec.u.size))
         return out
 
+    def windowed(self, stop, note):
+        """This fitter on the record's first ``stop`` samples (whole cycles: a stop at a
+        cycle's end), with the note ``note(kept, n)``."""
+        out = copy.copy(self)
+        out.rec, out._predictions = self.rec.shifted(0, stop), []
+        self.note(note(out.rec.u.size, self.rec.u.size))
+        return out
+
     def note(self, text):
         """Adds ``text`` to the notes of the family being fitted (once)."""
         if text not in self.notes:

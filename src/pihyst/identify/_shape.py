@@ -24,6 +24,16 @@ SEARCH_SAMPLES = 20_000
 
 def _search_fitter(fitter):
     """``fitter`` on the subsampled record (itself for a short record)."""
+    from pihyst.identify._boucwen import FAMILY_TRAVEL, travel_window
+
+    stop = travel_window(fitter.rec, FAMILY_TRAVEL)
+    if stop is not None:
+        # a record of much input travel: every extremum of it kept would cost each of
+        # the search's evaluations a pass over thousands of reversals (2 s on 10^6
+        # samples of level ramps); its first cycles tell the shape as well
+        fitter = fitter.windowed(stop, note=lambda kept, n: (
+            f"shape searched on the first {kept} of {n} samples ({FAMILY_TRAVEL:g} ranges "
+            f"of input travel), the weights then fitted on all"))
     return fitter.subsampled(SEARCH_SAMPLES, note=lambda kept, n: (
         f"shape searched on {kept} of {n} samples (evenly spaced, and every input "
         f"extremum), the weights then fitted on all"))
