@@ -106,8 +106,9 @@ class HammersteinModel:
         >>> model.hysteresis_output([0.0, 4.0, 0.0]).ravel().tolist()
         [0.0, 5.0, 1.0]
         """
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        return np.column_stack([H.predict(u[:, i]) for i, H in enumerate(self.hysteresis)])
+        inputs = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        return np.column_stack([H.predict(inputs[:, i])
+                                for i, H in enumerate(self.hysteresis)])
 
     def predict(self, u: ArrayLike) -> NDArray[np.float64]:
         """The outputs for inputs ``u``, the dynamics simulated from rest.
@@ -406,7 +407,8 @@ def predict_linear(a: Sequence[ArrayLike], b: Sequence[ArrayLike],
 
 
 def fit_hammerstein(records: Iterable[tuple[ArrayLike, ArrayLike]], na: int, nb: int, *,
-                    thresholds: Sequence[ArrayLike] | None = None, n_operators: int = 4,
+                    thresholds: Sequence[NDArray[np.float64] | Sequence[float]] | None = None,
+                    n_operators: int = 4,
                     input_range: Sequence[tuple[float, float]] | None = None,
                     iterations: int = 5, refinements: int = 10,
                     period: int | None = None) -> HammersteinModel:

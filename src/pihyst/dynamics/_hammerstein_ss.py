@@ -104,11 +104,11 @@ class StateSpaceHammerstein:
         >>> model.hysteresis_output([0.0, 4.0, 0.0]).ravel().tolist()
         [0.0, 5.0, 1.0]
         """
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        if u.shape[1] != self.n_inputs:
+        inputs = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        if inputs.shape[1] != self.n_inputs:
             raise InvalidArgumentError(f"the model has {self.n_inputs} inputs; u has "
-                                       f"{u.shape[1]} columns")
-        return np.column_stack([H.predict(u[:, i], initial_state=np.zeros(H.n_operators))
+                                       f"{inputs.shape[1]} columns")
+        return np.column_stack([H.predict(inputs[:, i], initial_state=np.zeros(H.n_operators))
                                 for i, H in enumerate(self.hysteresis)])
 
     def predict(self, u: ArrayLike) -> NDArray[np.float64]:
@@ -226,7 +226,8 @@ def _thresholds(u, n_operators):
 
 def fit_hammerstein_ss(records: Iterable[tuple[Any, Any]], period: int,
                        order: int | None = None, *,
-                       thresholds: Sequence[ArrayLike] | None = None, n_operators: int = 4,
+                       thresholds: Sequence[NDArray[np.float64] | Sequence[float]] | None = None,
+                       n_operators: int = 4,
                        input_range: Sequence[tuple[float, float]] | None = None,
                        refinements: int = 3, orders: Sequence[int] = DEFAULT_ORDERS,
                        validation: Sequence[int] | None = None, discard: int = 1,

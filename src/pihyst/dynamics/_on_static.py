@@ -47,7 +47,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from pihyst.dynamics._hammerstein import HammersteinModel
 from pihyst.dynamics._linear import fit_oe_periodic, response
@@ -137,9 +136,8 @@ def _numerator_on_static(H, a, nb, records):
     return np.linalg.lstsq(np.vstack(rows), np.concatenate(target), rcond=None)[0][None, :]
 
 
-def fit_dynamics(static: Any, slow: tuple[ArrayLike, ArrayLike],
-                 fast: Sequence[tuple[ArrayLike, ArrayLike]], *,
-                 orders: Sequence[tuple[int, int]] = DEFAULT_ORDERS,
+def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, Any]], *,
+                 orders: Sequence[Sequence[int]] = DEFAULT_ORDERS,
                  validation: int | None = -1, tolerance: float = 0.01,
                  numerator_on_static: bool = True, keep_creep: bool = False) -> HammersteinModel:
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
@@ -223,8 +221,8 @@ def fit_dynamics(static: Any, slow: tuple[ArrayLike, ArrayLike],
         held = spectra[validation]
         fit_on = [s for i, s in enumerate(spectra) if i != validation % len(spectra)]
         fit_on.append(_unit_dc(fit_on, period))
-        errors = np.sqrt([_output_error(*fit_oe_periodic(fit_on, na, nb, period), [held],
-                                        period) for na, nb in orders])
+        fits = [fit_oe_periodic(fit_on, na, nb, period) for na, nb in orders]
+        errors = np.sqrt([_output_error(a, b, [held], period) for a, b in fits])
         floor = 1e-9 * np.sqrt(np.sum(np.abs(held[1]) ** 2))
         na, nb = orders[int(np.flatnonzero(errors <= (1 + tolerance) * errors.min()
                                            + floor)[0])]

@@ -180,11 +180,11 @@ class StateSpace:
         >>> ss.predict([1.0, 1.0, 1.0]).ravel().tolist()
         [0.0, 1.0, 1.5]
         """
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        if u.shape[1] != self.n_inputs:
+        inputs = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        if inputs.shape[1] != self.n_inputs:
             raise InvalidArgumentError(f"the model has {self.n_inputs} inputs; u has "
-                                       f"{u.shape[1]} columns")
-        return simulate(self.A, self.B, self.C, self.D, u)
+                                       f"{inputs.shape[1]} columns")
+        return simulate(self.A, self.B, self.C, self.D, inputs)
 
     def scaled_inputs(self, gains: ArrayLike) -> "StateSpace":
         """The model of u -> y with input i scaled by gains[i] (B and D columns).
