@@ -18,6 +18,7 @@ affine change of variable:
 
 import copy
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -431,7 +432,7 @@ class Classical(Family):
         >>> Classical().candidates(100.0, 4).tolist()
         [0.0, 12.5, 25.0, 37.5]
         """
-        return np.arange(n_candidates) * (0.5 * S / n_candidates)
+        return np.asarray(np.arange(n_candidates) * (0.5 * S / n_candidates), dtype=np.float64)
 
     def max_threshold(self, S: float) -> float:
         """The largest useful threshold, S/2 (above it an operator never moves).
@@ -592,7 +593,7 @@ class Multislope(Family):
     # loops alone says nothing about them
     minor_loops_fixed = False
 
-    def __init__(self, shape: dict[str, float | None] | None = None) -> None:
+    def __init__(self, shape: Mapping[str, Any] | None = None) -> None:
         shape = {} if shape is None else dict(shape)
         unknown = sorted(set(shape) - set(SHAPE_KEYS))
         if unknown:
@@ -636,7 +637,7 @@ class Multislope(Family):
     def _shape_dict(self):
         return {"U": self.U, "a": self.a, "b": self.b, "h": self.h}
 
-    def shape(self, S: float) -> dict[str, float]:
+    def shape(self, S: float) -> dict[str, Any]:
         """The shape resolved on the span ``S`` (U None: ``S``).
 
         Parameters
@@ -793,7 +794,7 @@ class Multislope(Family):
             return MultislopePI(thresholds, weights, offset=offset, input_range=(0.0, S),
                                 initial_state=state_v, **s)
         polys = [multislope_polylines(r, S, s["U"], s["a"], s["b"], s["h"])
-                 for r in thresholds]
+                 for r in np.asarray(thresholds, dtype=float)]
         return PiecewiseLinearPI(_shift([p[0] for p in polys], lo),
                                  _shift([p[1] for p in polys], lo), weights, offset=offset,
                                  input_range=(lo, lo + S), initial_state=state_v)
@@ -849,7 +850,7 @@ class MultislopeIdentified(Multislope):
     name = "multislope-identified"
     title = "multislope PI (identified shape)"
 
-    def __init__(self, shape: dict[str, float | None] | None = None,
+    def __init__(self, shape: Mapping[str, Any] | None = None,
                  identify: bool | str = True) -> None:
         super().__init__(shape)
         if identify not in (True, False, "with-U"):
@@ -1058,7 +1059,8 @@ class ModifiedPI(PolylineFamily):
         >>> ModifiedPI().candidates(100.0, 4).tolist()
         [10.0, 20.0, 30.0, 40.0]
         """
-        return np.arange(1, n_candidates + 1) * (0.5 * S / (n_candidates + 1))
+        return np.asarray(np.arange(1, n_candidates + 1) * (0.5 * S / (n_candidates + 1)),
+                          dtype=np.float64)
 
     def max_threshold(self, S: float) -> float:
         """The largest useful threshold, S/2.
@@ -1275,7 +1277,7 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
         index = {p: k for k, p in enumerate(pairs)}
         rows: list[NDArray[np.float64]] = []
 
-        def row(entries: list[tuple[int, float]]) -> None:
+        def row(entries: list[tuple[Any, float]]) -> None:
             r = np.zeros(len(pairs))
             for k, v in entries:
                 r[k] = v
