@@ -31,47 +31,50 @@ from pihyst.model import ClassicalPI, MultislopePI, PiecewiseLinearPI, PIModel
 PAPER_A, PAPER_B, PAPER_H = 0.8, 1.2, 0.5
 
 
-def multislope_max_threshold(U, a, h):
+def multislope_max_threshold(U: float, a: float, h: float) -> float:
     """Largest valid multislope threshold, (1 - a)U / (1 - a h) (docs/theory/operators.md)."""
     return (1 - a) * U / (1 - a * h)
 
 
-def _line(S, slope, intercept):
+def _line(S: float, slope: float,
+          intercept: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """A straight polyline y = slope v + intercept (two points, extended by the core)."""
     x = np.array([0.0, S])
     return (x, slope * x + intercept)
 
 
-def _ramp(start, length, height):
+def _ramp(start: float, length: float,
+          height: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """0 below ``start``, rising linearly to ``height`` over ``length``, flat above."""
     x = np.array([start - length, start, start + length, start + 2 * length])
     return (x, np.array([0.0, 0.0, height, height]))
 
 
-def multislope_polylines(r, S, U, a, b, h):
+def multislope_polylines(r: float, S: float, U: float, a: float, b: float,
+                         h: float) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
     """Rising and falling envelopes of a multislope operator as polylines on [0, S].
 
     R(v) = max(a(v - r), b v - r - (b - 1)U)         kink at ((b - 1)U + (1 - a)r)/(b - a)
     F(v) = min(b v, a v + (1 - a)U - (1 - a h) r)    kink at ((1 - a)U - (1 - a h)r)/(b - a)
     """
-    def rise(v):
+    def rise(v: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.maximum(a * (v - r), b * v - r - (b - 1) * U)
 
-    def fall(v):
+    def fall(v: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.minimum(b * v, a * v + (1 - a) * U - (1 - a * h) * r)
 
     out = []
     for env, kink in ((rise, ((b - 1) * U + (1 - a) * r) / (b - a)),
                       (fall, ((1 - a) * U - (1 - a * h) * r) / (b - a))):
-        x = [0.0, S]
+        points = [0.0, S]
         if 1e-9 * S < kink < S * (1 - 1e-9):
-            x = [0.0, kink, S]
-        x = np.array(x)
+            points = [0.0, kink, S]
+        x = np.array(points)
         out.append((x, env(x)))
     return out
 
 
-def _shift(polylines, lo):
+def _shift(polylines: list[Any], lo: float) -> list[Any]:
     return [(x + lo, y.copy()) for x, y in polylines]
 
 
@@ -378,17 +381,17 @@ class Family(ABC):
         """
         return {}
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         return type(self) is type(other) and self.__dict__ == other.__dict__
 
-    def __hash__(self):
+    def __hash__(self) -> int:
         return hash((type(self), tuple(sorted(self.__dict__.items()))))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self._args().items())
         return f"{type(self).__name__}({args})"
 
-    def _args(self):
+    def _args(self) -> dict[str, Any]:
         return {}
 
 
@@ -634,7 +637,7 @@ class Multislope(Family):
         Multislope.__init__(out, {**self._shape_dict(), **shape})
         return out
 
-    def _shape_dict(self):
+    def _shape_dict(self) -> dict[str, Any]:
         return {"U": self.U, "a": self.a, "b": self.b, "h": self.h}
 
     def shape(self, S: float) -> dict[str, Any]:
@@ -819,7 +822,7 @@ class Multislope(Family):
         """
         return {"shape": {k: float(v) for k, v in self.shape(S).items()}}
 
-    def _args(self):
+    def _args(self) -> dict[str, Any]:
         return {"shape": self._shape_dict()}
 
 
@@ -923,7 +926,7 @@ class MultislopeIdentified(Multislope):
             return fitted            # explicit thresholds: nothing was chosen
         return refine_shape(fitter, fitted)
 
-    def _args(self):
+    def _args(self) -> dict[str, Any]:
         return {"shape": self._shape_dict(), "identify": self.identify}
 
 
@@ -1115,7 +1118,7 @@ class ModifiedPI(PolylineFamily):
         """
         return {"input_function_segments": self.segments}
 
-    def _args(self):
+    def _args(self) -> dict[str, Any]:
         return {"segments": self.segments}
 
 
@@ -1321,7 +1324,7 @@ class KrasnoselskiiPokrovskii(PolylineFamily):
         """
         return {"grid": self.grid}
 
-    def _args(self):
+    def _args(self) -> dict[str, Any]:
         return {"grid": self.grid}
 
 
@@ -1475,7 +1478,7 @@ class BoucWen(Family):
         """
         return {"n": self.n}
 
-    def _args(self):
+    def _args(self) -> dict[str, Any]:
         return {} if self.n is None else {"n": self.n}
 
 
@@ -1489,7 +1492,7 @@ PI_FAMILY_NAMES = tuple(name for name in FAMILIES if name != BoucWen.name)
 CREEP_FAMILIES = FAMILY_NAMES
 
 
-def as_family(spec):
+def as_family(spec: Any) -> Family:
     """A family object from a name (its default options) or a family object."""
     if isinstance(spec, Family):
         return spec

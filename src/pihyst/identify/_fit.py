@@ -38,7 +38,7 @@ def _one_blas_thread(function: _F) -> _F:
     an SVD of 300 x 150 took 15 times longer with two), and the sums then run in one
     order, so the same record gives the same model bit for bit whatever the core count."""
     @functools.wraps(function)
-    def wrapped(*args, **kwargs):
+    def wrapped(*args: Any, **kwargs: Any) -> Any:
         import scipy.linalg  # noqa: F401  SciPy's own BLAS: limited only once loaded
         from threadpoolctl import threadpool_limits
 

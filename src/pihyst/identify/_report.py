@@ -14,7 +14,7 @@ import numpy as np
 from pihyst.identify._assess import KINDS
 
 
-def _state_choice_text(choice):
+def _state_choice_text(choice: dict[str, Any] | None) -> str:
     """How "auto" chose the initial state, when it compared (identify/_start_state.py)."""
     if not choice:
         return ""
@@ -72,7 +72,7 @@ class FitResult:
     models: dict[str, Any] = field(default_factory=dict)
 
 
-def _num(x):
+def _num(x: Any) -> Any:
     if x is None:
         return None
     if isinstance(x, (list, tuple, np.ndarray)):
@@ -194,7 +194,7 @@ class FitReport:
         return cls(_num(out))
 
     @staticmethod
-    def _family_entry(c, is_chosen, S):
+    def _family_entry(c: Any, is_chosen: bool, S: float) -> dict[str, Any]:
         r = c.fitted
         fam = r.family
         entry = {"family": r.name, "title": fam.title, "recipe": repr(fam),
@@ -375,11 +375,11 @@ class FitReport:
         return summary
 
     # ------------------------------------------------------------------ text
-    def __str__(self):
+    def __str__(self) -> str:
         return "\n".join(self._data_lines() + self._family_lines() + self._record_lines()
                          + self._chosen_lines())
 
-    def _data_lines(self):
+    def _data_lines(self) -> list[str]:
         """The record: samples, ranges, start state, cycles, what was held back."""
         d = self._data["data"]
         uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
@@ -402,7 +402,7 @@ class FitReport:
                          f"the operators' outputs there are exactly the whole record's)")
         return lines + [""]
 
-    def _family_lines(self):
+    def _family_lines(self) -> list[str]:
         """The table of families: errors, latency, skipped and excluded ones."""
         d = self._data["data"]
         uout = d["units"].get("output", "um")
@@ -441,7 +441,7 @@ class FitReport:
                 lines.append(f"x {f['family']}: not chosen, {f['excluded']}")
         return lines
 
-    def _record_lines(self):
+    def _record_lines(self) -> list[str]:
         """The validation record, the delay, creep and what the data could not tell."""
         d = self._data["data"]
         lines = []
@@ -476,7 +476,7 @@ class FitReport:
             lines += [f"  - {t}" for t in self._data["undetermined"]]
         return lines
 
-    def _chosen_lines(self):
+    def _chosen_lines(self) -> list[str]:
         """The chosen family: the criterion, the refit, its structure and why."""
         d = self._data["data"]
         uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
