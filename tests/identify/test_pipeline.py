@@ -6,6 +6,7 @@ lines of code."""
 import ast
 import dataclasses
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ import pytest
 
 import pihyst
 from pihyst import ClassicalPI, FitError
+from pihyst.exceptions import PihystWarning
 from pihyst.identify import _constants, _record_fit
 from pihyst.identify._decisions import Choice, Delay, FamiliesFitted, StartState
 from pihyst.identify._options import FitOptions
@@ -244,3 +246,25 @@ def test_a_record_of_much_travel_is_windowed_for_bouc_wen_and_the_shape_search()
     assert travel_window(short, FAMILY_TRAVEL) is None
     result = pihyst.fit(u, y, family="bouc-wen")
     assert any("ranges of input travel" in n for n in result.report.family("bouc-wen")["notes"])
+
+
+@pytest.mark.parametrize("kwargs", [{"n_operators": 4}, {"thresholds": [0, 10, 30]},
+                                    {"candidates": list(np.linspace(0, 60, 8))}])
+def test_a_fit_with_sample_times_takes_the_threshold_options(kwargs):
+    """With sample times the structure is chosen again on the record with its creep
+    removed; there too the kernel basis and Bouc-Wen, which have no thresholds, are
+    skipped rather than failing the fit (they failed it before: 'kp: has no thresholds')."""
+    from pihyst.sim import make_plant, signals
+
+    beam = make_plant("paper-beam", seed=1)
+    t, u = signals.triangle(0, 150, 20.0, 4, 0.05)
+    y = beam.run(u, t)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PihystWarning)   # e.g. a modified PI on given r
+        result = pihyst.fit(u, y, t=t, **kwargs)
+    data = result.report.to_dict()
+    assert data["chosen"] in ("classical", "modified-pi", "multislope",
+                              "multislope-identified")
+    assert "creep" in data and "kept" in data["creep"]
+    if "thresholds" in kwargs and data["chosen"] == "classical":
+        np.testing.assert_allclose(result.model.thresholds, kwargs["thresholds"])
