@@ -6,6 +6,7 @@ lines of code."""
 import ast
 import dataclasses
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ import pytest
 
 import pihyst
 from pihyst import ClassicalPI, FitError
+from pihyst.exceptions import PihystWarning
 from pihyst.identify import _constants, _record_fit
 from pihyst.identify._decisions import Choice, Delay, FamiliesFitted, StartState
 from pihyst.identify._options import FitOptions
@@ -244,3 +246,27 @@ def test_a_record_of_much_travel_is_windowed_for_bouc_wen_and_the_shape_search()
     assert travel_window(short, FAMILY_TRAVEL) is None
     result = pihyst.fit(u, y, family="bouc-wen")
     assert any("ranges of input travel" in n for n in result.report.family("bouc-wen")["notes"])
+
+
+@pytest.mark.parametrize("kwargs", [{"n_operators": 4}, {"thresholds": [0, 10, 30]},
+                                    {"candidates": list(np.linspace(0, 60, 8))},
+                                    {"offset": 0.0}, {"initial_state": "zero"},
+                                    {"bounds": (0, 1)}, {"nonnegative": False}])
+def test_a_fit_with_sample_times_takes_every_option_the_fit_without_them_takes(kwargs):
+    """With sample times the structure is chosen again on the record with its creep
+    removed; there too a default family that cannot take an option (the kernel basis
+    and Bouc-Wen have no thresholds; Bouc-Wen fits its own offset and state, has no
+    bounds) is skipped rather than failing the fit, as it failed it before."""
+    from pihyst.sim import make_plant, signals
+
+    beam = make_plant("paper-beam", seed=1)
+    t, u = signals.triangle(0, 150, 20.0, 4, 0.05)
+    y = beam.run(u, t)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PihystWarning)   # e.g. a modified PI on given r
+        result = pihyst.fit(u, y, t=t, **kwargs)
+    data = result.report.to_dict()
+    assert data["chosen"] != "bouc-wen"
+    assert "creep" in data and "kept" in data["creep"]
+    if "thresholds" in kwargs and data["chosen"] == "classical":
+        np.testing.assert_allclose(result.model.thresholds, kwargs["thresholds"])

@@ -40,7 +40,7 @@ class Candidate:
     by_kind: dict
     judged_rms: float
     latency: object           # Latency
-    excluded: str = None      # why it may not be chosen
+    excluded: str | None = None      # why it may not be chosen
 
     @property
     def name(self):

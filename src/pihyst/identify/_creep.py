@@ -340,7 +340,10 @@ class _Trial:
         psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
         names = families if families is not None else (
             self.plain.families if self.plain.explicit_family else CREEP_FAMILIES)
-        options = self.plain.but(families=names, explicit_family=True)
+        # the families the user named are still theirs (a failure is an error); the
+        # default ones are skipped with the reason where they cannot be fitted, as in the
+        # fit without creep (with thresholds= or n_operators=, kp and Bouc-Wen)
+        options = self.plain.but(families=names)
         y = np.r_[self.y[:self.d], rec.y + psi @ gains]
         if not self.decide:
             return fit_record(self.u, y, options, self.steps, t=self.t,
@@ -387,7 +390,11 @@ def _other_kind_tried(trial, first, start, second, judged):
             f"more than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
             f"{judged['family_with']} reaches with creep")
         return second, judged
-    second_other, judged_other = trial.judged(start_other, families)
+    try:
+        second_other, judged_other = trial.judged(start_other, families)
+    except FitError as err:
+        judged["other_kind_not_tried"] = f"{start_other.family}: {err}"
+        return second, judged
     tried = [dict(family=judged["family_without"], **_with_creep(judged)),
              dict(family=start_other.family, **_with_creep(judged_other))]
     if judged_other["held_back_rms_with"] < judged["held_back_rms_with"]:

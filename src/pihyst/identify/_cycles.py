@@ -129,8 +129,8 @@ class Layout:
     n_minor: int
     settle_end: int
     holdout: str
-    kinds: list = None
-    points: list = None      # the turning points the cycles were cut at
+    kinds: list | None = None
+    points: list | None = None      # the turning points the cycles were cut at
 
     def _chosen(self, role, kind):
         kinds = self.kinds or [None] * len(self.segments)

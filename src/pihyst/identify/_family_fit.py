@@ -9,8 +9,10 @@ Equations: the normal equations of ``_gram``, the QP of ``_qp``, the subset sear
 
 import copy
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pihyst.exceptions import FitError, InfeasibleConstraintsError
 from pihyst.identify._assess import minor_loops_determined
@@ -214,11 +216,31 @@ class FramedRecord:
         return cycled_state(template, self.S)
 
 
-def cycled_state(model, S):
+def cycled_state(model: Any, S: float) -> NDArray[np.float64]:
     """Operator state at rest at the bottom of the range after a full bottom -> top ->
-    bottom cycle (docs/interfaces.md), for a model of v on [0, S]. For a monotone sweep
-    the operator output at its end only depends on its end points, so three samples are
-    exact."""
+    bottom cycle (docs/interfaces.md), for a model of v on [0, S].
+
+    For a monotone sweep the operator output at its end only depends on its end points,
+    so three samples are exact.
+
+    Parameters
+    ----------
+    model : PIModel
+        A PI model of the input v on [0, S].
+    S : float
+        The top of its input range.
+
+    Returns
+    -------
+    ndarray
+        One output per operator.
+
+    Examples
+    --------
+    >>> from pihyst.model import ClassicalPI
+    >>> cycled_state(ClassicalPI([0, 20], [1.0, 1.0], input_range=(0, 100)), 100).tolist()
+    [0.0, 20.0]
+    """
     return model.simulate(np.array([0.0, S, 0.0])).final_state
 
 

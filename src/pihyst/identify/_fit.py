@@ -11,6 +11,10 @@ something is in :mod:`pihyst.identify._constants`.
 """
 
 import functools
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar, cast
+
+from numpy.typing import ArrayLike
 
 from pihyst._arguments import real_array
 from pihyst.identify._creep import fit_with_creep
@@ -19,32 +23,43 @@ from pihyst.identify._family_fit import INITIAL_STATES, cycled_state
 from pihyst.identify._options import DEFAULT_N_CANDIDATES, FitOptions
 from pihyst.identify._progress import Steps
 from pihyst.identify._record_fit import fit_record
+from pihyst.identify._report import FitResult
 from pihyst.identify._subsets import DEFAULT_MAX_EXHAUSTIVE
 
 __all__ = ["fit", "FAMILY_NAMES", "INITIAL_STATES", "cycled_state"]
 
 
-def _one_blas_thread(function):
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _one_blas_thread(function: _F) -> _F:
     """Runs ``function`` with BLAS on one thread: the fit's matrices are small (tens to a
     few hundred columns), where a second thread only waits (on a loaded 2-core machine
     an SVD of 300 x 150 took 15 times longer with two), and the sums then run in one
     order, so the same record gives the same model bit for bit whatever the core count."""
     @functools.wraps(function)
-    def wrapped(*args, **kwargs):
+    def wrapped(*args: Any, **kwargs: Any) -> Any:
         import scipy.linalg  # noqa: F401  SciPy's own BLAS: limited only once loaded
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(1, user_api="blas"):
             return function(*args, **kwargs)
-    return wrapped
+    return cast(_F, wrapped)
 
 
 @_one_blas_thread
-def fit(u, y, *, family=None, thresholds=None, n_operators=None, candidates=None,
-        n_candidates=DEFAULT_N_CANDIDATES, offset=True, nonnegative=True, bounds=None,
-        through=None, initial_state="auto", holdout="alternate", refit=True,
-        input_range=None, validate=None, delay="auto", max_operators=None, max_latency=None,
-        max_exhaustive=DEFAULT_MAX_EXHAUSTIVE, t=None, creep="auto", progress=None):
+def fit(u: ArrayLike, y: ArrayLike, *, family: Any = None,
+        thresholds: ArrayLike | None = None, n_operators: int | None = None,
+        candidates: ArrayLike | None = None, n_candidates: int = DEFAULT_N_CANDIDATES,
+        offset: bool | float = True, nonnegative: bool = True,
+        bounds: tuple[Any, Any] | None = None, through: str | Sequence[int] | None = None,
+        initial_state: str | ArrayLike = "auto", holdout: str | float | None = "alternate",
+        refit: bool = True, input_range: tuple[float, float] | None = None,
+        validate: tuple[ArrayLike, ArrayLike] | None = None, delay: int | str = "auto",
+        max_operators: int | None = None, max_latency: float | None = None,
+        max_exhaustive: int = DEFAULT_MAX_EXHAUSTIVE, t: ArrayLike | None = None,
+        creep: str | bool | ArrayLike = "auto",
+        progress: Callable[[str], Any] | None = None) -> FitResult:
     """Fit PI-type hysteresis models to a measured record and keep the smallest, fastest
     one of those that generalize best.
 

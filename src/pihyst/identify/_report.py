@@ -7,13 +7,14 @@ prints as a table (``print(report)``).
 import copy
 import json
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from pihyst.identify._assess import KINDS
 
 
-def _state_choice_text(choice):
+def _state_choice_text(choice: dict[str, Any] | None) -> str:
     """How "auto" chose the initial state, when it compared (identify/_start_state.py)."""
     if not choice:
         return ""
@@ -44,22 +45,34 @@ _STATE_TEXT = {
 class FitResult:
     """What :func:`pihyst.fit` returns.
 
-    Attributes
+    Parameters
     ----------
-    model : PIModel
+    model : PIModel or BoucWenModel
         The most accurate model (weights refitted on all cycles unless ``refit=False``).
     report : FitReport
         Errors, the comparison of families, the threshold choice and its reasons.
     models : dict
         Every fitted family's model by family name.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pihyst
+    >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+    >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+    >>> res = pihyst.fit(u, y, family="classical", thresholds=[0, 30])
+    >>> res.report.chosen, sorted(res.models)
+    ('classical', ['classical'])
+    >>> [round(float(w), 6) for w in res.model.weights]
+    [0.3, 0.2]
     """
 
-    model: object
+    model: Any
     report: "FitReport"
-    models: dict = field(default_factory=dict)
+    models: dict[str, Any] = field(default_factory=dict)
 
 
-def _num(x):
+def _num(x: Any) -> Any:
     if x is None:
         return None
     if isinstance(x, (list, tuple, np.ndarray)):
@@ -75,19 +88,79 @@ def _num(x):
 
 
 class FitReport:
-    """Report of a fit; ``to_dict()`` gives the data, ``str()`` a table."""
+    """Report of a fit; ``to_dict()`` gives the data, ``str()`` a table.
 
-    def __init__(self, data):
+    :func:`pihyst.fit` builds it (:meth:`build`); ``FitReport(report.to_dict())`` is the
+    same report again.
+
+    Parameters
+    ----------
+    data : dict
+        The report's JSON-ready data, as :meth:`to_dict` returns it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import pihyst
+    >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+    >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+    >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+    >>> report.chosen
+    'classical'
+    >>> FitReport(report.to_dict()).to_dict() == report.to_dict()
+    True
+    """
+
+    def __init__(self, data: dict[str, Any]) -> None:
         self._data = data
 
     @classmethod
-    def build(cls, rec, start, choice, skipped, *, refit, final_errors, delay, validation,
-              undetermined, fitted_on=None):
-        """The report of a fit of the framed record ``rec`` from the decisions made on
-        it: the start state (``_decisions.StartState``), the choice (``Choice``), the
-        families skipped, the refit's errors, the delay's report entry, the validation
-        record's description and what the data could not determine; ``fitted_on``: the
-        samples a long record was fitted and judged on (all if None)."""
+    def build(cls, rec: Any, start: Any, choice: Any, skipped: list[dict[str, Any]], *,
+              refit: bool, final_errors: dict[str, Any] | None, delay: dict[str, Any] | None,
+              validation: dict[str, Any] | None, undetermined: list[str],
+              fitted_on: int | None = None) -> "FitReport":
+        """The report of a fit of the framed record ``rec`` from the decisions made on it.
+
+        Parameters
+        ----------
+        rec : FramedRecord
+            The record in the fitting frame (``pihyst.identify._family_fit``).
+        start : StartState
+            The start state decided (``pihyst.identify._decisions``).
+        choice : Choice
+            The families compared and the one chosen (``pihyst.identify._decisions``).
+        skipped : list of dict
+            The families skipped, each ``{"family": name, "reason": text}``.
+        refit : bool
+            Whether the chosen structure's weights were refitted on all cycles.
+        final_errors : dict or None
+            The refitted model's errors (``"fit"``, ``"held_back"``, ``"validation"``).
+        delay : dict or None
+            The delay's report entry.
+        validation : dict or None
+            The validation record's description.
+        undetermined : list of str
+            What the data could not determine.
+        fitted_on : int, optional
+            The samples a long record was fitted and judged on (all if None).
+
+        Returns
+        -------
+        FitReport
+            The report, its data JSON-ready.
+
+        Examples
+        --------
+        :func:`pihyst.fit` calls it as its last step; the result is its report:
+
+        >>> import numpy as np
+        >>> import pihyst
+        >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+        >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+        >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+        >>> isinstance(report, FitReport)
+        True
+        """
         lay = rec.layout
         candidates, chosen = choice.candidates, choice.chosen.name
         units = dict(candidates[0].fitted.model.units)
@@ -121,7 +194,7 @@ class FitReport:
         return cls(_num(out))
 
     @staticmethod
-    def _family_entry(c, is_chosen, S):
+    def _family_entry(c: Any, is_chosen: bool, S: float) -> dict[str, Any]:
         r = c.fitted
         fam = r.family
         entry = {"family": r.name, "title": fam.title, "recipe": repr(fam),
@@ -145,38 +218,144 @@ class FitReport:
         entry["warnings"] = list(r.warnings)
         return entry
 
-    def with_creep(self, decision):
-        """This report with the decision on creep (``fit(..., t=t)``) added."""
+    def with_creep(self, decision: dict[str, Any]) -> "FitReport":
+        """This report with the decision on creep (``fit(..., t=t)``) added.
+
+        Parameters
+        ----------
+        decision : dict
+            The decision on creep: ``"kept"``, ``"reason"`` and what it was judged on.
+
+        Returns
+        -------
+        FitReport
+            A new report; this one is unchanged.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import pihyst
+        >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+        >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+        >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+        >>> report.with_creep({"kept": False, "reason": "example"}).to_dict()["creep"]
+        {'kept': False, 'reason': 'example'}
+        """
         data = self.to_dict()
         data["creep"] = _num(decision)
         return type(self)(data)
 
     # ------------------------------------------------------------------ access
-    def to_dict(self):
-        """The report as a JSON-ready dict (a copy)."""
+    def to_dict(self) -> dict[str, Any]:
+        """The report as a JSON-ready dict (a copy).
+
+        Returns
+        -------
+        dict
+            ``"data"``, ``"families"``, ``"skipped"``, ``"chosen"``, ``"criterion"``,
+            ``"undetermined"``, ``"final"`` (and ``"creep"`` when decided).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import pihyst
+        >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+        >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+        >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+        >>> report.to_dict()["data"]["n_samples"]
+        453
+        """
         return copy.deepcopy(self._data)
 
-    def to_json(self, indent=2):
+    def to_json(self, indent: int | None = 2) -> str:
+        """The report as JSON text.
+
+        Parameters
+        ----------
+        indent : int or None
+            Indentation of the JSON text (None: one line).
+
+        Returns
+        -------
+        str
+            The JSON text of :meth:`to_dict`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import pihyst
+        >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+        >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+        >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+        >>> import json
+        >>> json.loads(report.to_json())["chosen"]
+        'classical'
+        """
         return json.dumps(self._data, indent=indent)
 
     @property
-    def chosen(self):
+    def chosen(self) -> str:
         """Name of the family returned."""
         return self._data["chosen"]
 
     @property
-    def families(self):
+    def families(self) -> list[dict[str, Any]]:
         """Per-family entries, as dicts."""
         return copy.deepcopy(self._data["families"])
 
-    def family(self, name):
+    def family(self, name: str) -> dict[str, Any]:
+        """One family's entry, as a dict (a copy).
+
+        Parameters
+        ----------
+        name : str
+            The family's name (e.g. ``"classical"``).
+
+        Returns
+        -------
+        dict
+            Its operators, weights, errors, latency, threshold choice, notes.
+
+        Raises
+        ------
+        KeyError
+            If no family of that name was fitted.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import pihyst
+        >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+        >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+        >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+        >>> report.family("classical")["thresholds"]
+        [0.0, 30.0]
+        """
         for f in self._data["families"]:
             if f["family"] == name:
                 return copy.deepcopy(f)
         raise KeyError(name)
 
-    def model_summary(self):
-        """What a saved model records about its fit (``model.metadata["fit"]``)."""
+    def model_summary(self) -> dict[str, Any]:
+        """What a saved model records about its fit (``model.metadata["fit"]``).
+
+        Returns
+        -------
+        dict
+            The chosen family's entry (without the per-size search), the data, the
+            criterion, what was undetermined, the refit and every family's judged RMS.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import pihyst
+        >>> u = np.tile(np.r_[np.linspace(0, 150, 76), np.linspace(150, 0, 76)[1:]], 3)
+        >>> y = pihyst.model.ClassicalPI([0, 30], [0.3, 0.2]).predict(u)
+        >>> report = pihyst.fit(u, y, family="classical", thresholds=[0, 30]).report
+        >>> summary = report.model_summary()
+        >>> summary["family"], sorted(summary["compared"])
+        ('classical', ['classical'])
+        """
         best = self.family(self.chosen)
         keep = ("family", "title", "recipe", "operator_kind", "n_operators", "thresholds",
                 "kernels", "shape", "input_function_segments", "grid", "regularization",
@@ -196,11 +375,11 @@ class FitReport:
         return summary
 
     # ------------------------------------------------------------------ text
-    def __str__(self):
+    def __str__(self) -> str:
         return "\n".join(self._data_lines() + self._family_lines() + self._record_lines()
                          + self._chosen_lines())
 
-    def _data_lines(self):
+    def _data_lines(self) -> list[str]:
         """The record: samples, ranges, start state, cycles, what was held back."""
         d = self._data["data"]
         uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
@@ -223,7 +402,7 @@ class FitReport:
                          f"the operators' outputs there are exactly the whole record's)")
         return lines + [""]
 
-    def _family_lines(self):
+    def _family_lines(self) -> list[str]:
         """The table of families: errors, latency, skipped and excluded ones."""
         d = self._data["data"]
         uout = d["units"].get("output", "um")
@@ -262,7 +441,7 @@ class FitReport:
                 lines.append(f"x {f['family']}: not chosen, {f['excluded']}")
         return lines
 
-    def _record_lines(self):
+    def _record_lines(self) -> list[str]:
         """The validation record, the delay, creep and what the data could not tell."""
         d = self._data["data"]
         lines = []
@@ -297,7 +476,7 @@ class FitReport:
             lines += [f"  - {t}" for t in self._data["undetermined"]]
         return lines
 
-    def _chosen_lines(self):
+    def _chosen_lines(self) -> list[str]:
         """The chosen family: the criterion, the refit, its structure and why."""
         d = self._data["data"]
         uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")

@@ -64,9 +64,9 @@ class SubsetProblem:
     n_candidates: int
     lower: np.ndarray
     upper: np.ndarray
-    A_eq: np.ndarray = None
-    b_eq: np.ndarray = None
-    names: list = None
+    A_eq: np.ndarray | None = None
+    b_eq: np.ndarray | None = None
+    names: list | None = None
     _cache: dict = field(default_factory=dict, repr=False)
     evaluations: int = 0
 

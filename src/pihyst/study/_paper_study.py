@@ -317,7 +317,8 @@ def fit_paper_models(rec: "Recording", *, paper_method: bool = True,
     >>> sorted(fit_paper_models(rec))
     ['classical', 'multislope']
     """
-    options = ({"initial_state": "zero", "offset": False} if paper_method else {})
+    options: dict[str, Any] = ({"initial_state": "zero", "offset": False} if paper_method
+                               else {})
     span = float(np.ptp(rec.u))
     out = {}
     classical = [r * scale for r in CLASSICAL_THRESHOLDS]
