@@ -16,7 +16,9 @@ used to weight the parametric fit. A line is excited when the records' summed in
 power on it exceeds ``threshold`` times its largest value.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -25,8 +27,27 @@ from pihyst.exceptions import InvalidArgumentError
 
 @dataclass(frozen=True)
 class FrequencyResponse:
-    """G(k) (L, p, m) on the DFT lines ``lines`` of a period of ``period`` samples;
-    ``variance`` (L, p, m) or None when there are only m records."""
+    """A frequency response on DFT lines, as :func:`estimate_bla` returns it.
+
+    Parameters
+    ----------
+    lines : ndarray of int
+        (L,) the DFT lines k of one period.
+    period : int
+        Samples per period N.
+    G : ndarray of complex
+        (L, p, m) the response on each line.
+    variance : ndarray or None
+        (L, p, m) the variance of G's estimate, or None when there are only m records.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.dynamics import FrequencyResponse
+    >>> fr = FrequencyResponse(np.array([1, 2]), 8, np.ones((2, 1, 1), complex), None)
+    >>> fr.omega.round(4).tolist()
+    [0.7854, 1.5708]
+    """
 
     lines: np.ndarray
     period: int
@@ -76,8 +97,45 @@ def period_spectra(x, period, discard):
     return np.fft.rfft(keep, axis=0)
 
 
-def estimate_bla(records, period, *, discard=1, threshold=1e-6):
-    """:class:`FrequencyResponse` of the records (module notes)."""
+def estimate_bla(records: Iterable[tuple[Any, Any]], period: int, *, discard: int = 1,
+                 threshold: float = 1e-6) -> FrequencyResponse:
+    """The best linear approximation of periodic multisine records (module notes).
+
+    Parameters
+    ----------
+    records : iterable of (array_like, array_like)
+        ``(u, y)`` pairs: (P N, m) inputs and (P N, p) outputs (or 1-D for one), a whole
+        number of periods each; at least m records of independent inputs.
+    period : int
+        Samples per period N, >= 4.
+    discard : int
+        Leading periods left out (the start-up transient).
+    threshold : float
+        A line is excited when its input power exceeds this times the largest.
+
+    Returns
+    -------
+    FrequencyResponse
+        G and, with more than m records, its variance on the excited lines.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Records that are not pairs of whole periods, too few or dependent inputs.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.dynamics import StateSpace, estimate_bla
+    >>> plant = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+    >>> k = np.arange(32)
+    >>> u = np.sin(2 * np.pi * k / 16) + np.cos(2 * np.pi * 3 * k / 16)
+    >>> fr = estimate_bla([(u, plant.predict(u))], 16, discard=1)
+    >>> fr.lines.tolist()
+    [1, 3]
+    >>> bool(np.allclose(fr.G, plant.response(fr.omega), atol=1e-3))
+    True
+    """
     recs = periodic_records(records, period)
     m = recs[0][0].shape[1]
     if len(recs) < m:

@@ -31,7 +31,10 @@ the same way for a periodic trajectory of all outputs, R(k) a vector per line:
 then each input's hysteresis inverted on its own (its own limits and slew).
 """
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse import compensate
@@ -44,8 +47,32 @@ def _lfilter():
     return lfilter
 
 
-def zpetc(a, b, r, settle=None):
-    """h_d of the module notes for the reference r (SISO: b a 1-D array)."""
+def zpetc(a: ArrayLike, b: ArrayLike, r: ArrayLike,
+          settle: int | None = None) -> NDArray[np.float64]:
+    """The zero-phase error tracking prefilter h_d of the module notes (SISO).
+
+    Parameters
+    ----------
+    a : array_like
+        A(q^-1) = [1, a_1, ...].
+    b : array_like
+        B(q^-1), 1-D (its leading zeros a pure delay).
+    r : array_like
+        The reference trajectory.
+    settle : int, optional
+        Samples of ``r[0]`` held before the start (default: as many as ``r`` has).
+
+    Returns
+    -------
+    ndarray
+        h_d, as many samples as ``r``.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import zpetc
+    >>> zpetc([1.0, -0.5], [0.25, 0.25], [0.0, 1.0, 1.0, 1.0]).round(6).tolist()
+    [1.0, 1.5, 1.0, 1.0]
+    """
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float).ravel()
     r = np.asarray(r, dtype=float)
@@ -64,8 +91,34 @@ def zpetc(a, b, r, settle=None):
     return h[pre + lead:pre + lead + r.size]
 
 
-def periodic_inverse_dynamics(a, b, r):
-    """H_d of the module notes for one period ``r`` of a periodic reference (SISO)."""
+def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike) -> NDArray[np.float64]:
+    """The exact inverse of the dynamics for one period ``r`` of a periodic reference
+    (SISO; module notes: H_d(k) = R(k) / G(z_k)).
+
+    Parameters
+    ----------
+    a : array_like
+        A(q^-1) = [1, a_1, ...].
+    b : array_like
+        B(q^-1), 1-D or one row.
+    r : array_like
+        One period of the reference.
+
+    Returns
+    -------
+    ndarray
+        One period of h_d, as many samples as ``r``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.dynamics import periodic_inverse_dynamics, predict_linear
+    >>> r = 10 + 5 * np.sin(2 * np.pi * np.arange(50) / 50)
+    >>> h = periodic_inverse_dynamics([1.0, -0.5], [0.5], r)
+    >>> y = predict_linear([[1.0, -0.5]], [[[0.5]]], np.tile(h, 3))[100:, 0]
+    >>> bool(np.allclose(y, r))
+    True
+    """
     from pihyst.dynamics._linear import response
     r = np.asarray(r, dtype=float)
     G = response(np.asarray(a, dtype=float), np.atleast_2d(np.asarray(b, dtype=float)),
@@ -100,14 +153,57 @@ def _per_input(value, m, name):
     return [float(v) for v in values]
 
 
-def compensate_mimo(model, desired, *, u_min=None, u_max=None, slew_rate=None,
-                    sample_period=None):
-    """Voltages (N, m) that make a square :class:`StateSpaceHammerstein` follow one period
-    ``desired`` (N, p) of a repeated trajectory: the dynamics inverted per harmonic, then
-    each input's hysteresis inverted over two periods (the second returned), within its
-    limits and slew (``u_min``, ``u_max``, ``slew_rate`` in V/s at ``sample_period`` s:
-    one value or one per input).
-    Returns (voltage, h_desired, results of :func:`pihyst.compensate` per input)."""
+def compensate_mimo(model: Any, desired: ArrayLike, *, u_min: ArrayLike | None = None,
+                    u_max: ArrayLike | None = None, slew_rate: ArrayLike | None = None,
+                    sample_period: float | None = None
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64], list[Any]]:
+    """Voltages that make a square :class:`StateSpaceHammerstein` follow one period of a
+    repeated trajectory: the dynamics inverted per harmonic, then each input's
+    hysteresis inverted over two periods (the second returned), within its limits and
+    slew.
+
+    Parameters
+    ----------
+    model : StateSpaceHammerstein
+        As many inputs as outputs.
+    desired : array_like
+        (N, p) one period of every output's trajectory.
+    u_min, u_max : float or array_like, optional
+        Voltage limits: one value or one per input (default: the models' input ranges).
+    slew_rate : float or array_like, optional
+        V/s: one value or one per input.
+    sample_period : float, optional
+        Seconds between samples (needed with ``slew_rate``).
+
+    Returns
+    -------
+    voltage : ndarray
+        (N, m) one period of voltages.
+    h_desired : ndarray
+        (N, m) the hysteresis outputs the dynamics need.
+    results : list of CompensationResult
+        :func:`pihyst.compensate`'s result per input (over two periods).
+
+    Raises
+    ------
+    InvalidArgumentError
+        A model that is not square, or ``desired`` or limits of the wrong shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein, compensate_mimo
+    >>> model = StateSpaceHammerstein((ClassicalPI([0.0], [1.0]), ClassicalPI([0.0], [1.0])),
+    ...                               StateSpace(0.5 * np.eye(2), np.eye(2), 0.5 * np.eye(2),
+    ...                                          np.zeros((2, 2))))
+    >>> t = np.arange(40)
+    >>> desired = np.column_stack([10 + np.sin(2 * np.pi * t / 40), 20 + 0 * t])
+    >>> voltage, h, results = compensate_mimo(model, desired)
+    >>> y = model.predict(np.tile(voltage, (3, 1)))[80:]
+    >>> bool(np.allclose(y, desired))
+    True
+    """
     m, p = model.n_inputs, model.n_outputs
     if m != p:
         raise InvalidArgumentError(f"compensate_mimo needs as many inputs as outputs, got "
@@ -127,15 +223,57 @@ def compensate_mimo(model, desired, *, u_min=None, u_max=None, slew_rate=None,
     return voltage, h_d, results
 
 
-def compensate_hammerstein(model, desired, *, u_min=None, u_max=None, slew_rate=None,
-                           sample_period=None, periodic=False):
+def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | None = None,
+                           u_max: float | None = None, slew_rate: float | None = None,
+                           sample_period: float | None = None, periodic: bool = False
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64], Any]:
     """Voltages that make a SISO :class:`HammersteinModel` follow ``desired``: the
-    ZPETC prefilter (``periodic``: ``desired`` is one period of a repeated trajectory,
-    inverted exactly per harmonic), then the hysteresis inverse from the hysteresis
-    model's initial state (``periodic``: run over two periods, the second returned, from
-    which the hysteresis memory repeats); ``slew_rate`` in V/s at ``sample_period`` s, as
-    for :func:`pihyst.compensate`. Returns (voltage, h_desired, result of
-    :func:`pihyst.compensate`)."""
+    ZPETC prefilter, then the hysteresis inverse from the hysteresis model's initial
+    state (module notes).
+
+    Parameters
+    ----------
+    model : HammersteinModel
+        One input, one output.
+    desired : array_like
+        The desired output; with ``periodic``, one period of a repeated trajectory.
+    u_min, u_max : float, optional
+        Voltage limits, as for :func:`pihyst.compensate`.
+    slew_rate : float, optional
+        V/s, as for :func:`pihyst.compensate`.
+    sample_period : float, optional
+        Seconds between samples (needed with ``slew_rate``).
+    periodic : bool
+        Invert the dynamics exactly per harmonic, and the hysteresis over two periods
+        (the second returned, from which the hysteresis memory repeats).
+
+    Returns
+    -------
+    voltage : ndarray
+        The voltages, as many as ``desired``.
+    h_desired : ndarray
+        The hysteresis output the dynamics need.
+    result : CompensationResult
+        :func:`pihyst.compensate`'s result (over two periods with ``periodic``).
+
+    Raises
+    ------
+    InvalidArgumentError
+        A model that is not single-input single-output.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import HammersteinModel, compensate_hammerstein
+    >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+    ...                          a=([1.0, -0.5],), b=([[0.5]],))
+    >>> r = 10 + 5 * np.sin(2 * np.pi * np.arange(50) / 50)
+    >>> voltage, h, result = compensate_hammerstein(model, r, periodic=True)
+    >>> y = model.predict(np.tile(voltage, 3))[100:, 0]
+    >>> bool(np.allclose(y, r))
+    True
+    """
     if model.n_inputs != 1 or model.n_outputs != 1:
         raise InvalidArgumentError(f"compensate_hammerstein needs a single-input "
                                    f"single-output model, got {model.n_inputs} input(s) and "

@@ -15,7 +15,9 @@ noise, and only noise with it), then, with ``refine``, refined by nonlinear leas
 on the BLA of all the records (:mod:`._refine`).
 """
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -29,12 +31,31 @@ DEFAULT_ORDERS = tuple(range(4, 65, 4))
 
 @dataclass(frozen=True)
 class OrderSelection:
-    """Validation errors per candidate order and the chosen one."""
+    """Validation errors per candidate order and the chosen one, as
+    :func:`fit_state_space` returns them with ``return_selection``.
 
-    orders: tuple
-    errors: tuple
+    Parameters
+    ----------
+    orders : tuple of int
+        The candidate orders.
+    errors : tuple of float
+        Each one's steady-state RMS simulation error on the validation records.
+    chosen : int
+        The order chosen.
+    validation : tuple of int
+        The indices of the records held back for validation.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import OrderSelection
+    >>> OrderSelection(orders=(1, 2), errors=(0.1, 0.1), chosen=1, validation=(2,)).chosen
+    1
+    """
+
+    orders: tuple[int, ...]
+    errors: tuple[float, ...]
     chosen: int
-    validation: tuple
+    validation: tuple[int, ...]
 
 
 def bla_weights(frf, weighted):
@@ -60,22 +81,73 @@ def steady_state_rms(model, records, period, discard):
     return np.sqrt(sq / count)
 
 
-def fit_state_space(records, period, order=None, *, orders=DEFAULT_ORDERS, validation=None,
-                    discard=1, weighted=False, q=None, tolerance=0.01, refine=True,
-                    max_nfev=30, return_selection=False):
+def fit_state_space(records: Iterable[tuple[Any, Any]], period: int, order: int | None = None,
+                    *, orders: Sequence[int] = DEFAULT_ORDERS,
+                    validation: Sequence[int] | None = None, discard: int = 1,
+                    weighted: bool = False, q: int | None = None, tolerance: float = 0.01,
+                    refine: bool = True, max_nfev: int = 30,
+                    return_selection: bool = False) -> Any:
     """A stable MIMO :class:`~pihyst.dynamics.StateSpace` fitted to periodic multisine
-    records (list of (u (N, m), y (N, p)), N a multiple of ``period``; the first
-    ``discard`` periods of each are the transient).
+    records (module notes).
 
-    ``order``: the state dimension; None chooses it from ``orders`` by validation on
-    the records with indices ``validation`` (default: the last third, leaving at least
-    m to fit), the smallest within ``tolerance`` of the best. ``weighted``: weight
-    the B, D fit by the BLA's inverse standard deviation (off by default: with few
-    records the variance estimate is too noisy to help). ``q``: FSID block rows
-    (default order + 1). ``refine``: finish with the nonlinear least-squares fit of
-    :mod:`pihyst.dynamics._refine` (at most ``max_nfev`` evaluations; kept only if it
-    lowers the error on the BLA). With ``return_selection`` returns (model,
-    :class:`OrderSelection` or None)."""
+    Parameters
+    ----------
+    records : iterable of (array_like, array_like)
+        ``(u, y)`` pairs, u (N, m) and y (N, p) (or 1-D for one), N a multiple of
+        ``period``.
+    period : int
+        Samples per period.
+    order : int, optional
+        The state dimension; None chooses it from ``orders`` by validation.
+    orders : sequence of int
+        The candidate orders.
+    validation : sequence of int, optional
+        Indices of the records held back to choose the order (default: the last
+        third, leaving at least m to fit).
+    discard : int
+        Leading periods of each record that are the transient.
+    weighted : bool
+        Weight the B, D fit by the BLA's inverse standard deviation (off by default:
+        with few records the variance estimate is too noisy to help).
+    q : int, optional
+        FSID block rows (default order + 1).
+    tolerance : float
+        The smallest order whose validation error is within this (relative) of the
+        best is chosen.
+    refine : bool
+        Finish with a nonlinear least-squares fit on the BLA (kept only if it lowers
+        the error there).
+    max_nfev : int
+        At most this many evaluations of that fit.
+    return_selection : bool
+        Return the order selection too.
+
+    Returns
+    -------
+    StateSpace or (StateSpace, OrderSelection or None)
+        The model; with ``return_selection``, also how its order was chosen (None
+        when ``order`` was given).
+
+    Raises
+    ------
+    InvalidArgumentError
+        Records that are not whole periods, too few records to fit or choose the
+        order, orders or validation indices that are not valid.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.dynamics import StateSpace
+    >>> plant = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+    >>> def multisine(seed, t=np.arange(64), k=np.arange(1, 8)):
+    ...     phase = np.random.default_rng(seed).uniform(0, 2 * np.pi, k.size)
+    ...     return 10 + np.cos(2 * np.pi * np.outer(t, k) / 32 + phase).sum(axis=1)
+    >>> records = [(u, plant.predict(u)) for u in map(multisine, range(3))]
+    >>> from pihyst.dynamics import fit_state_space
+    >>> model, selection = fit_state_space(records, 32, orders=(1, 2), return_selection=True)
+    >>> selection.chosen, np.round(model.dc_gain(), 6)
+    (1, array([[2.]]))
+    """
     recs = periodic_records(records, period)
     R, m = len(recs), recs[0][0].shape[1]
     selection = None

@@ -21,9 +21,13 @@ Identification (:func:`fit_hammerstein`), for fixed play thresholds r_ik:
 The linear-only reference (:func:`fit_linear`) is the same linear fit on u itself.
 """
 
+import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.dynamics._linear import fit_oe, fit_oe_periodic, response, simulate
 from pihyst.exceptions import InvalidArgumentError, InvalidModelError
@@ -44,13 +48,31 @@ def _operators(model, u):
 
 @dataclass(frozen=True)
 class HammersteinModel:
-    """Static hysteresis per input (``hysteresis``: pihyst models with an exact inverse,
-    ClassicalPI from :func:`fit_hammerstein`, any family from :func:`fit_dynamics`)
-    followed by ``a[j]`` / ``b[j][i]`` linear dynamics per output (q^-1 polynomials)."""
+    """Static hysteresis per input followed by linear dynamics per output (module notes).
 
-    hysteresis: tuple
-    a: tuple
-    b: tuple
+    Parameters
+    ----------
+    hysteresis : tuple of PIModel
+        One model per input, with an exact inverse (ClassicalPI from
+        :func:`fit_hammerstein`, any family from :func:`fit_dynamics`).
+    a : tuple of array_like
+        Per output j, A_j(q^-1) = [1, a_1, ...].
+    b : tuple of array_like
+        Per output j, B_ji(q^-1) as one row per input (m, nb).
+
+    Examples
+    --------
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import HammersteinModel
+    >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+    ...                          a=([1.0, -0.5],), b=([[0.5]],))
+    >>> model.n_inputs, model.n_outputs
+    (1, 1)
+    """
+
+    hysteresis: tuple[Any, ...]
+    a: tuple[Any, ...]
+    b: tuple[Any, ...]
 
     family = FAMILY
 
@@ -62,32 +84,132 @@ class HammersteinModel:
     def n_outputs(self):
         return len(self.a)
 
-    def hysteresis_output(self, u):
-        """h_i = H_i(u_i) from each hysteresis model's initial state; u of shape (N, m)."""
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        return np.column_stack([H.predict(u[:, i]) for i, H in enumerate(self.hysteresis)])
+    def hysteresis_output(self, u: ArrayLike) -> NDArray[np.float64]:
+        """h_i = H_i(u_i) from each hysteresis model's initial state.
 
-    def predict(self, u):
-        """Outputs (N, p) for inputs u (N, m), simulated from rest."""
+        Parameters
+        ----------
+        u : array_like
+            (N, m) inputs, or (N,) for one input.
+
+        Returns
+        -------
+        ndarray
+            (N, m) the hysteresis outputs.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import HammersteinModel
+        >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                          a=([1.0, -0.5],), b=([[0.5]],))
+        >>> model.hysteresis_output([0.0, 4.0, 0.0]).ravel().tolist()
+        [0.0, 5.0, 1.0]
+        """
+        inputs = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        return np.column_stack([H.predict(inputs[:, i])
+                                for i, H in enumerate(self.hysteresis)])
+
+    def predict(self, u: ArrayLike) -> NDArray[np.float64]:
+        """The outputs for inputs ``u``, the dynamics simulated from rest.
+
+        Parameters
+        ----------
+        u : array_like
+            (N, m) inputs, or (N,) for one input.
+
+        Returns
+        -------
+        ndarray
+            (N, p) outputs.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import HammersteinModel
+        >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                          a=([1.0, -0.5],), b=([[0.5]],))
+        >>> model.predict([1.0, 1.0, 1.0]).ravel().tolist()
+        [0.5, 0.75, 0.875]
+        """
         h = self.hysteresis_output(u)
         return np.column_stack([simulate(self.a[j], np.asarray(self.b[j]), h)
                                 for j in range(self.n_outputs)])
 
-    def static_gain(self):
-        """B_ji(1) / A_j(1) per output and input: (p, m)."""
+    def static_gain(self) -> NDArray[np.float64]:
+        """B_ji(1) / A_j(1), the dynamics' gain per output and input.
+
+        Returns
+        -------
+        ndarray
+            (p, m) the gains.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import HammersteinModel
+        >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                          a=([1.0, -0.5],), b=([[0.5]],))
+        >>> model.static_gain()
+        array([[1.]])
+        """
         return np.array([np.sum(np.atleast_2d(b), axis=1) / np.sum(a)
                          for a, b in zip(self.a, self.b)])
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
+        """The model as JSON values (its file's schema, :func:`load_hammerstein`).
+
+        Returns
+        -------
+        dict
+            ``family``, ``hysteresis`` (each model's dict), ``a`` and ``b``.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import HammersteinModel
+        >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                          a=([1.0, -0.5],), b=([[0.5]],))
+        >>> d = model.to_dict()
+        >>> d["a"], d["b"]
+        ([[1.0, -0.5]], [[[0.5]]])
+        """
         return {"family": FAMILY,
                 "hysteresis": [H.to_dict() for H in self.hysteresis],
                 "a": [np.asarray(a).tolist() for a in self.a],
                 "b": [np.atleast_2d(b).tolist() for b in self.b]}
 
     @classmethod
-    def from_dict(cls, d, source="model"):
-        """The model of a dict of :meth:`to_dict`'s keys; a broken one raises
-        InvalidModelError naming ``source`` and the key."""
+    def from_dict(cls, d: dict[str, Any], source: str = "model") -> "HammersteinModel":
+        """The model of a dict of :meth:`to_dict`'s keys.
+
+        Parameters
+        ----------
+        d : dict
+            ``family`` ("hammerstein"), ``hysteresis``, ``a`` and ``b``.
+        source : str
+            What the dict came from, for the messages.
+
+        Returns
+        -------
+        HammersteinModel
+            The model.
+
+        Raises
+        ------
+        InvalidModelError
+            A broken dict, named by ``source`` and the key (unstable dynamics among
+            them).
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import HammersteinModel
+        >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                          a=([1.0, -0.5],), b=([[0.5]],))
+        >>> HammersteinModel.from_dict(model.to_dict()).static_gain()
+        array([[1.]])
+        """
         from pihyst.model import PIModel
         if not isinstance(d, dict) or d.get("family") != FAMILY:
             family = d.get("family") if isinstance(d, dict) else None
@@ -121,8 +243,27 @@ class HammersteinModel:
             b.append(bj)
         return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b))
 
-    def save(self, path):
-        """Write the model as JSON to ``path`` (the file appears only once complete)."""
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the model as JSON to ``path`` (the file appears only once complete).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.dynamics import load_hammerstein
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import HammersteinModel
+        >>> model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                          a=([1.0, -0.5],), b=([[0.5]],))
+        >>> path = os.path.join(tempfile.mkdtemp(), "hammerstein.json")
+        >>> model.save(path)
+        >>> load_hammerstein(path).a[0].tolist()
+        [1.0, -0.5]
+        """
         import json
 
         from pihyst._atomic import write_atomically
@@ -159,18 +300,70 @@ def _as_records(records):
     return out
 
 
-def default_thresholds(u, n_operators=4):
-    """Thresholds 0, ..., about the input's half span: equally spaced on [0, S/2)."""
+def default_thresholds(u: ArrayLike, n_operators: int = 4) -> NDArray[np.float64]:
+    """Thresholds 0, ..., about the input's half span: equally spaced on [0, S/2).
+
+    Parameters
+    ----------
+    u : array_like
+        The input; S is its span (max - min).
+    n_operators : int
+        How many thresholds.
+
+    Returns
+    -------
+    ndarray
+        (n_operators,) thresholds, V.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import default_thresholds
+    >>> default_thresholds([0.0, 10.0]).tolist()
+    [0.0, 1.25, 2.5, 3.75]
+    """
     span = float(np.ptp(u))
     return np.arange(n_operators) * (span / 2) / n_operators
 
 
-def fit_linear(records, na, nb, iterations=5, period=None):
+def fit_linear(records: Iterable[tuple[ArrayLike, ArrayLike]], na: int, nb: int,
+               iterations: int = 5, period: int | None = None
+               ) -> tuple[tuple[NDArray[np.float64], ...], tuple[NDArray[np.float64], ...]]:
     """Linear-only MIMO model of the same structure: A_j y_j = sum_i B_ji u_i.
 
-    ``period``: the records are periodic with this many samples per period and in
-    steady state over their last period; the fit is then the frequency-domain
-    output-error fit of that period (:func:`pihyst.dynamics._linear.fit_oe_periodic`)."""
+    Parameters
+    ----------
+    records : iterable of (array_like, array_like)
+        ``(u, y)`` pairs, u (N, m) and y (N, p) (or 1-D for one).
+    na, nb : int
+        Orders of A (its coefficients after the leading 1) and B (coefficients).
+    iterations : int
+        Steiglitz-McBride iterations towards the output-error fit.
+    period : int, optional
+        The records are periodic with this many samples per period and in steady
+        state over their last period; the fit is then the frequency-domain
+        output-error fit of that period.
+
+    Returns
+    -------
+    a : tuple of ndarray
+        Per output, A_j = [1, a_1, ..., a_na].
+    b : tuple of ndarray
+        Per output, B_ji as (m, nb).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import HammersteinModel, fit_hammerstein, fit_linear, predict_linear
+    >>> true = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+    ...                         a=([1.0, -0.5],), b=([[0.5]],))
+    >>> t = np.arange(400)
+    >>> u = 5 + 5 * np.sin(2 * np.pi * t / 100) * np.sin(2 * np.pi * t / 400)
+    >>> y = true.predict(u)
+    >>> a, b = fit_linear([(u, y)], 1, 1)
+    >>> a[0].shape, b[0].shape
+    ((2,), (1, 1))
+    """
     recs = _as_records(records)
     a, b = [], []
     for j in range(recs[0][1].shape[1]):
@@ -185,19 +378,90 @@ def fit_linear(records, na, nb, iterations=5, period=None):
     return tuple(a), tuple(b)
 
 
-def predict_linear(a, b, u):
+def predict_linear(a: Sequence[ArrayLike], b: Sequence[ArrayLike],
+                   u: ArrayLike) -> NDArray[np.float64]:
+    """The outputs of the linear model of :func:`fit_linear`, simulated from rest.
+
+    Parameters
+    ----------
+    a : sequence of array_like
+        Per output, A_j = [1, a_1, ...].
+    b : sequence of array_like
+        Per output, B_ji as (m, nb).
+    u : array_like
+        (N, m) inputs, or (N,) for one input.
+
+    Returns
+    -------
+    ndarray
+        (N, p) outputs.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import predict_linear
+    >>> predict_linear([[1.0, -0.5]], [[[0.5]]], [1.0, 1.0, 1.0]).ravel().tolist()
+    [0.5, 0.75, 0.875]
+    """
     u = np.atleast_2d(np.asarray(u, dtype=float).T).T
     return np.column_stack([simulate(a[j], b[j], u) for j in range(len(a))])
 
 
-def fit_hammerstein(records, na, nb, *, thresholds=None, n_operators=4, input_range=None,
-                    iterations=5, refinements=10, period=None):
-    """A :class:`HammersteinModel` fitted to ``records`` (list of (u, y), u (N, m), y (N,
-    p)); module notes. ``thresholds``: one array per input (default
-    :func:`default_thresholds` of all records' input). ``input_range``: per input
-    (default: 1.5 times the data's span about its centre). ``period``: as for
-    :func:`fit_linear` (the fit then runs on the last period's spectrum; the operators
-    are run over the whole record, so the first period settles them)."""
+def fit_hammerstein(records: Iterable[tuple[ArrayLike, ArrayLike]], na: int, nb: int, *,
+                    thresholds: Sequence[NDArray[np.float64] | Sequence[float]] | None = None,
+                    n_operators: int = 4,
+                    input_range: Sequence[tuple[float, float]] | None = None,
+                    iterations: int = 5, refinements: int = 10,
+                    period: int | None = None) -> HammersteinModel:
+    """A :class:`HammersteinModel` fitted to ``records`` (module notes).
+
+    Parameters
+    ----------
+    records : iterable of (array_like, array_like)
+        ``(u, y)`` pairs, u (N, m) and y (N, p) (or 1-D for one).
+    na, nb : int
+        Orders of A (its coefficients after the leading 1) and B (coefficients).
+    thresholds : sequence of array_like, optional
+        One array of play thresholds per input (default :func:`default_thresholds` of
+        all records' input).
+    n_operators : int
+        Operators per input when the thresholds are not given.
+    input_range : sequence of (float, float), optional
+        Per input (default: 1.5 times the data's span about its centre).
+    iterations : int
+        Steiglitz-McBride iterations of each dynamics fit.
+    refinements : int
+        At most this many alternations of weights and dynamics.
+    period : int, optional
+        As for :func:`fit_linear` (the fit then runs on the last period's spectrum; the
+        operators are run over the whole record, so the first period settles them).
+
+    Returns
+    -------
+    HammersteinModel
+        The model, never worse on the records than the linear model it starts from.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A record with not as many input as output samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import HammersteinModel, fit_hammerstein, fit_linear, predict_linear
+    >>> true = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+    ...                         a=([1.0, -0.5],), b=([[0.5]],))
+    >>> t = np.arange(400)
+    >>> u = 5 + 5 * np.sin(2 * np.pi * t / 100) * np.sin(2 * np.pi * t / 400)
+    >>> y = true.predict(u)
+    >>> model = fit_hammerstein([(u, y)], 1, 1, n_operators=3)
+    >>> a, b = fit_linear([(u, y)], 1, 1)
+    >>> hammerstein = np.max(np.abs(model.predict(u) - y))
+    >>> linear = np.max(np.abs(predict_linear(a, b, u) - y))
+    >>> bool(hammerstein < linear / 5)
+    True
+    """
     from scipy.optimize import lsq_linear
 
     recs = _as_records(records)

@@ -25,9 +25,12 @@ Identification (:func:`fit_hammerstein_ss`), the play thresholds r_ik fixed:
    fits its records worse than the linear model it starts from.
 """
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.dynamics._bla import estimate_bla, period_spectra, periodic_records
 from pihyst.dynamics._fit_state_space import (
@@ -44,10 +47,26 @@ from pihyst.model import ClassicalPI
 
 @dataclass(frozen=True, eq=False)
 class StateSpaceHammerstein:
-    """Static hysteresis per input (``hysteresis``: ClassicalPI models) followed by the
-    MIMO state-space ``dynamics``."""
+    """Static hysteresis per input followed by MIMO state-space dynamics.
 
-    hysteresis: tuple
+    Parameters
+    ----------
+    hysteresis : tuple of PIModel
+        One model per input (ClassicalPI from :func:`fit_hammerstein_ss`).
+    dynamics : StateSpace
+        The dynamics from the hysteresis outputs to the outputs (m inputs).
+
+    Examples
+    --------
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein
+    >>> model = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+    ...                               StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+    >>> model.n_inputs, model.n_outputs
+    (1, 1)
+    """
+
+    hysteresis: tuple[Any, ...]
     dynamics: StateSpace
 
     @property
@@ -58,35 +77,143 @@ class StateSpaceHammerstein:
     def n_outputs(self):
         return self.dynamics.n_outputs
 
-    def hysteresis_output(self, u):
-        """h_i = H_i(u_i) from the zero operator state; u of shape (N, m)."""
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        if u.shape[1] != self.n_inputs:
+    def hysteresis_output(self, u: ArrayLike) -> NDArray[np.float64]:
+        """h_i = H_i(u_i) from the zero operator state.
+
+        Parameters
+        ----------
+        u : array_like
+            (N, m) inputs, or (N,) for one input.
+
+        Returns
+        -------
+        ndarray
+            (N, m) the hysteresis outputs.
+
+        Raises
+        ------
+        InvalidArgumentError
+            ``u`` has not as many columns as the model has inputs.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein
+        >>> model = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                               StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+        >>> model.hysteresis_output([0.0, 4.0, 0.0]).ravel().tolist()
+        [0.0, 5.0, 1.0]
+        """
+        inputs = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        if inputs.shape[1] != self.n_inputs:
             raise InvalidArgumentError(f"the model has {self.n_inputs} inputs; u has "
-                                       f"{u.shape[1]} columns")
-        return np.column_stack([H.predict(u[:, i], initial_state=np.zeros(H.n_operators))
+                                       f"{inputs.shape[1]} columns")
+        return np.column_stack([H.predict(inputs[:, i], initial_state=np.zeros(H.n_operators))
                                 for i, H in enumerate(self.hysteresis)])
 
-    def predict(self, u):
-        """Outputs (N, p) for inputs u (N, m), simulated from rest."""
+    def predict(self, u: ArrayLike) -> NDArray[np.float64]:
+        """The outputs for inputs ``u``, simulated from rest.
+
+        Parameters
+        ----------
+        u : array_like
+            (N, m) inputs, or (N,) for one input.
+
+        Returns
+        -------
+        ndarray
+            (N, p) outputs.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein
+        >>> model = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                               StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+        >>> model.predict([1.0, 1.0, 1.0]).ravel().tolist()
+        [0.0, 1.0, 1.5]
+        """
         return self.dynamics.predict(self.hysteresis_output(u))
 
-    def predict_steady(self, u, period):
+    def predict_steady(self, u: ArrayLike, period: int) -> NDArray[np.float64]:
         """Outputs over the last period of u in periodic steady state, from the DFT of
-        the last period's hysteresis output (the same criterion as the fit)."""
+        the last period's hysteresis output (the same criterion as the fit).
+
+        Parameters
+        ----------
+        u : array_like
+            (N, m) inputs, or (N,) for one input; its last ``period`` samples repeat.
+        period : int
+            Samples per period.
+
+        Returns
+        -------
+        ndarray
+            (period, p) the steady-state outputs.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein
+        >>> model = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                               StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+        >>> u = np.tile(10 + np.sin(2 * np.pi * np.arange(16) / 16), 3)
+        >>> steady = model.predict_steady(u, 16)
+        >>> bool(np.allclose(steady, model.predict(np.tile(u, 4))[-16:]))
+        True
+        """
         h = self.hysteresis_output(u)[-period:]
         H = np.fft.rfft(h, axis=0)
         w = 2 * np.pi * np.arange(H.shape[0]) / period
         Y = np.einsum("kpm,km->kp", self.dynamics.response(w), H)
         return np.fft.irfft(Y, n=period, axis=0)
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
+        """The model as JSON values (:meth:`from_dict` reads them back).
+
+        Returns
+        -------
+        dict
+            ``family`` ("hammerstein-state-space"), ``hysteresis`` (each model's dict)
+            and ``dynamics`` (:meth:`StateSpace.to_dict`).
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein
+        >>> model = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                               StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+        >>> model.to_dict()["dynamics"]["A"]
+        [[0.5]]
+        """
         return {"family": "hammerstein-state-space",
                 "hysteresis": [H.to_dict() for H in self.hysteresis],
                 "dynamics": self.dynamics.to_dict()}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: dict[str, Any]) -> "StateSpaceHammerstein":
+        """The model a dict of :meth:`to_dict` describes.
+
+        Parameters
+        ----------
+        d : dict
+            With ``hysteresis`` and ``dynamics``.
+
+        Returns
+        -------
+        StateSpaceHammerstein
+            The model.
+
+        Examples
+        --------
+        >>> from pihyst import ClassicalPI
+        >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein
+        >>> model = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+        ...                               StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+        >>> StateSpaceHammerstein.from_dict(model.to_dict()).predict([1.0, 1.0]).ravel().tolist()
+        [0.0, 1.0]
+        """
         from pihyst.model import PIModel
         return cls(hysteresis=tuple(PIModel.from_dict(h) for h in d["hysteresis"]),
                    dynamics=StateSpace.from_dict(d["dynamics"]))
@@ -97,18 +224,68 @@ def _thresholds(u, n_operators):
     return np.arange(n_operators) * (span / 2) / n_operators
 
 
-def fit_hammerstein_ss(records, period, order=None, *, thresholds=None, n_operators=4,
-                       input_range=None, refinements=3, orders=DEFAULT_ORDERS,
-                       validation=None, discard=1, weighted=False, linear=None,
-                       refine=True, max_nfev=30):
+def fit_hammerstein_ss(records: Iterable[tuple[Any, Any]], period: int,
+                       order: int | None = None, *,
+                       thresholds: Sequence[NDArray[np.float64] | Sequence[float]] | None = None,
+                       n_operators: int = 4,
+                       input_range: Sequence[tuple[float, float]] | None = None,
+                       refinements: int = 3, orders: Sequence[int] = DEFAULT_ORDERS,
+                       validation: Sequence[int] | None = None, discard: int = 1,
+                       weighted: bool = False, linear: StateSpace | None = None,
+                       refine: bool = True, max_nfev: int = 30) -> StateSpaceHammerstein:
     """A :class:`StateSpaceHammerstein` fitted to periodic multisine records (module
-    notes). ``order``, ``orders``, ``validation``, ``discard``, ``weighted``,
-    ``refine``, ``max_nfev``: as for
-    :func:`~pihyst.dynamics.fit_state_space` (the order is chosen once, for the linear
-    start). ``thresholds``: one array per input (default: ``n_operators`` equally
-    spaced on [0, S/2) of the input's span S); ``input_range`` per input (default 1.5
-    times the span about its centre). ``linear``: the linear start of step 1 if already
-    fitted to these records (a :class:`StateSpace` with m inputs; its order is kept)."""
+    notes).
+
+    Parameters
+    ----------
+    records : iterable of (array_like, array_like)
+        ``(u, y)`` pairs, u (N, m) and y (N, p) (or 1-D for one), N a multiple of
+        ``period``.
+    period : int
+        Samples per period.
+    order : int, optional
+        As for :func:`~pihyst.dynamics.fit_state_space` (the order is chosen once, for
+        the linear start).
+    thresholds : sequence of array_like, optional
+        One array per input (default: ``n_operators`` equally spaced on [0, S/2) of
+        the input's span S).
+    n_operators : int
+        Operators per input when the thresholds are not given.
+    input_range : sequence of (float, float), optional
+        Per input (default 1.5 times the span about its centre).
+    refinements : int
+        At most this many alternations of weights and dynamics, >= 0.
+    orders, validation, discard, weighted, refine, max_nfev
+        As for :func:`~pihyst.dynamics.fit_state_space`.
+    linear : StateSpace, optional
+        The linear start of step 1 if already fitted to these records (m inputs; its
+        order is kept).
+
+    Returns
+    -------
+    StateSpaceHammerstein
+        The model, never worse on the records than its linear start.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Records that are not whole periods, options that are not valid.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import StateSpace, StateSpaceHammerstein, fit_hammerstein_ss
+    >>> true = StateSpaceHammerstein((ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+    ...                              StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]]))
+    >>> def multisine(seed, t=np.arange(64), k=np.arange(1, 8)):
+    ...     phase = np.random.default_rng(seed).uniform(0, 2 * np.pi, k.size)
+    ...     return 10 + np.cos(2 * np.pi * np.outer(t, k) / 32 + phase).sum(axis=1)
+    >>> records = [(u, true.predict(u)) for u in map(multisine, range(3))]
+    >>> model = fit_hammerstein_ss(records, 32, 1, n_operators=3)
+    >>> model.n_inputs, model.dynamics.order, model.hysteresis[0].n_operators
+    (1, 1, 3)
+    """
     from scipy.optimize import lsq_linear
 
     recs = periodic_records(records, period)

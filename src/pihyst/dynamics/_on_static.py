@@ -43,6 +43,8 @@ the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d ->
 """
 
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -134,23 +136,67 @@ def _numerator_on_static(H, a, nb, records):
     return np.linalg.lstsq(np.vstack(rows), np.concatenate(target), rcond=None)[0][None, :]
 
 
-def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
-                 tolerance=0.01, numerator_on_static=True, keep_creep=False):
+def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, Any]], *,
+                 orders: Sequence[Sequence[int]] = DEFAULT_ORDERS,
+                 validation: int | None = -1, tolerance: float = 0.01,
+                 numerator_on_static: bool = True, keep_creep: bool = False) -> HammersteinModel:
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
     unit-static-gain dynamics measured by the ratio of rates (module notes).
 
-    ``slow``: (u, y), one period of the drive at a rate far below the dynamics (its
-    harmonics where G ~ 1), in periodic steady state; ``fast``: a list of (u, y), one period
-    each of the same drive shape at faster rates (the same harmonics, another number of
-    samples per period). ``validation``: the index of the fast record that chooses the
-    order (the first of ``orders`` whose output error there is within ``tolerance`` of the
-    best, or within 1e-9 of the output: noise-free data); None takes the first of
-    ``orders``. ``numerator_on_static``: then refit B, the poles kept, on the static
-    model's output (module notes). ``keep_creep``: the returned model's hysteresis keeps
-    the static model's creep (for :func:`pihyst.learn.learn_periodic`, which runs it on
-    the period's time base; :meth:`HammersteinModel.predict` and
-    :func:`compensate_hammerstein` do not time it: leave it off for them). The dynamics
-    are fitted without it either way."""
+    Parameters
+    ----------
+    static : PIModel or BoucWenModel
+        The static model (``pihyst.fit``, any family).
+    slow : (array_like, array_like)
+        ``(u, y)``, one period of the drive at a rate far below the dynamics (its
+        harmonics where G ~ 1), in periodic steady state.
+    fast : sequence of (array_like, array_like)
+        ``(u, y)`` pairs, one period each of the same drive shape at faster rates (the
+        same harmonics, another number of samples per period).
+    orders : sequence of (int, int)
+        The candidate (na, nb).
+    validation : int or None
+        The index of the fast record that chooses the order (the first of ``orders``
+        whose output error there is within ``tolerance`` of the best, or within 1e-9 of
+        the output: noise-free data); None takes the first of ``orders``.
+    tolerance : float
+        Relative, as above.
+    numerator_on_static : bool
+        Then refit B, the poles kept, on the static model's output (module notes).
+    keep_creep : bool
+        The returned model's hysteresis keeps the static model's creep (for
+        :func:`pihyst.learn.learn_periodic`, which runs it on the period's time base;
+        :meth:`HammersteinModel.predict` and :func:`compensate_hammerstein` do not time
+        it: leave it off for them). The dynamics are fitted without it either way.
+
+    Returns
+    -------
+    HammersteinModel
+        One input, one output, the dynamics' static gain 1.
+
+    Raises
+    ------
+    InvalidArgumentError
+        No fast record, orders that are not valid, a constant drive, periods without a
+        small common multiple, dynamics without static gain.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst import ClassicalPI
+    >>> from pihyst.dynamics import HammersteinModel, fit_dynamics
+    >>> static = ClassicalPI([0.0, 2.0], [1.0, 0.5])
+    >>> true = HammersteinModel(hysteresis=(static,), a=([1.0, -0.5],), b=([[0.5]],))
+    >>> def one_period(model, n):
+    ...     u = 5 + 4 * np.sin(2 * np.pi * np.arange(n) / n)
+    ...     return u, model.predict(np.tile(u, 4))[-n:, 0]
+    >>> u_slow = 5 + 4 * np.sin(2 * np.pi * np.arange(400) / 400)
+    >>> slow = u_slow, static.predict(np.tile(u_slow, 2))[-400:]
+    >>> model = fit_dynamics(static, slow, [one_period(true, 20), one_period(true, 40)],
+    ...                      orders=[(1, 1)], validation=None)
+    >>> np.round(model.a[0], 2).tolist(), np.round(model.static_gain(), 6).tolist()
+    ([1.0, -0.5], [[1.0]])
+    """
     slow = _one_period(slow, "slow")
     fast = [_one_period(r, i) for i, r in enumerate(fast)]
     if not fast:
@@ -175,8 +221,8 @@ def fit_dynamics(static, slow, fast, *, orders=DEFAULT_ORDERS, validation=-1,
         held = spectra[validation]
         fit_on = [s for i, s in enumerate(spectra) if i != validation % len(spectra)]
         fit_on.append(_unit_dc(fit_on, period))
-        errors = np.sqrt([_output_error(*fit_oe_periodic(fit_on, na, nb, period), [held],
-                                        period) for na, nb in orders])
+        fits = [fit_oe_periodic(fit_on, na, nb, period) for na, nb in orders]
+        errors = np.sqrt([_output_error(a, b, [held], period) for a, b in fits])
         floor = 1e-9 * np.sqrt(np.sum(np.abs(held[1]) ** 2))
         na, nb = orders[int(np.flatnonzero(errors <= (1 + tolerance) * errors.min()
                                            + floor)[0])]

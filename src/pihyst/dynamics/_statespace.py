@@ -43,8 +43,10 @@ others, and the order with the smallest steady-state simulation error wins.
 """
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.exceptions import InvalidArgumentError
 
@@ -53,7 +55,31 @@ MAX_RADIUS = 1.0 - 1e-6
 
 @dataclass(frozen=True, eq=False)
 class StateSpace:
-    """x[t+1] = A x[t] + B u[t], y[t] = C x[t] + D u[t] (module notes)."""
+    """x[t+1] = A x[t] + B u[t], y[t] = C x[t] + D u[t] (module notes).
+
+    Parameters
+    ----------
+    A : array_like
+        (n, n) state matrix.
+    B : array_like
+        (n, m) input matrix.
+    C : array_like
+        (p, n) output matrix.
+    D : array_like
+        (p, m) feedthrough.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Shapes that do not match, or NaN or infinite entries.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import StateSpace
+    >>> ss = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+    >>> ss.order, ss.n_inputs, ss.n_outputs, ss.spectral_radius
+    (1, 1, 1, 0.5)
+    """
 
     A: np.ndarray
     B: np.ndarray
@@ -89,33 +115,140 @@ class StateSpace:
     def spectral_radius(self):
         return float(np.max(np.abs(np.linalg.eigvals(self.A)), initial=0.0))
 
-    def response(self, omega):
-        """G(exp(i w)) for normalised angular frequencies w (rad/sample): (L, p, m)."""
+    def response(self, omega: ArrayLike) -> NDArray[np.complex128]:
+        """G(exp(i w)) for normalised angular frequencies w (rad/sample).
+
+        Parameters
+        ----------
+        omega : array_like
+            (L,) angular frequencies, rad/sample.
+
+        Returns
+        -------
+        ndarray of complex
+            (L, p, m) the frequency response on each.
+
+        Examples
+        --------
+        >>> from pihyst.dynamics import StateSpace
+        >>> ss = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+        >>> G = ss.response([0.0, 3.141592653589793])
+        >>> G.shape, G.real.round(6).ravel().tolist()
+        ((2, 1, 1), [2.0, -0.666667])
+        """
         return _response(self.A, self.B, self.C, self.D, np.asarray(omega, dtype=float))
 
-    def dc_gain(self):
-        """G(1) (p, m)."""
+    def dc_gain(self) -> NDArray[np.float64]:
+        """G(1), the static gain.
+
+        Returns
+        -------
+        ndarray
+            (p, m) the steady output per unit of each input.
+
+        Examples
+        --------
+        >>> from pihyst.dynamics import StateSpace
+        >>> ss = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+        >>> ss.dc_gain()
+        array([[2.]])
+        """
         return self.response([0.0])[0].real
 
-    def predict(self, u):
-        """y (N, p) for u (N, m) (or (N,) for one input), from rest."""
-        u = np.atleast_2d(np.asarray(u, dtype=float).T).T
-        if u.shape[1] != self.n_inputs:
-            raise InvalidArgumentError(f"the model has {self.n_inputs} inputs; u has "
-                                       f"{u.shape[1]} columns")
-        return simulate(self.A, self.B, self.C, self.D, u)
+    def predict(self, u: ArrayLike) -> NDArray[np.float64]:
+        """The output for the input ``u``, from rest (x[0] = 0).
 
-    def scaled_inputs(self, gains):
-        """The model of u -> y with input i scaled by gains[i] (B and D columns)."""
+        Parameters
+        ----------
+        u : array_like
+            (N, m) inputs, or (N,) for one input.
+
+        Returns
+        -------
+        ndarray
+            (N, p) outputs.
+
+        Raises
+        ------
+        InvalidArgumentError
+            ``u`` has not as many columns as the model has inputs.
+
+        Examples
+        --------
+        >>> from pihyst.dynamics import StateSpace
+        >>> ss = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+        >>> ss.predict([1.0, 1.0, 1.0]).ravel().tolist()
+        [0.0, 1.0, 1.5]
+        """
+        inputs = np.atleast_2d(np.asarray(u, dtype=float).T).T
+        if inputs.shape[1] != self.n_inputs:
+            raise InvalidArgumentError(f"the model has {self.n_inputs} inputs; u has "
+                                       f"{inputs.shape[1]} columns")
+        return simulate(self.A, self.B, self.C, self.D, inputs)
+
+    def scaled_inputs(self, gains: ArrayLike) -> "StateSpace":
+        """The model of u -> y with input i scaled by gains[i] (B and D columns).
+
+        Parameters
+        ----------
+        gains : array_like
+            (m,) one gain per input.
+
+        Returns
+        -------
+        StateSpace
+            The model of u -> y where this one sees gains * u.
+
+        Examples
+        --------
+        >>> from pihyst.dynamics import StateSpace
+        >>> ss = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+        >>> ss.scaled_inputs([3.0]).dc_gain()
+        array([[6.]])
+        """
         g = np.asarray(gains, dtype=float)
         return StateSpace(self.A, self.B * g, self.C, self.D * g)
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
+        """The model as JSON values (:meth:`from_dict` reads them back).
+
+        Returns
+        -------
+        dict
+            ``family`` ("state-space") and the matrices ``A``, ``B``, ``C``, ``D`` as
+            nested lists.
+
+        Examples
+        --------
+        >>> from pihyst.dynamics import StateSpace
+        >>> ss = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+        >>> ss.to_dict()
+        {'family': 'state-space', 'A': [[0.5]], 'B': [[1.0]], 'C': [[1.0]], 'D': [[0.0]]}
+        """
         return {"family": "state-space", "A": self.A.tolist(), "B": self.B.tolist(),
                 "C": self.C.tolist(), "D": self.D.tolist()}
 
     @classmethod
-    def from_dict(cls, d):
+    def from_dict(cls, d: dict[str, Any]) -> "StateSpace":
+        """The model a dict of :meth:`to_dict` describes.
+
+        Parameters
+        ----------
+        d : dict
+            With the matrices ``A``, ``B``, ``C``, ``D``.
+
+        Returns
+        -------
+        StateSpace
+            The model.
+
+        Examples
+        --------
+        >>> from pihyst.dynamics import StateSpace
+        >>> ss = StateSpace.from_dict({"A": [[0.5]], "B": [[1.0]], "C": [[1.0]], "D": [[0.0]]})
+        >>> ss.dc_gain()
+        array([[2.]])
+        """
         return cls(*(np.asarray(d[k], dtype=float) for k in "ABCD"))
 
 
@@ -237,11 +370,46 @@ def stabilized(A, C):
     return wr, C @ vr
 
 
-def fsid(omega, G, order, *, q=None, weight=None, basis=None):
-    """A stable :class:`StateSpace` of ``order`` fitted to G (L, p, m) on lines
-    ``omega`` (module notes). ``q``: block rows (default order + 1); ``weight`` (L, p,
-    m): elementwise weights of the B, D fit; ``basis``: a precomputed
-    :func:`observability_basis` of the same data (with q > order)."""
+def fsid(omega: ArrayLike, G: ArrayLike, order: int, *, q: int | None = None,
+         weight: ArrayLike | None = None, basis: tuple[Any, Any] | None = None) -> StateSpace:
+    """A stable :class:`StateSpace` of ``order`` fitted to a frequency response (module
+    notes: frequency-domain subspace identification).
+
+    Parameters
+    ----------
+    omega : array_like
+        (L,) angular frequencies of the lines, rad/sample.
+    G : array_like
+        (L, p, m) the frequency response on them.
+    order : int
+        The model's order (number of states), >= 1.
+    q : int, optional
+        Block rows (default order + 1).
+    weight : array_like, optional
+        (L, p, m) elementwise weights of the B, D fit (e.g. 1 / standard deviation).
+    basis : tuple, optional
+        A precomputed ``observability_basis`` of the same data (with q > order).
+
+    Returns
+    -------
+    StateSpace
+        The fitted model, its spectral radius below 1.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An order that is not a positive integer, too few block rows or frequency lines.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.dynamics import StateSpace, fsid
+    >>> true = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])
+    >>> omega = np.linspace(0.1, 3.0, 20)
+    >>> model = fsid(omega, true.response(omega), 1)
+    >>> np.round(model.dc_gain(), 6)
+    array([[2.]])
+    """
     G = np.asarray(G)
     L, p, m = G.shape
     if not isinstance(order, (int, np.integer)) or order < 1:

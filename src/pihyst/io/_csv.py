@@ -9,8 +9,11 @@ import io as _io
 import json
 import os
 import stat
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst._atomic import AtomicFile
 from pihyst.exceptions import CSVError
@@ -26,13 +29,45 @@ from pihyst.io._text_source import TextSource
 WRITE_ROWS = 1 << 16
 
 
-def read_columns(path, names, optional=()):
+def read_columns(path: str | os.PathLike[str], names: Sequence[str],
+                 optional: Sequence[str] = ()) -> tuple[dict[str, NDArray[np.float64]],
+                                                        NDArray[np.int_]]:
     """Read named columns of a delimited text file as float arrays.
 
-    Returns ``(columns, lines)``: a dict name -> array holding every column of ``names``
-    (an error if absent) and those of ``optional`` that the header has, and the 1-based
-    file line of each data row. Every value must be a finite number; the file must
-    have at least one data row.
+    Every value must be a finite number; the file must have at least one data row.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The delimited text file, with a header line naming its columns.
+    names : sequence of str
+        The columns that must be there.
+    optional : sequence of str
+        Columns read when the header has them.
+
+    Returns
+    -------
+    columns : dict of str to ndarray
+        Every column of ``names`` and those of ``optional`` found, by name.
+    lines : ndarray of int
+        The 1-based file line of each data row.
+
+    Raises
+    ------
+    CSVError
+        A missing or repeated column, or a value that is not a finite number, with the
+        file, line and column.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pihyst.io import read_columns
+    >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("voltage_V,displacement_um\\n0,0.5\\n10,1.5\\n")
+    >>> columns, lines = read_columns(path, ["voltage_V"], optional=["displacement_um"])
+    >>> columns["displacement_um"].tolist(), lines.tolist()
+    ([0.5, 1.5], [2, 3])
     """
     src = TextSource(path)
     if not src.columns:
@@ -83,9 +118,39 @@ class ColumnWriter:
     ``np.loadtxt(skiprows=1, delimiter=",")``, ``pandas.read_csv``). What used to be
     ``#`` comment lines (``comments``: what wrote it, with which options) goes to a
     sidecar, ``PATH.json`` beside it (:func:`sidecar_path`), written once the CSV is
-    complete; pihyst's reader reads it back into the record's metadata."""
+    complete; pihyst's reader reads it back into the record's metadata.
 
-    def __init__(self, path, names, comments=(), engine=None, metadata=None):
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (``.csv``, or ``.parquet``, ``.h5``, ``.hdf5``).
+    names : sequence of str
+        The columns, in order.
+    comments : sequence of str
+        Lines that say what wrote the file, kept in its metadata.
+    engine : str or None
+        The number formatter (None: the fastest available).
+    metadata : dict or None
+        More metadata kept with the file.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from pihyst.io import ColumnWriter
+    >>> path = os.path.join(tempfile.mkdtemp(), "out.csv")
+    >>> with ColumnWriter(path, ["voltage_V", "displacement_um"]) as w:
+    ...     w.write({"voltage_V": np.array([0.0, 1.5]), "displacement_um": np.array([0.0, 0.25])})
+    >>> print(Path(path).read_text(), end="")
+    voltage_V,displacement_um
+    0.0,0.0
+    1.5,0.25
+    """
+
+    def __init__(self, path: str | os.PathLike[str], names: Sequence[str],
+                 comments: Sequence[str] = (), engine: str | None = None,
+                 metadata: dict[str, Any] | None = None) -> None:
         self.path = os.fspath(path)
         self.engine = engine
         self.names = list(names)
@@ -96,8 +161,9 @@ class ColumnWriter:
         if self.format != "csv":
             # Parquet or HDF5: the metadata inside the file, no sidecar
             check_output_format(self.path)
-            self._sink = SINKS[self.format](self.path, self.names, self._described())
-            self._file = None
+            # a ParquetSink or HDF5Sink: write, commit, abort
+            self._sink: Any = SINKS[self.format](self.path, self.names, self._described())
+            self._file: Any = None     # an AtomicFile for CSV
             return
         self._sink = None
         self._file = AtomicFile(self.path)
@@ -108,8 +174,24 @@ class ColumnWriter:
             self._file.abort()        # no caller holds this writer yet to abort it
             raise
 
-    def write(self, columns):
-        """Append rows: a dict name -> array with every name of the header."""
+    def write(self, columns: Mapping[str, ArrayLike]) -> None:
+        """Append rows.
+
+        Parameters
+        ----------
+        columns : mapping of str to array_like
+            Every name of the header, each with the same number of values.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import ColumnWriter
+        >>> w = ColumnWriter(os.path.join(tempfile.mkdtemp(), "out.csv"), ["x"])
+        >>> w.write({"x": [1.0, 2.0]})
+        >>> w.rows
+        2
+        >>> w.abort()
+        """
         data = [np.ascontiguousarray(columns[n], dtype=np.float64) for n in self.names]
         n = len(data[0])
         if self._sink is not None:
@@ -124,14 +206,42 @@ class ColumnWriter:
     def _described(self):
         return described(self.path, self.names, self.rows, self.comments, self.metadata)
 
-    def close(self):
+    def close(self) -> None:
+        """Put the complete file in place (and its sidecar ``PATH.json``, if any).
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import ColumnWriter
+        >>> path = os.path.join(tempfile.mkdtemp(), "out.csv")
+        >>> w = ColumnWriter(path, ["x"])
+        >>> w.write({"x": [1.0]})
+        >>> os.path.exists(path)
+        False
+        >>> w.close()
+        >>> os.path.exists(path)
+        True
+        """
         if self._sink is not None:
             self._sink.commit(self._described())
             return
         self._file.commit()
         write_sidecar(self.path, self.names, self.rows, self.comments, self.metadata)
 
-    def abort(self):
+    def abort(self) -> None:
+        """Give the file up: nothing is left where it was to be.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import ColumnWriter
+        >>> path = os.path.join(tempfile.mkdtemp(), "out.csv")
+        >>> w = ColumnWriter(path, ["x"])
+        >>> w.write({"x": [1.0]})
+        >>> w.abort()
+        >>> os.path.exists(path)
+        False
+        """
         if self._sink is not None:
             self._sink.abort()
         else:
@@ -169,9 +279,33 @@ def format_rows(columns, engine=None):
     return ((line * len(columns[0])) % tuple(flat)).encode("ascii")
 
 
-def write_columns(path, columns, comments=(), metadata=None):
-    """Write named columns (dict name -> array) to ``path``, complete or not at all
-    (``comments`` and ``metadata`` in its sidecar ``PATH.json``)."""
+def write_columns(path: str | os.PathLike[str], columns: Mapping[str, ArrayLike],
+                  comments: Sequence[str] = (), metadata: dict[str, Any] | None = None) -> None:
+    """Write named columns to ``path``, complete or not at all (:class:`ColumnWriter`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (``.csv``, or ``.parquet``, ``.h5``, ``.hdf5``).
+    columns : mapping of str to array_like
+        The columns by name, each with the same number of values.
+    comments : sequence of str
+        Lines that say what wrote the file, in its sidecar ``PATH.json``.
+    metadata : dict or None
+        More metadata for the sidecar.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pathlib import Path
+    >>> from pihyst.io import write_columns
+    >>> path = os.path.join(tempfile.mkdtemp(), "out.csv")
+    >>> write_columns(path, {"t": [0.0, 0.5], "y": [1.0, 2.0]})
+    >>> print(Path(path).read_text(), end="")
+    t,y
+    0.0,1.0
+    0.5,2.0
+    """
     with ColumnWriter(path, list(columns), comments, metadata=metadata) as w:
         w.write(columns)
 
@@ -224,9 +358,33 @@ def read_sidecar(path):
     return data
 
 
-def column_number(path, name):
+def column_number(path: str | os.PathLike[str], name: str) -> int:
     """1-based position of column ``name`` in the header of ``path``, 0 if absent
-    (for error messages that name a column)."""
+    (for error messages that name a column).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A delimited text file with a header line.
+    name : str
+        The column's name.
+
+    Returns
+    -------
+    int
+        Its 1-based position, or 0 when the header has no such column (or the file no
+        header).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pihyst.io import column_number
+    >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("time_s,voltage_V\\n0,1\\n")
+    >>> column_number(path, "voltage_V"), column_number(path, "current_A")
+    (2, 0)
+    """
     try:
         columns = TextSource(path).columns
     except CSVError:

@@ -26,14 +26,33 @@ and column.
 
 import json
 import os
+from typing import Any
 
 from pihyst.exceptions import InvalidArgumentError, InvalidModelError, RecordError
 from pihyst.io._inputs import read_small
 from pihyst.model import PIModel
 
 
-def load_model(path_or_dict):
+def load_model(path_or_dict: str | os.PathLike[str] | dict[str, Any]) -> PIModel:
     """A model from a JSON file path or from a dict of the schema in this module.
+
+    Parameters
+    ----------
+    path_or_dict : str, os.PathLike or dict
+        A JSON model file, or the dict it would hold.
+
+    Returns
+    -------
+    PIModel
+        The model (ClassicalPI, MultislopePI, PiecewiseLinearPI or BoucWenModel).
+
+    Raises
+    ------
+    InvalidModelError
+        A file that cannot be read, is not valid JSON (with its line and column), or does
+        not describe a valid model.
+    InvalidArgumentError
+        ``path_or_dict`` is neither a path nor a dict.
 
     Examples
     --------
@@ -48,10 +67,38 @@ def load_model(path_or_dict):
     return PIModel.from_dict(read_model_dict(path_or_dict), source=path)
 
 
-def read_model_dict(path_or_dict):
+def read_model_dict(path_or_dict: str | os.PathLike[str] | dict[str, Any]) -> dict[str, Any]:
     """The dict a JSON model file holds (any family, e.g. ``hammerstein`` for
     :func:`pihyst.dynamics.load_hammerstein`), its file errors reported as one line;
-    a dict is returned as it is."""
+    a dict is returned as it is.
+
+    Parameters
+    ----------
+    path_or_dict : str, os.PathLike or dict
+        A JSON file, or a dict.
+
+    Returns
+    -------
+    dict
+        What the file holds (not checked against a model's schema).
+
+    Raises
+    ------
+    InvalidModelError
+        A file that cannot be read or is not valid JSON (with its line and column).
+    InvalidArgumentError
+        ``path_or_dict`` is neither a path nor a dict.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pathlib import Path
+    >>> from pihyst.io import read_model_dict
+    >>> path = Path(tempfile.mkdtemp()) / "model.json"
+    >>> _ = path.write_text('{"family": "hammerstein", "order": 2}')
+    >>> read_model_dict(path)
+    {'family': 'hammerstein', 'order': 2}
+    """
     if isinstance(path_or_dict, dict):
         return path_or_dict
     try:
@@ -126,6 +173,23 @@ def _where(text, token, last):
     return f"{line}:{i - (text.rfind(chr(10), 0, i) + 1) + 1}"
 
 
-def save_model(model, path):
-    """Write ``model`` as JSON; the file appears only once it is complete."""
+def save_model(model: Any, path: str | os.PathLike[str]) -> None:
+    """Write ``model`` as JSON; the file appears only once it is complete.
+
+    Parameters
+    ----------
+    model : PIModel or BoucWenModel
+        Any model with a ``save`` method (pihyst's models).
+    path : str or os.PathLike
+        The JSON file to write.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import pihyst
+    >>> path = os.path.join(tempfile.mkdtemp(), "model.json")
+    >>> pihyst.save_model(pihyst.ClassicalPI([0, 10], [0.5, 0.25]), path)
+    >>> pihyst.load_model(path).thresholds.tolist()
+    [0.0, 10.0]
+    """
     model.save(path)

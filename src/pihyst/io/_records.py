@@ -12,7 +12,9 @@ import os
 import re
 import sys
 import warnings
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -45,28 +47,80 @@ BLOCK_ROWS = 1 << 20
 
 @dataclass(frozen=True, eq=False)
 class Record:
-    """Samples of a record: ``voltage`` (V, the actuator's), ``displacement`` (µm) and
-    ``time`` (s), each a float array or None; ``start`` is the index of the first sample
-    in the whole record (0 unless this is a block of a longer one); ``metadata`` says
-    what was found and applied (format, columns, units, lag, skipped samples)."""
+    """Samples of a record, as :func:`read_record` and :meth:`RecordReader.chunks` return
+    them.
 
-    voltage: np.ndarray = None
-    displacement: np.ndarray = None
-    time: np.ndarray = None
+    Parameters
+    ----------
+    voltage : ndarray or None
+        The actuator's voltage (V).
+    displacement : ndarray or None
+        The displacement (µm).
+    time : ndarray or None
+        The sample times (s).
+    source : str
+        The file the samples come from.
+    metadata : dict
+        What was found and applied (format, columns, units, lag, skipped samples).
+    start : int
+        The index of the first sample in the whole record (0 unless this is a block of
+        a longer one).
+    reader : RecordReader or None
+        The reader it comes from, which locates a sample in the file for
+        :meth:`error`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.io import Record
+    >>> rec = Record(voltage=np.array([0.0, 5.0]), displacement=np.array([0.1, 1.2]))
+    >>> len(rec), rec.time is None
+    (2, True)
+    """
+
+    voltage: np.ndarray | None = None
+    displacement: np.ndarray | None = None
+    time: np.ndarray | None = None
     source: str = ""
-    metadata: dict = field(default_factory=dict)
+    metadata: dict[str, Any] = field(default_factory=dict)
     start: int = 0
-    reader: object = field(default=None, repr=False)
+    reader: Any = field(default=None, repr=False)
 
-    def __len__(self):
+    def __len__(self) -> int:
         for a in (self.voltage, self.displacement, self.time):
             if a is not None:
                 return len(a)
         return 0
 
-    def error(self, index, quantity, message):
+    def error(self, index: int, quantity: str, message: str) -> RecordError:
         """A :class:`RecordError` naming the file, line and column (or variable and
-        sample) of sample ``index`` of this record: for messages about the values."""
+        sample) of sample ``index`` of this record: for messages about the values.
+
+        Parameters
+        ----------
+        index : int
+            The sample, 0-based within this record (or block).
+        quantity : str
+            ``"voltage"``, ``"displacement"`` or ``"time"``.
+        message : str
+            What is wrong with it.
+
+        Returns
+        -------
+        RecordError
+            The error, to raise.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> rec = open_record(path).read()
+        >>> print(str(rec.error(2, "voltage", "above the limit")).replace(path, "PATH"))
+        PATH:4:2: above the limit
+        """
         if self.reader is None:
             return RecordError(self.source or "record", f"{quantity} sample "
                                f"{self.start + index}: {message}")
@@ -75,12 +129,75 @@ class Record:
 
 class RecordReader:
     """An opened record with its reading options. Use :meth:`read` for all samples, or
-    :meth:`chunks` for blocks; :meth:`error` locates a sample for a message."""
+    :meth:`chunks` for blocks; :meth:`error` locates a sample for a message.
 
-    def __init__(self, path, *, voltage=None, displacement=None, time=None, rate=None,
-                 displacement_unit=None, voltage_gain=None, lag=0, skip_until=None,
-                 separator=None, decimal_comma=None, reader=None, sheet=None,
-                 units_row=None, need=("voltage", "displacement"), optional=("time",)):
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Delimited text (any separator, header or not), ``.npy``, ``.npz``, ``.mat``,
+        ``.h5``/``.hdf5``, ``.parquet``, ``.lvm``, ``.tdms``, ``.xlsx``; or anything, with
+        ``reader``.
+    voltage, displacement, time : str, int or None
+        The column (name or 1-based number; in array files a variable, ``NAME:K`` or
+        ``K``); None: found by name. ``time="none"`` ignores a time column.
+    rate : float or None
+        Sample rate (Hz), for a record without a time column.
+    displacement_unit : str or None
+        m, mm, um or nm (default: from the column name, else um).
+    voltage_gain : float or None
+        The voltage column times this is the actuator's voltage (default 1).
+    lag : int
+        The sensor answers this many samples late: displacement[k + lag] goes with
+        voltage[k].
+    skip_until : float or None
+        Drop the samples before this time (s).
+    separator : str or None
+        Text: the field separator, when not found right.
+    decimal_comma : bool or None
+        Text: numbers written with a decimal comma (None: detected).
+    reader : callable, str or None
+        A function, ``module:function`` or ``file.py:function`` called with ``path``,
+        returning a dict of arrays ``voltage``, ``displacement``, ``time`` and
+        ``metadata``.
+    sheet : str or None
+        Spreadsheets: the sheet to read (default: the first).
+    units_row : bool or None
+        Text: True, the line under the header holds the units; False, there is none;
+        None: detected.
+    need : str or sequence of str
+        The quantities that must be there.
+    optional : str or sequence of str
+        The quantities read when there.
+
+    Raises
+    ------
+    RecordError
+        A file that cannot be read or lacks a needed column (:class:`CSVError` for text,
+        with file, line and column).
+    InvalidArgumentError
+        Options that are not valid.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pihyst.io import open_record
+    >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+    >>> with open_record(path, need="voltage") as reader:
+    ...     reader.read().voltage.tolist()
+    [0.0, 5.0, 10.0]
+    """
+
+    def __init__(self, path: str | os.PathLike[str], *, voltage: str | int | None = None,
+                 displacement: str | int | None = None, time: str | int | None = None,
+                 rate: float | None = None, displacement_unit: str | None = None,
+                 voltage_gain: float | None = None, lag: int = 0,
+                 skip_until: float | None = None, separator: str | None = None,
+                 decimal_comma: bool | None = None, reader: Any = None,
+                 sheet: str | None = None, units_row: bool | None = None,
+                 need: str | Sequence[str] = ("voltage", "displacement"),
+                 optional: str | Sequence[str] = ("time",)) -> None:
         self.path = os.fspath(path)
         # one quantity may be named alone (need="time"), not spelt out letter by letter
         self.need = (need,) if isinstance(need, str) else tuple(need)
@@ -97,8 +214,8 @@ class RecordReader:
             "rate_why", "the reader's metadata 'rate'")
         self.rate = (_positive(rate, "--rate") if rate is not None else
                      _positive(found.get("rate"), "the reader's metadata 'rate'"))
-        self.why = {}                 # quantity -> why its column was taken
-        self.warnings = []            # what the user should know: said, never silent
+        self.why: dict[str, str] = {}       # quantity -> why its column was taken
+        self.warnings: list[str] = []       # what the user should know: said, never silent
         self.notes = list(getattr(self.source, "notes", ()))
         specs = {"voltage": voltage, "displacement": displacement, "time": time}
         # --time none: the user said the time column is not to be used
@@ -147,12 +264,34 @@ class RecordReader:
                                        f"has time in {self.labels['time']} (use --time none to "
                                        f"ignore it)")
         self.skipped = 0
-        self.n_samples = None
+        self.n_samples: int | None = None
         for message in self.warnings:
             warnings.warn(message, PihystWarning, stacklevel=3)
 
     # ---------------------------------------------------------------- columns
-    def labels_of(self, quantity):
+    def labels_of(self, quantity: str) -> str:
+        """Where ``quantity`` is read from, as the messages name it.
+
+        Parameters
+        ----------
+        quantity : str
+            ``"voltage"``, ``"displacement"`` or ``"time"``, one the record is read with.
+
+        Returns
+        -------
+        str
+            Its column (name and number) or variable.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> open_record(path).labels_of("displacement")
+        "column 3 'displacement_um'"
+        """
         return self._label(self.refs[quantity])
 
     def _names(self):
@@ -360,10 +499,39 @@ class RecordReader:
         for values in blocks:
             yield {q: values[:, j] for j, q in enumerate(order)}
 
-    def chunks(self, block_rows=None, progress=None):
+    def chunks(self, block_rows: int | None = None,
+               progress: Callable[[int, int], object] | None = None) -> Iterator[Record]:
         """The record as consecutive :class:`Record` blocks (about ``block_rows`` samples
         each for array files; text files are read in blocks of bytes).
-        ``progress(done, total)`` is called after each block."""
+
+        Parameters
+        ----------
+        block_rows : int or None
+            Samples per block of an array file (default 2**20).
+        progress : callable or None
+            ``progress(done, total)``, called after each block.
+
+        Yields
+        ------
+        Record
+            The next block, its ``start`` the index of its first sample.
+
+        Raises
+        ------
+        RecordError
+            No samples left after the lag and the skipped start, or bad data (with its
+            file, line and column).
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> [(block.start, len(block)) for block in open_record(path).chunks()]
+        [(0, 3)]
+        """
         transform = _Transform(self)
         start = 0
         for raw in self._raw_blocks(block_rows or BLOCK_ROWS, progress):
@@ -383,16 +551,43 @@ class RecordReader:
                                  if self.skip_until is not None else "")
                               + (f" after --lag {self.lag}" if self.lag else ""))
 
-    def read(self, progress=None):
+    def read(self, progress: Callable[[int, int], object] | None = None) -> Record:
         """All samples as one :class:`Record`, gathered into arrays sized from the part
-        of the file read so far (so that the record is held about once, not twice)."""
+        of the file read so far (so that the record is held about once, not twice).
+
+        Parameters
+        ----------
+        progress : callable or None
+            ``progress(done, total)``, called after each block read.
+
+        Returns
+        -------
+        Record
+            Every sample.
+
+        Raises
+        ------
+        RecordError
+            No samples left after the lag and the skipped start, or bad data (with its
+            file, line and column).
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> open_record(path, lag=1).read().displacement.tolist()
+        [1.2, 2.6]
+        """
         seen = [0, 0]
 
         def track(done, total):
             seen[:] = done, total
             if progress is not None:
                 progress(done, total)
-        gathered = {}
+        gathered: dict[str, np.ndarray] = {}
         n = 0
         for rec in self.chunks(progress=track):
             k = len(rec)
@@ -410,7 +605,7 @@ class RecordReader:
                     buf = gathered[q] = grown
                 buf[n:n + k] = a
             n += k
-        joined = {q: None for q in QUANTITIES}
+        joined: dict[str, np.ndarray | None] = {q: None for q in QUANTITIES}
         for q, buf in gathered.items():
             buf.resize(n, refcheck=False)   # in place: nothing else refers to it
             joined[q] = buf
@@ -418,7 +613,25 @@ class RecordReader:
                       reader=self)
 
     # ---------------------------------------------------------------- describing
-    def metadata(self):
+    def metadata(self) -> dict[str, Any]:
+        """What was found and applied: format, columns and why, units, rate, lag,
+        skipped samples, warnings.
+
+        Returns
+        -------
+        dict
+            JSON-ready values, as written in the outputs' metadata.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> open_record(path).metadata()["columns"]["voltage"]
+        "column 2 'voltage_V'"
+        """
         meta = {"file": self.path, **{k: v for k, v in self.source.metadata().items()
                                       if not k.startswith("_")}}
         if isinstance(self.source, TextSource) and self._sidecar() is not None:
@@ -456,8 +669,25 @@ class RecordReader:
             self._sidecar_name = sidecar_path(self.path)
         return self._sidecar_data
 
-    def describe(self):
-        """One line for the user: what was read from where."""
+    def describe(self) -> str:
+        """One line for the user: what was read from where.
+
+        Returns
+        -------
+        str
+            The file, its layout, the columns read and what was applied to them.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> line = open_record(path, displacement_unit="nm").describe()
+        >>> print(line.replace(path, "PATH"))
+        read PATH: ...
+        """
         parts = [f"{q} {self.labels[q]}" + (f" ({self.why[q]})" if q in self.why else "")
                  for q in QUANTITIES if q in self.labels]
         notes = []
@@ -490,15 +720,53 @@ class RecordReader:
         return (f"read {self.path}: {n}{layout}; " + ", ".join(parts)
                 + ("; " + ", ".join(notes) if notes else ""))
 
-    def error(self, index, quantity, message):
+    def error(self, index: int, quantity: str, message: str) -> RecordError:
         """A :class:`RecordError` at sample ``index`` (0-based, after lag and skip) of
-        ``quantity``: file:line:column for text, variable and sample for arrays."""
+        ``quantity``: file:line:column for text, variable and sample for arrays.
+
+        Parameters
+        ----------
+        index : int
+            The sample, 0-based in the record as read.
+        quantity : str
+            ``"voltage"``, ``"displacement"`` or ``"time"``.
+        message : str
+            What is wrong with it.
+
+        Returns
+        -------
+        RecordError
+            The error, to raise.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> err = open_record(path, lag=1).error(0, "displacement", "too large")
+        >>> print(str(err).replace(path, "PATH"))
+        PATH:3:3: too large
+        """
         row = self.skipped + index + (self.lag if quantity == "displacement" else 0)
         if quantity not in self.refs:
             return RecordError(self.path, f"sample {index}: {message}")
         return self.source.error(row, self.refs[quantity], message)
 
-    def close(self):
+    def close(self) -> None:
+        """Close the file (array files; text is read block by block without holding it).
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.io import open_record
+        >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+        >>> with open(path, "w") as f:
+        ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+        >>> reader = open_record(path)
+        >>> reader.close()
+        """
         if isinstance(self.source, ArraySource):
             self.source.close()
 
@@ -731,12 +999,43 @@ def _finite(value, option):
     return value
 
 
-def open_record(path, **options):
-    """A :class:`RecordReader` for ``path`` (see :func:`read_record` for the options)."""
+def open_record(path: str | os.PathLike[str], **options: Any) -> RecordReader:
+    """A :class:`RecordReader` for ``path`` (see :func:`read_record` for the options).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The record.
+    **options
+        The reading options of :class:`RecordReader`.
+
+    Returns
+    -------
+    RecordReader
+        The opened record, to read whole or block by block.
+
+    Raises
+    ------
+    RecordError
+        A file that cannot be read or lacks a needed column.
+    InvalidArgumentError
+        Options that are not valid.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pihyst.io import open_record
+    >>> path = os.path.join(tempfile.mkdtemp(), "loop.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("time_s,voltage_V,displacement_um\\n0,0,0\\n0.1,5,1.2\\n0.2,10,2.6\\n")
+    >>> with open_record(path) as reader:
+    ...     sorted(reader.metadata()["columns"])
+    ['displacement', 'time', 'voltage']
+    """
     return RecordReader(path, **options)
 
 
-def read_record(path, **options):
+def read_record(path: str | os.PathLike[str], **options: Any) -> Record:
     """Read a record as it comes.
 
     ``path``: delimited text (any separator, header or not), ``.npy``, ``.npz``, ``.mat``
@@ -755,8 +1054,24 @@ def read_record(path, **options):
     returning a dict of arrays ``voltage``, ``displacement``, ``time`` and ``metadata``);
     ``need`` (the quantities that must be there).
 
-    Returns a :class:`Record`. Bad data raise :class:`RecordError` (:class:`CSVError` for
-    text, with file, line and column); bad options :class:`InvalidArgumentError`.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The record.
+    **options
+        The reading options above (those of :class:`RecordReader`).
+
+    Returns
+    -------
+    Record
+        Every sample, with the metadata of what was found and applied.
+
+    Raises
+    ------
+    RecordError
+        Bad data (:class:`CSVError` for text, with file, line and column).
+    InvalidArgumentError
+        Bad options.
 
     Examples
     --------

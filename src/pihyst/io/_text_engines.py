@@ -12,6 +12,7 @@ refuse what is valid; it never accepts what the careful reader refuses.
 import importlib
 import io
 import re
+from typing import Any
 
 import numpy as np
 
@@ -27,8 +28,8 @@ def engine_name():
     return "pyarrow" if _arrow() is not None else "numpy"
 
 
-_ARROW = []
-_FAST = []
+_ARROW: list[Any] = []
+_FAST: list[Any] = []
 
 
 def _fast():

@@ -2,8 +2,10 @@
 measured displacement, overall and cycle by cycle (docs/records.md)."""
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pihyst.exceptions import InvalidArgumentError
 
@@ -40,10 +42,35 @@ class Errors:
 
 @dataclass(frozen=True)
 class Validation:
-    """The result of :func:`validate_model`: ``errors`` over the judged samples,
-    ``shifted`` (the same with the output offset re-fitted to this record's sensor zero,
-    and ``shift`` that offset), ``cycles`` (``(start, stop, Errors)`` per input cycle),
-    ``predicted`` (every sample) and ``first`` (the first judged sample)."""
+    """The result of :func:`validate_model`.
+
+    Errors are measured - predicted, in µm and in % of the measured range of the judged
+    samples.
+
+    Parameters
+    ----------
+    errors : Errors
+        Over the judged samples: ``samples``, ``mean_abs``, ``rms``, ``max_abs`` (µm),
+        ``at`` (the sample of the largest) and ``span``.
+    shifted : Errors
+        The same with the output offset re-fitted to this record's sensor zero.
+    shift : float
+        That offset (µm).
+    cycles : list of (int, int, Errors)
+        ``(start, stop, errors)`` per cycle of the input.
+    predicted : ndarray
+        The model's prediction of every sample.
+    first : int
+        The first judged sample.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> from pihyst.io import validate_model
+    >>> v = validate_model(pihyst.ClassicalPI([0], [0.5]), [0, 10, 0], [0.0, 5.5, 0.0])
+    >>> v.errors.max_abs, v.errors.at, round(v.shift, 6)
+    (0.5, 1, 0.166667)
+    """
 
     errors: Errors
     shifted: Errors
@@ -52,7 +79,24 @@ class Validation:
     predicted: np.ndarray = field(repr=False)
     first: int = 0
 
-    def to_dict(self):
+    def to_dict(self) -> dict[str, Any]:
+        """The result as plain JSON values (µm and %), as the command line writes it.
+
+        Returns
+        -------
+        dict
+            ``errors``, ``offset_refitted`` (with ``shift_um``), ``first_judged_sample``
+            and ``cycles`` (``start``, ``stop`` and the errors of each).
+
+        Examples
+        --------
+        >>> import pihyst
+        >>> from pihyst.io import validate_model
+        >>> v = validate_model(pihyst.ClassicalPI([0], [0.5]), [0, 10, 0], [0.0, 5.5, 0.0])
+        >>> d = v.to_dict()
+        >>> d["errors"]["max_abs_um"], d["errors"]["max_abs_pct"], len(d["cycles"])
+        (0.5, 9.090909090909092, 1)
+        """
         return {"errors": self.errors.to_dict(), "offset_refitted": {
             "shift_um": self.shift, **self.shifted.to_dict()},
             "first_judged_sample": self.first,
@@ -84,10 +128,45 @@ def cycle_starts(u, band=SCHMITT_BAND):
     return np.array(starts)
 
 
-def validate_model(model, voltage, displacement, *, initial_state=None, first=0, t=None):
-    """Predict ``voltage`` with ``model`` (from ``initial_state``, default the model's;
-    a model with creep at the sample times ``t``, default every ``creep.dt``) and compare
-    with ``displacement`` from sample ``first`` on."""
+def validate_model(model: Any, voltage: ArrayLike, displacement: ArrayLike, *,
+                   initial_state: ArrayLike | None = None, first: int = 0,
+                   t: ArrayLike | None = None) -> Validation:
+    """Predict ``voltage`` with ``model`` and compare with ``displacement`` from sample
+    ``first`` on, overall and cycle by cycle.
+
+    Parameters
+    ----------
+    model : PIModel or BoucWenModel
+        The model judged (anything with ``predict(u, initial_state=...)``).
+    voltage : array_like
+        The record's voltage (V).
+    displacement : array_like
+        The measured displacement (µm), as many samples.
+    initial_state : array_like, optional
+        The model's state before the first sample (default: the model's own).
+    first : int
+        The first sample judged (the ones before only set the model's state).
+    t : array_like, optional
+        Sample times (s), for a model with creep (default: every ``creep.dt``).
+
+    Returns
+    -------
+    Validation
+        The errors overall, with the offset re-fitted, and per cycle.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``first`` is not the index of a sample.
+
+    Examples
+    --------
+    >>> import pihyst
+    >>> from pihyst.io import validate_model
+    >>> v = validate_model(pihyst.ClassicalPI([0], [0.5]), [0, 10, 0], [0.0, 5.5, 0.0])
+    >>> v.predicted.tolist(), v.errors.max_abs
+    ([0.0, 5.0, 0.0], 0.5)
+    """
     u = np.asarray(voltage, dtype=float)
     y = np.asarray(displacement, dtype=float)
     if not 0 <= first < u.size:

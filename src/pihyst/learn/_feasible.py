@@ -18,13 +18,31 @@ v = m + a (v - m) with a = s / max_n |v[n] - v[n-1]|, which keeps it within the 
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: margin kept below the step limit against rounding in the caller's own check
 STEP_MARGIN = 1e-9
 
 
-def cyclic_steps(u):
-    """|u[n] - u[n - 1]| for every n, u[-1] being the last sample (the cycle's wrap)."""
+def cyclic_steps(u: ArrayLike) -> NDArray[np.float64]:
+    """|u[n] - u[n - 1]| for every n, u[-1] being the last sample (the cycle's wrap).
+
+    Parameters
+    ----------
+    u : array_like
+        One period of a periodic drive.
+
+    Returns
+    -------
+    ndarray
+        The absolute step into every sample, the first one from the last sample.
+
+    Examples
+    --------
+    >>> from pihyst.learn import cyclic_steps
+    >>> cyclic_steps([0.0, 1.0, 3.0])
+    array([3., 1., 2.])
+    """
     u = np.asarray(u, dtype=float)
     return np.abs(u - np.roll(u, 1))
 
@@ -38,20 +56,48 @@ def _rate_limited(u, step, start):
     return out
 
 
-def feasible_periodic(u, lo, hi, max_step=None):
+def feasible_periodic(u: ArrayLike, lo: float, hi: float,
+                      max_step: float | None = None) -> NDArray[np.float64]:
     """The periodic drive ``u`` within [lo, hi] and, if ``max_step`` (V per sample) is
-    given, within it on every step of the cycle (module notes)."""
-    u = np.clip(np.nan_to_num(np.asarray(u, dtype=float), nan=lo), lo, hi)
-    if max_step is None or u.size < 2:
-        return u
+    given, within it on every step of the cycle (module notes).
+
+    Parameters
+    ----------
+    u : array_like
+        One period of voltages; a NaN counts as ``lo``.
+    lo, hi : float
+        Voltage limits.
+    max_step : float or None
+        Largest step between consecutive samples (V per sample), round the cycle (the
+        last sample to the first included). None: no step limit.
+
+    Returns
+    -------
+    ndarray
+        The feasible period, as many samples as ``u``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.learn import cyclic_steps, feasible_periodic
+    >>> v = feasible_periodic([0.0, 200.0, -5.0, np.nan], 0.0, 150.0)
+    >>> v
+    array([  0., 150.,   0.,   0.])
+    >>> w = feasible_periodic(v, 0.0, 150.0, max_step=50.0)
+    >>> bool(np.all(cyclic_steps(w) <= 50.0))
+    True
+    """
+    clipped = np.clip(np.nan_to_num(np.asarray(u, dtype=float), nan=lo), lo, hi)
+    if max_step is None or clipped.size < 2:
+        return clipped
     step = max_step * (1 - STEP_MARGIN)
-    if np.all(cyclic_steps(u) <= step):
-        return u
+    if np.all(cyclic_steps(clipped) <= step):
+        return clipped
     # settled within the cycles the largest possible excursion needs, plus two
-    cycles = min(2 + math.ceil((hi - lo) / max(step * u.size, 1e-300)), 50)
-    v = _rate_limited(u, step, float(u[-1]))
+    cycles = min(2 + math.ceil((hi - lo) / max(step * clipped.size, 1e-300)), 50)
+    v = _rate_limited(clipped, step, float(clipped[-1]))
     for _ in range(cycles):
-        v_next = _rate_limited(u, step, float(v[-1]))
+        v_next = _rate_limited(clipped, step, float(v[-1]))
         if np.array_equal(v_next, v):
             break
         v = v_next

@@ -37,9 +37,12 @@ MIN_LEARNING_GAIN (no trial improves any more: the error is at what the noise an
 robustness filter allow), or when the error is at ``tolerance``.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.learn._feasible import feasible_periodic
@@ -58,7 +61,7 @@ SIGMA_FLOOR = 1e-6        # of the desired trajectory's standard deviation
 class LearningResult:
     """What :func:`learn_periodic` learned.
 
-    Attributes
+    Parameters
     ----------
     voltage : ndarray
         The best period of voltages found (the lowest RMS error of all trials).
@@ -79,6 +82,7 @@ class LearningResult:
         Per trial: ``"start"`` (trial 0), ``"learn"`` (the learning law) or ``"probe"``
         (the best drive plus the probe, nothing learned).
     best_trial : int
+        The trial whose voltages are ``voltage``.
     reason : str
         Why the learning stopped.
     converged : bool
@@ -90,6 +94,17 @@ class LearningResult:
         The estimated response per rfft line of the period (NaN where not known).
     trusted : ndarray of bool
         The lines whose response estimate was trusted at the end.
+    voltages, displacements : list of ndarray or None
+        With ``keep_trials``: every trial's voltages and measured period; else None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.learn import learn_periodic
+    >>> desired = 10.0 + 5.0 * np.sin(2 * np.pi * np.arange(64) / 64)
+    >>> result = learn_periodic(lambda u: 0.2 * u, desired, 1e-3, trials=3)
+    >>> result.trials, result.kinds[0], result.voltage.shape
+    (4, 'start', (64,))
     """
 
     voltage: np.ndarray
@@ -105,11 +120,12 @@ class LearningResult:
     noise_um: float
     response: np.ndarray = field(repr=False)
     trusted: np.ndarray = field(repr=False)
-    voltages: list = field(repr=False, default=None)
-    displacements: list = field(repr=False, default=None)
+    voltages: list[np.ndarray] | None = field(repr=False, default=None)
+    displacements: list[np.ndarray] | None = field(repr=False, default=None)
 
     @property
-    def trials(self):
+    def trials(self) -> int:
+        """The number of trials played, trial 0 included."""
         return int(self.rms.size)
 
 
@@ -219,9 +235,11 @@ def _model_lines(G_model):
     return np.ones(mag.size, dtype=bool)
 
 
-def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_max=150.0,
-                   slew_rate=None, trials=10, *, bandwidth_hz=None, tolerance=None, seed=0,
-                   keep_trials=False):
+def learn_periodic(run_period: Callable[[NDArray[np.float64]], ArrayLike], desired: ArrayLike,
+                   sample_period: float, model: Any = None, u_min: float = 0.0,
+                   u_max: float = 150.0, slew_rate: float | None = None, trials: int = 10, *,
+                   bandwidth_hz: float | None = None, tolerance: float | None = None,
+                   seed: int = 0, keep_trials: bool = False) -> LearningResult:
     """Learn one period of feedforward voltages that make the actuator follow ``desired``
     (module notes; docs/theory/learning.md).
 
@@ -258,20 +276,38 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
     Returns
     -------
     LearningResult
+        The best period of voltages, and every trial's error, gain and kind.
+
+    Raises
+    ------
+    InvalidArgumentError
+        When the arguments are not valid (empty or non-finite ``desired``, limits,
+        slew rate, trials), or ``run_period`` returns a period of another length.
+
+    Examples
+    --------
+    A plant of 0.2 um/V with no hysteresis, learned from no model:
+
+    >>> import numpy as np
+    >>> from pihyst.learn import learn_periodic
+    >>> desired = 10.0 + 5.0 * np.sin(2 * np.pi * np.arange(64) / 64)
+    >>> result = learn_periodic(lambda u: 0.2 * u, desired, 1e-3, trials=5)
+    >>> bool(result.rms[result.best_trial] < 1e-6 * result.rms[0])
+    True
     """
-    desired = _checked(desired, sample_period, u_min, u_max, slew_rate, trials)
+    target = _checked(desired, sample_period, u_min, u_max, slew_rate, trials)
     parts = model_parts(model, float(sample_period))
-    n = desired.size
+    n = target.size
     lo, hi = float(u_min), float(u_max)
     max_step = None if slew_rate is None else float(slew_rate) * float(sample_period)
     freqs = np.fft.rfftfreq(n, sample_period)
     in_band = np.ones(freqs.size, dtype=bool) if bandwidth_hz is None else freqs <= bandwidth_hz
     G_model = parts.response(n)
     model_lines = _model_lines(G_model)
-    R = np.fft.rfft(desired)
-    sigma_floor = SIGMA_FLOOR * max(float(np.std(desired)), 1e-12)
+    R = np.fft.rfft(target)
+    sigma_floor = SIGMA_FLOOR * max(float(np.std(target)), 1e-12)
     rng = np.random.default_rng(seed)
-    estimate = ResponseEstimate(desired)
+    estimate = ResponseEstimate(target)
 
     def play(u):
         u = feasible_periodic(u, lo, hi, max_step)
@@ -281,10 +317,10 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
                                        f"of {u.shape}")
         return u, y
 
-    u, y = play(_start(parts, desired, G_model, model_lines, lo, hi, max_step))
+    u, y = play(_start(parts, target, G_model, model_lines, lo, hi, max_step))
     sigma = noise_sigma(y, sigma_floor)
     estimate.add(parts.hysteresis_output(u), y, sigma)
-    trial = [_Trial(_rms(y - desired), u, y, np.zeros(R.size, dtype=complex), "start")]
+    trial = [_Trial(_rms(y - target), u, y, np.zeros(R.size, dtype=complex), "start")]
     best = 0
     accepted, gains, learned = [True], [np.nan], [0]
     gamma, reason, converged = 1.0, None, False
@@ -324,7 +360,7 @@ def learn_periodic(run_period, desired, sample_period, model=None, u_min=0.0, u_
         u, y = play(periodic_inverse(parts, np.fft.irfft(H_next, n), lo, hi, max_step))
         sigma = min(noise_sigma(y, sigma_floor), estimate.sigma)
         estimate.add(parts.hysteresis_output(u), y, sigma, parent=best)
-        trial.append(_Trial(_rms(y - desired), u, y, probe, kind))
+        trial.append(_Trial(_rms(y - target), u, y, probe, kind))
         gains.append(gamma if kind == "learn" else np.nan)
         learned.append(int(np.count_nonzero(Q)) if kind == "learn" else 0)
         accepted.append(trial[-1].rms <= b.rms)

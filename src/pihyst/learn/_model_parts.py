@@ -44,7 +44,7 @@ class ModelParts:
     output); ``dynamics``: (a, b) q^-1 polynomials of a SISO Hammerstein model, or None."""
 
     static: object = None
-    dynamics: tuple = None
+    dynamics: tuple | None = None
     sample_period: float = 1.0
 
     @property
