@@ -118,7 +118,7 @@ def test_strict_refuses_out_of_reach_whatever_the_slew_rate(tmp_path, capsys, fa
                "--strict") == 2
     err = capsys.readouterr().err
     assert err.startswith(f"pihyst: error: {src}:3:2: displacement_um = {float(far):g} is out "
-                          f"of reach: the model reaches [0, 41.38] um")
+                          f"of reach: the model reaches [0, 41.38] µm")
     assert err.count("\n") == 1 and not out.exists()
     assert run("compensate", MULTISLOPE, str(src), "-o", str(out), "--saturate",
                "--slew-rate", "2") == 0

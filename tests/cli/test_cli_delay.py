@@ -180,8 +180,8 @@ def test_compensate_says_a_delayed_models_reach_as_the_undelayed_ones(tmp_path, 
         lines[d] = [line for line in capsys.readouterr().out.splitlines()
                     if "reach" in line]
     assert lines[D] == lines[0]
-    assert lines[D][0].startswith("reachable displacement: [8.5, 81.5] um")
-    assert any("the trajectory spans 120 um, more than the 73 um the model reaches" in line
+    assert lines[D][0].startswith("reachable displacement: [8.5, 81.5] µm")
+    assert any("the trajectory spans 120 µm, more than the 73 µm the model reaches" in line
                for line in lines[D])
 
 

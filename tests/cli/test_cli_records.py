@@ -89,7 +89,7 @@ def test_validate_a_model_on_its_own_prediction_and_a_shifted_record(tmp_path, c
         in out
     assert "displacement in nm (column name 'd_nm') -> um" in out
     assert "as the model is                    2         2         2     5.16 %" in out
-    assert "mostly an offset of +2 um" in out
+    assert "mostly an offset of +2 µm" in out
     assert figure.read_text().lstrip().startswith("<?xml")
 
 
@@ -144,14 +144,14 @@ def test_compensate_prints_reach_and_strict_refuses(tmp_path, capsys):
     out = tmp_path / "out.csv"
     assert run("compensate", MULTISLOPE, src, "-o", out, "--saturate") == 0
     text = capsys.readouterr().out
-    assert "reachable displacement: [0, 41.38] um with the voltage in [0, 150] V" in text
+    assert "reachable displacement: [0, 41.38] µm with the voltage in [0, 150] V" in text
     assert "1 samples lie outside the reachable range" in text
     assert "sensor zero of the record the model was fitted on" in text
     out.unlink()
     assert run("compensate", MULTISLOPE, src, "-o", out, "--strict") == 2
     err = capsys.readouterr().err
     assert err.startswith(f"pihyst: error: {src}:4:2: displacement_um = 60 is out of reach")
-    assert "[0, 41.38] um" in err and err.count("\n") == 1 and not out.exists()
+    assert "[0, 41.38] µm" in err and err.count("\n") == 1 and not out.exists()
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".pihyst-")]
 
 

@@ -112,8 +112,8 @@ def test_track_says_which_ticks_the_model_cannot_reach(tmp_path, capsys):
     assert "frame: absolute" in text
     # the first 0 um is reached (from the initial state), the last two are not (2 um is
     # left at 0 V after the way up), nor the 23 above 28 um
-    assert "note: 25 of 81 ticks of the desired displacement (span [0, 40] um) are out of " \
-           "the model's reach with the voltage in [0, 100] V (at most [2, 28] um): their " \
+    assert "note: 25 of 81 ticks of the desired displacement (span [0, 40] µm) are out of " \
+           "the model's reach with the voltage in [0, 100] V (at most [2, 28] µm): their " \
            "voltage saturates" in text, text
     assert "note: 25 of 81 ticks" in _log_notes(out)
     desired.write_text("time_s,displacement_um\n0,5\n2,20\n4,5\n")

@@ -24,6 +24,7 @@ from pihyst.cli.record_options import (
 )
 from pihyst.inverse import PreviewRun, compensator_for
 from pihyst.io import ColumnWriter, load_model
+from pihyst.model._units import output_unit
 
 
 def register(sub):
@@ -105,7 +106,7 @@ def reachable(model, state, lo, hi):
 def reach_hint(model, y_lo, y_hi, d_lo=None, d_hi=None):
     """Why a desired displacement may be out of reach, and (given the trajectory's span)
     whether a shift would bring it in."""
-    unit = model.units.get("output", "um")
+    unit = output_unit(model)
     hint = (f"the displacement's zero is the sensor zero of the record the model was fitted "
             f"on (model offset {model.offset:.4g} {unit})")
     if d_lo is None:
@@ -167,7 +168,7 @@ def run(args):
         y_lo, y_hi = reachable(model, state, lo, hi)
         # in the user's frame: what is printed and written
         y_lo, y_hi = y_lo - offset, y_hi - offset
-        unit = model.units.get("output", "um")
+        unit = output_unit(model)
         stats = _Stats(compensator.delay)
         writer = None
         # a delayed model: voltages with preview (pihyst.compensate), written d samples

@@ -8,6 +8,7 @@ reach rule: a trajectory with more than 10 % of its samples out of reach is an e
 import numpy as np
 
 from pihyst.cli.errors import UsageError
+from pihyst.model._units import output_unit
 
 MAX_OUT_OF_REACH = 0.10
 
@@ -35,7 +36,7 @@ def rest_point(model):
 def frame(args, model):
     """(offset, line): the desired displacement plus ``offset`` is in the model's frame;
     the line says which frame was used."""
-    unit = model.units.get("output", "um")
+    unit = output_unit(model)
     if getattr(args, "relative", False):
         y0 = rest_point(model)
         return y0, (f"frame: relative, desired displacement from the model's rest point at "

@@ -23,6 +23,7 @@ from pihyst.cli.record_options import (
     refuse_unused,
 )
 from pihyst.io import ColumnWriter, load_model
+from pihyst.model._units import output_unit
 
 
 def register(sub):
@@ -99,4 +100,4 @@ def run(args):
     if limits.note():
         print(f"note: {limits.note()}")
     print(f"wrote {writer.rows} samples to {args.output} "
-          f"(displacement {lo:.4g} .. {hi:.4g} {model.units.get('output', 'um')})")
+          f"(displacement {lo:.4g} .. {hi:.4g} {output_unit(model)})")

@@ -15,6 +15,7 @@ from pihyst.cli.errors import UsageError, count, number, positive_number
 from pihyst.cli.frames import add_frame_options, check_reach, frame
 from pihyst.cli.model_inputs import delay_for_run
 from pihyst.io import load_model
+from pihyst.model._units import output_unit
 from pihyst.rig._per_tick import column_per_tick
 from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
 
@@ -388,7 +389,7 @@ def _reach_note(model, desired, lo, hi):
     if not run.n_saturated:
         return None, 0
     y_lo, y_hi = reachable(model, model.initial_state, lo, hi)
-    unit = model.units.get("output", "um")
+    unit = output_unit(model)
     return ((f"note: {run.n_saturated} of {desired.size} ticks of the desired displacement "
             f"(span [{desired.min():.4g}, {desired.max():.4g}] {unit}) are out of the "
             f"model's reach with the voltage in [{lo:g}, {hi:g}] V (at most [{y_lo:.4g}, "

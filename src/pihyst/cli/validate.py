@@ -17,6 +17,7 @@ from pihyst.cli.model_inputs import (
 )
 from pihyst.cli.record_options import add_record_options, read_from_args
 from pihyst.io import validate_model
+from pihyst.model._units import output_unit
 
 FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
@@ -100,7 +101,7 @@ def _line(name, e):
 
 def _print(args, model, rec, result, limits, start):
     e = result.errors
-    unit = model.units.get("output", "um")
+    unit = output_unit(model)
     print(f"pihyst validate: {args.model} on {args.data}: {len(rec)} samples, voltage "
           f"{rec.voltage.min():.4g} .. {rec.voltage.max():.4g} V, measured range "
           f"{e.span:.4g} {unit}"

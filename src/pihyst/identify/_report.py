@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from pihyst.identify._assess import KINDS
+from pihyst.model._units import display_unit
 
 
 def _state_choice_text(choice: dict[str, Any] | None) -> str:
@@ -382,7 +383,7 @@ class FitReport:
     def _data_lines(self) -> list[str]:
         """The record: samples, ranges, start state, cycles, what was held back."""
         d = self._data["data"]
-        uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
+        uin, uout = d["units"].get("input", "V"), display_unit(d["units"].get("output", "um"))
         lines = [
             f"pihyst fit: {d['n_samples']} samples, input {d['input_range'][0]:.6g} .. "
             f"{d['input_range'][1]:.6g} {uin}, output {d['output_range'][0]:.6g} .. "
@@ -405,7 +406,7 @@ class FitReport:
     def _family_lines(self) -> list[str]:
         """The table of families: errors, latency, skipped and excluded ones."""
         d = self._data["data"]
-        uout = d["units"].get("output", "um")
+        uout = display_unit(d["units"].get("output", "um"))
         lines = []
         held = d["held_back_samples"] > 0
         fams = self._data["families"]
@@ -479,7 +480,7 @@ class FitReport:
     def _chosen_lines(self) -> list[str]:
         """The chosen family: the criterion, the refit, its structure and why."""
         d = self._data["data"]
-        uin, uout = d["units"].get("input", "V"), d["units"].get("output", "um")
+        uin, uout = d["units"].get("input", "V"), display_unit(d["units"].get("output", "um"))
         lines = []
         best = self.family(self.chosen)
         lines += ["", f"chosen: {best['family']} ({best['title']}), {self._data['criterion']}"]

@@ -327,8 +327,8 @@ def learn_periodic(run_period: Callable[[NDArray[np.float64]], ArrayLike], desir
     G, trusted = None, None
     for j in range(1, int(trials) + 1):
         if tolerance is not None and trial[best].rms <= tolerance:
-            reason, converged = (f"the RMS error {trial[best].rms:.4g} um is within the "
-                                 f"tolerance {tolerance:g} um"), True
+            reason, converged = (f"the RMS error {trial[best].rms:.4g} µm is within the "
+                                 f"tolerance {tolerance:g} µm"), True
             break
         if gamma < MIN_LEARNING_GAIN:
             reason = (f"no trial improved on trial {best} after the gain fell to "

@@ -194,4 +194,4 @@ class FeedbackProgram(FeedforwardProgram):
 
     def describe(self):
         return (super().describe().replace("open loop", "with feedback") +
-                f"; PID Kp {self.kp:g} V/um, Ki {self.ki:g} V/(um s), Kd {self.kd:g} V s/um")
+                f"; PID Kp {self.kp:g} V/µm, Ki {self.ki:g} V/(µm s), Kd {self.kd:g} V s/µm")
