@@ -239,6 +239,17 @@ class CreepStart:
 
 
 @dataclass(frozen=True)
+class CreepEstimate:
+    """What a joint QP of weights (Bouc-Wen: shape and linear part) and creep gains
+    found: the model without creep, the gains of the lags, and the family it was
+    estimated with."""
+
+    model: object
+    gains: np.ndarray
+    family: str
+
+
+@dataclass(frozen=True)
 class _Aligned:
     """The record with its output ``d`` samples later (u[k] -> y[k + d]), its sample
     intervals and times at the output, the creep time constants and the QP options."""
@@ -326,10 +337,9 @@ class _Trial:
         self.decide, self.steps = decide, steps
         self.warnings = {}
 
-    def structure(self, start, families=None):
-        """:class:`RecordFit` of the record with the creep ``start``'s joint QP
-        estimates removed (the settled displacement the structure is chosen on), among
-        ``families`` (default: every creep-capable family the fit was given). Every
+    def estimate(self, start):
+        """:class:`CreepEstimate` of the creep ``start``'s joint QP finds on the fitted
+        rows (``rows``; every sample from the settling sweep without a judgement). Every
         weight is free in that QP (a kp basis may overfit there; only the creep estimate
         is kept, the structure and weights are fitted again)."""
         rec = self.rec
@@ -337,6 +347,16 @@ class _Trial:
         hyst, gains, _ = _joint_qp_of(model, rec.fixed_n)(
             model, rec.u, rec.y, rec.dt, rec.tau, start=start.settled_sample,
             rows=self.rows, **rec.qp)
+        return CreepEstimate(hyst, gains, start.family)
+
+    def structure(self, start, families=None, estimate=None):
+        """:class:`RecordFit` of the record with the creep ``start``'s joint QP
+        estimates (``estimate``, default: :meth:`estimate`) removed (the settled
+        displacement the structure is chosen on), among ``families`` (default: every
+        creep-capable family the fit was given)."""
+        rec = self.rec
+        estimate = self.estimate(start) if estimate is None else estimate
+        hyst, gains = estimate.model, estimate.gains
         psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
         names = families if families is not None else (
             self.plain.families if self.plain.explicit_family else CREEP_FAMILIES)
@@ -362,9 +382,17 @@ class _Trial:
         return second
 
     def judged(self, start, families=None):
-        """(RecordFit, judgement) of the structure chosen with ``start``'s estimate."""
-        second = self.structure(start, families)
-        judged = _judge(self.first.result, second, self.rec, self.rows, self.held)
+        """(RecordFit, judgement) of the structure chosen with ``start``'s estimate.
+
+        A Bouc-Wen structure chosen again is judged with the estimate itself: that joint
+        fit of shape, linear part and creep gains on the fitted rows is the one the
+        judgement needs, and a second shape search from another start would fit the same
+        thing twice (0.35 s of the 2 s fit of P-885)."""
+        estimate = self.estimate(start)
+        second = self.structure(start, families, estimate)
+        fitted = (estimate if isinstance(estimate.model, BoucWenModel)
+                  and second.result.report.chosen == start.family else None)
+        judged = _judge(self.first.result, second, self.rec, self.rows, self.held, fitted)
         self.steps.done(f"creep estimated with {start.family}: {judged['family_with']} "
                         f"holds back {judged['held_back_rms_with']:.4g}")
         return second, judged
@@ -510,17 +538,21 @@ def _with_creep(judged):
             "held_back_rms_with": judged["held_back_rms_with"]}
 
 
-def _judge(first, second, rec, fit_rows, held_rows):
+def _judge(first, second, rec, fit_rows, held_rows, fitted=None):
     """Whether creep generalizes: the structure of ``second`` (a RecordFit, chosen on
     the record with its creep removed) with weights and creep gains fitted on the
-    fitted cycles only, against the ordinary fit ``first`` (a FitResult), both on the
-    held-back cycles (the choice's RMS, before any refit). Creep is kept when it lowers
-    that RMS by more than the choice's tolerance."""
+    fitted cycles only (``fitted``, a :class:`CreepEstimate` of that structure on those
+    rows, when there is one), against the ordinary fit ``first`` (a FitResult), both on
+    the held-back cycles (the choice's RMS, before any refit). Creep is kept when it
+    lowers that RMS by more than the choice's tolerance."""
     chosen = second.result.model
-    hyst, gains, _ = _joint_qp_of(chosen, rec.fixed_n)(
-        chosen.replace(delay=0), rec.u, rec.y, rec.dt, rec.tau,
-        start=second.settled_sample, rows=fit_rows,
-        free_weights=second.result.report.chosen != "kp", **rec.qp)
+    if fitted is None:
+        hyst, gains, _ = _joint_qp_of(chosen, rec.fixed_n)(
+            chosen.replace(delay=0), rec.u, rec.y, rec.dt, rec.tau,
+            start=second.settled_sample, rows=fit_rows,
+            free_weights=second.result.report.chosen != "kp", **rec.qp)
+    else:
+        hyst, gains = fitted.model, fitted.gains
     with_creep = hyst.replace(creep=Creep(rec.tau, gains, float(np.median(rec.dt))))
     r = with_creep.predict(rec.u, t=rec.t)[held_rows] - rec.y[held_rows]
     rms_creep = float(np.sqrt(np.mean(r * r)))

@@ -695,7 +695,7 @@ class PIModel(Immutable, ABC):
         for name, value in self._params().items():
             if name == "metadata":
                 continue
-            if isinstance(value, list):  # polylines
+            if isinstance(value, (list, _Polylines)):  # polylines
                 value = tuple((tuple(x), tuple(y)) for x, y in value)
             elif isinstance(value, np.ndarray):
                 value = tuple(value.tolist())
@@ -723,7 +723,7 @@ class PIModel(Immutable, ABC):
                 continue
             if name in defaults and _same(value, defaults[name]):
                 continue
-            if isinstance(value, list):
+            if isinstance(value, (list, _Polylines)):
                 parts.append(f"{name}=<{len(value)} polylines>")
             elif isinstance(value, np.ndarray):
                 parts.append(f"{name}={_short(value)}")
@@ -1322,7 +1322,7 @@ class PiecewiseLinearPI(PIModel):
         return {"thresholds": None, "rising": self.rising, "falling": self.falling}
 
     def _own_params(self):
-        return {"rising": list(self.rising), "falling": list(self.falling)}
+        return {"rising": self.rising, "falling": self.falling}
 
     def _own_dict(self):
         return {"rising": [{"x": x.tolist(), "y": y.tolist()} for x, y in self.rising],
@@ -1359,12 +1359,19 @@ def _points(p, name):
     return (p["x"], p["y"])
 
 
+class _Polylines(tuple):
+    """Polylines `_polylines` has checked: a tuple of read-only (x, y) arrays, passed on
+    unchecked when a model is copied (`replace`), as the fit does for every candidate."""
+
+
 def _polylines(polylines, name):
+    if isinstance(polylines, _Polylines):
+        return polylines
     try:
         items = list(polylines)
     except TypeError:
         raise InvalidModelError(f"{name} must be a list of (x, y) polylines") from None
-    return tuple(_polyline(p, f"{name}[{k}]") for k, p in enumerate(items))
+    return _Polylines(_polyline(p, f"{name}[{k}]") for k, p in enumerate(items))
 
 
 def _polyline(points, name):
