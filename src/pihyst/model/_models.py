@@ -1371,7 +1371,27 @@ def _polylines(polylines, name):
         items = list(polylines)
     except TypeError:
         raise InvalidModelError(f"{name} must be a list of (x, y) polylines") from None
-    return _Polylines(_polyline(p, f"{name}[{k}]") for k, p in enumerate(items))
+    return _uniform(items) or _Polylines(_polyline(p, f"{name}[{k}]")
+                                         for k, p in enumerate(items))
+
+
+def _uniform(items):
+    """The checks of :func:`_polyline` on all polylines at once when they are float
+    arrays of one length (as the fit's kernel bases are): a KP basis of 135 kernels in
+    0.2 ms instead of 10. None if they are not, or fail a check (then each is checked
+    alone, for the error that names it)."""
+    pairs = [p for p in items if isinstance(p, tuple) and len(p) == 2]
+    arrays = [a for p in pairs for a in p
+              if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 1]
+    if not items or len(arrays) != 2 * len(items) or len({a.size for a in arrays}) != 1 \
+            or arrays[0].size == 0:
+        return None
+    x, y = np.array(arrays[0::2]), np.array(arrays[1::2])
+    if not (np.isfinite(x).all() and np.isfinite(y).all()
+            and (np.diff(x, axis=1) > 0).all() and (np.diff(y, axis=1) >= 0).all()):
+        return None
+    x.flags.writeable = y.flags.writeable = False
+    return _Polylines(zip(x, y))
 
 
 def _polyline(points, name):
