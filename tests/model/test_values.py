@@ -121,3 +121,33 @@ def test_a_stepper_leaves_its_model_unchanged(model, u):
     assert model.to_dict() == before
     assert [b.step(v) for v in u] == ya  # independent steppers, same results
     np.testing.assert_array_equal(ya, model.predict(u))
+
+
+@settings(max_examples=40, deadline=None)
+@given(any_model(), signals())
+def test_models_pickle_and_copy_as_values(model, u):
+    """multiprocessing and Dask send models by pickle: the copy is equal, has the same
+    metadata and units, stays read-only, and predicts the same bits."""
+    import copy
+    import pickle
+
+    for c in (pickle.loads(pickle.dumps(model)), copy.deepcopy(model)):
+        assert type(c) is type(model) and c == model
+        assert c.metadata == model.metadata and dict(c.units) == dict(model.units)
+        np.testing.assert_array_equal(c.predict(u), model.predict(u))
+        with pytest.raises(TypeError):
+            c.units["output"] = "nm"
+
+
+def test_a_fitted_model_with_creep_pickles():
+    import pickle
+
+    from pihyst.model import Creep
+
+    m = PAPER_CLASSICAL.replace(creep=Creep([1.0, 10.0], [0.02, 0.03], 0.1),
+                                metadata={"fit": {"family": "classical", "notes": ["a"]}})
+    c = pickle.loads(pickle.dumps(m))
+    t = np.arange(200) * 0.1
+    u = np.clip(np.sin(t), 0, 1) * 150
+    assert c == m and c.metadata["fit"]["notes"] == ["a"]
+    np.testing.assert_array_equal(c.predict(u, t=t), m.predict(u, t=t))

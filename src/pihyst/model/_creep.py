@@ -93,6 +93,9 @@ class Creep:
     def __setattr__(self, name, value):
         raise AttributeError("Creep is immutable: make a new one")
 
+    def __reduce__(self):          # pickle and copy through the constructor
+        return (Creep, (self.tau, self.gain, self.dt))
+
     @property
     def n_lags(self) -> int:
         """The number of lags."""

@@ -172,6 +172,15 @@ class Immutable:
     def __delattr__(self, name):
         raise AttributeError(f"{type(self).__name__} is immutable")
 
+    def __reduce__(self):
+        # pickle (multiprocessing, Dask) and copy by the constructor's arguments: the
+        # read-only units and metadata are remade, not copied attribute by attribute
+        return (_rebuilt, (type(self), self._params()))
+
+
+def _rebuilt(cls, params):
+    return cls(**params)
+
 
 def checked_units(units):
     """Read-only units of a model (default: V in, um out); InvalidModelError if not names
