@@ -270,3 +270,41 @@ def test_a_fit_with_sample_times_takes_every_option_the_fit_without_them_takes(k
     assert "creep" in data and "kept" in data["creep"]
     if "thresholds" in kwargs and data["chosen"] == "classical":
         np.testing.assert_allclose(result.model.thresholds, kwargs["thresholds"])
+
+
+def test_a_creep_estimate_of_nothing_does_not_refit_the_structure(monkeypatch):
+    """Compute once: where the joint QP finds no creep (a record of a creep-free
+    actuator), the record with the estimate removed is the record itself, and the
+    structure is the first fit's, not fitted again (NO_CREEP). Here the model fits the
+    record exactly, so the lags have nothing to explain."""
+    from pihyst.identify import _creep
+
+    u, y = record()
+    t = np.arange(u.size) * 0.01
+    calls = []
+    real = _creep.fit_record
+    monkeypatch.setattr(_creep, "fit_record",
+                        lambda *a, **k: calls.append(k.get("delay")) or real(*a, **k))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PihystWarning)
+        fitted = pihyst.fit(u, y, t=t, family="classical", thresholds=[0, 20, 45])
+    decision = fitted.model.metadata["fit"]["creep"]["decision"]
+    assert decision["kept"] is False
+    assert calls == [None]          # the first fit only; the trial reused it
+    assert decision["family_with"] == fitted.report.chosen
+
+
+def test_a_real_creep_estimate_refits_the_structure(monkeypatch):
+    from pihyst.identify import _creep
+
+    u, y = record(noise=1e-3)
+    t = np.arange(u.size) * 0.01
+    y = y + 0.02 * np.log1p(t)                  # a creep-like drift, 2 % per decade
+    calls = []
+    real = _creep.fit_record
+    monkeypatch.setattr(_creep, "fit_record",
+                        lambda *a, **k: calls.append(k.get("delay")) or real(*a, **k))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PihystWarning)
+        pihyst.fit(u, y, t=t, family=["classical", "modified-pi"])
+    assert len(calls) == 2

@@ -84,6 +84,13 @@ TOLERANCE = 0.02
 # by up to 10x on the population (benchmarks/bench_population.py: Bouc-Wen actuators
 # 4.9-10.3x, Preisach 2.6-9.1x with their own kind); twice that for margin.
 CREEP_REACH = 20.0
+# A creep estimate that moves no sample by more than this share of the output span is
+# none: the structure is the fit without creep's, not fitted again on the same record.
+# The joint QP's "no creep" is rounding: on SmartHysteresis (1 Hz sine) its estimates
+# moved the record by at most 1.9e-20 and 1.4e-17 um (4 um span); the random population's
+# creep is 0.3-3 % of the range per decade of time (pihyst.sim.random_plant), 10^6 times
+# more than this over any record's first decade.
+NO_CREEP = 1e-9
 # Whether the record's creep started at rest (identify/_record_start.py): the share of
 # the model's residual that decays from the record's start explain was at most 8 % on
 # the 30 random actuators recorded from rest and 29-82 % after a hold, so above 20 % the

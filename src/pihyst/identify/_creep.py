@@ -36,7 +36,7 @@ import numpy as np
 
 from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
-from pihyst.identify._constants import CREEP_REACH, TOLERANCE
+from pihyst.identify._constants import CREEP_REACH, NO_CREEP, TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._qp import solve_qp
 from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
@@ -360,6 +360,8 @@ class _Trial:
         psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
         names = families if families is not None else (
             self.plain.families if self.plain.explicit_family else CREEP_FAMILIES)
+        if self._unchanged(psi @ gains, names):
+            return self.first
         # the families the user named are still theirs (a failure is an error); the
         # default ones are skipped with the reason where they cannot be fitted, as in the
         # fit without creep (with thresholds= or n_operators=, kp and Bouc-Wen)
@@ -380,6 +382,15 @@ class _Trial:
             if not issubclass(w.category, PihystWarning):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         return second
+
+    def _unchanged(self, shift, names):
+        """Whether removing the creep estimate (``shift``, the displacement it adds)
+        leaves the record as the first fit saw it, among the same families: then the
+        structure is the first fit's, not fitted twice."""
+        span = float(np.ptp(self.rec.y))
+        fitted = {f["family"] for f in self.first.result.report.families}
+        return (float(np.max(np.abs(shift), initial=0.0)) <= NO_CREEP * span
+                and fitted <= {getattr(name, "name", name) for name in names})
 
     def judged(self, start, families=None):
         """(RecordFit, judgement) of the structure chosen with ``start``'s estimate.
