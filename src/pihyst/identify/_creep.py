@@ -36,7 +36,7 @@ import numpy as np
 
 from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
-from pihyst.identify._constants import CREEP_REACH, NO_CREEP, TOLERANCE
+from pihyst.identify._constants import BOUCWEN_CREEP_REACH, CREEP_REACH, NO_CREEP, TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._qp import solve_qp
 from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
@@ -423,10 +423,12 @@ def _other_kind_tried(trial, first, start, second, judged):
     if other is None:
         return second, judged
     start_other, families, rms_without = other
-    if rms_without > CREEP_REACH * judged["held_back_rms_with"]:
+    reach = (BOUCWEN_CREEP_REACH if isinstance(start_other.model, BoucWenModel)
+             else CREEP_REACH)
+    if rms_without > reach * judged["held_back_rms_with"]:
         judged["other_kind_not_tried"] = (
             f"{start_other.family}: its held-back RMS without creep, {rms_without:.4g}, is "
-            f"more than {CREEP_REACH:g} times {judged['held_back_rms_with']:.4g}, what "
+            f"more than {reach:g} times {judged['held_back_rms_with']:.4g}, what "
             f"{judged['family_with']} reaches with creep")
         return second, judged
     try:
