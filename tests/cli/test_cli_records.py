@@ -391,7 +391,7 @@ def test_a_scale_option_that_overflows_is_one_line(tmp_path, capsys, command, op
     *[(c, o) for c in ("compensate", "track")
       for o in (["--voltage-gain", "20"], ["--lag", "1"], ["--voltage", "2"])],
     *[("predict", o) for o in (["--lag", "1"], ["--displacement", "2"],
-                               ["--displacement-unit", "nm"])],
+                               ["--displacement-unit", "nm"], ["--displacement-gain", "-1"])],
 ])
 def test_a_record_option_a_command_does_not_use_is_refused(tmp_path, capsys, command, option):
     src = tmp_path / "in.csv"
@@ -472,3 +472,21 @@ def test_fit_says_its_time_column_in_the_read_line(tmp_path, capsys):
     first = capsys.readouterr().out.splitlines()[0]
     assert first.startswith(f"read {path}") and "time column 1 'time_s'" in first
     assert first.endswith("time used for creep")
+
+
+def test_a_displacement_that_falls_as_the_voltage_rises_is_named(tmp_path, capsys):
+    """A sensor counting the other way (a distance to the target): the fit says so and
+    how to read it, in one line with no model written; --displacement-gain -1 fits it."""
+    u = np.tile(np.r_[np.linspace(0, 150, 60), np.linspace(150, 0, 60)], 3)
+    y = 0.1 * u + 2.0 * np.sin(np.deg2rad(u)) * np.tile(np.r_[np.ones(60), -np.ones(60)], 3)
+    src = tmp_path / "dist.csv"
+    np.savetxt(src, np.c_[u, 100.0 - y], delimiter=",", header="voltage_V,distance_um",
+               comments="")
+    out = tmp_path / "m.json"
+    assert run("fit", src, "--displacement", "distance_um", "-o", out) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "falls as the voltage rises" in err
+    assert "--displacement-gain -1" in err and not out.exists()
+    assert run("fit", src, "--displacement", "distance_um", "--displacement-gain", "-1",
+               "-o", out) == 0
+    assert out.exists()

@@ -52,6 +52,19 @@ def test_units_gain_from_options_and_names(tmp_path):
     assert rec.displacement == pytest.approx([2e-3])
 
 
+def test_a_sensor_counting_the_other_way_is_negated(tmp_path):
+    # a laser sensor measuring the distance to the target reads less as the actuator
+    # extends towards it: displacement_gain=-1 (after the unit's factor, in any order)
+    path = write(tmp_path, [(0.0, 1.0, 2e-3), (0.1, 2.0, 1e-3)], header="time_s,u,dist_mm")
+    reader = open_record(path, voltage="u", displacement="dist_mm", displacement_gain=-1)
+    rec = reader.read()
+    assert rec.displacement == pytest.approx([-2.0, -1.0])
+    assert rec.metadata["displacement_gain"] == -1
+    assert "displacement x -1" in reader.describe()
+    assert "displacement_gain" not in read_record(path, voltage="u",
+                                                  displacement="dist_mm").metadata
+
+
 @pytest.mark.parametrize("header, factors, note", [
     ("t_ms,u_mV,y", (1e-3, 1e-3), "voltage in mV (column name 'u_mV') -> V, time in ms"),
     ("time [us],U [kV],y", (1e-6, 1e3), "voltage in kV (column name 'U [kV]') -> V"),
@@ -85,6 +98,7 @@ def test_time_and_voltage_in_the_unit_their_column_names(tmp_path, small_blocks,
     ({"time": "none", "skip_until": 1}, "--skip-until needs a time column"),
     ({"displacement_unit": "inch"}, "--displacement-unit must be"),
     ({"voltage_gain": 0}, "--voltage-gain must not be 0"),
+    ({"displacement_gain": 0}, "--displacement-gain must not be 0"),
     ({"displacement": "u"}, "both read from column 2"),
     ({"separator": "|"}, "unknown separator"),
 ])

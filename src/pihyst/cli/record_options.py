@@ -43,6 +43,9 @@ def add_record_options(p, what="the record", unused=None):
     add("--voltage-gain", metavar="G", type=float,
                    help="the actuator's voltage is G x the voltage column (a record of an "
                         "amplifier's input)")
+    add("--displacement-gain", metavar="G", type=float,
+                   help="the displacement is G x the displacement column (-1: a sensor "
+                        "that counts the other way, such as a distance to the target)")
     add("--lag", metavar="N", type=count(0), default=0,
                    help="the displacement sensor answers N samples late: displacement[k+N] "
                         "goes with voltage[k] (default 0)")
@@ -70,7 +73,8 @@ def add_record_options(p, what="the record", unused=None):
 
 OPTIONS = (("voltage", "--voltage"), ("displacement", "--displacement"), ("time", "--time"),
            ("rate", "--rate"), ("displacement_unit", "--displacement-unit"),
-           ("voltage_gain", "--voltage-gain"), ("lag", "--lag"),
+           ("voltage_gain", "--voltage-gain"), ("displacement_gain", "--displacement-gain"),
+           ("lag", "--lag"),
            ("skip_until", "--skip-until"), ("separator", "--separator"),
            ("sheet", "--sheet"), ("reader", "--reader"))
 
@@ -100,6 +104,7 @@ NO_VOLTAGE = {
 NO_DISPLACEMENT = {
     "--displacement": "it reads no displacement from {what}",
     "--displacement-unit": "it reads no displacement from {what}",
+    "--displacement-gain": "it reads no displacement from {what}",
     "--lag": "it reads no measured displacement from {what} to pair with the voltage (a "
              "model's own input-output delay is in the model file, delay_samples)",
 }
@@ -135,7 +140,9 @@ def record_kwargs(args):
     ``args`` give (the one translation of the options, for every command)."""
     return dict(voltage=args.voltage, displacement=args.displacement, time=args.time,
                 rate=args.rate, displacement_unit=args.displacement_unit,
-                voltage_gain=args.voltage_gain, lag=args.lag, skip_until=args.skip_until,
+                voltage_gain=args.voltage_gain,
+                displacement_gain=getattr(args, "displacement_gain", None), lag=args.lag,
+                skip_until=args.skip_until,
                 separator=args.separator, decimal_comma=args.decimal_comma,
                 sheet=getattr(args, "sheet", None), reader=args.reader,
                 units_row=getattr(args, "units_row", None))

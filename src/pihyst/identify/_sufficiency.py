@@ -74,6 +74,13 @@ def check_fit(rec, judged_rms, model):
     variance = float(np.var(rec.y[judged])) if judged.size else 0.0
     explained = 1.0 - judged_rms ** 2 / variance if variance > 0 else 0.0
     if explained < MIN_EXPLAINED:
+        falling = _falling(rec.u[judged], rec.y[judged])
+        if falling is not None:
+            raise FitError(f"the displacement falls as the voltage rises (correlation "
+                           f"{falling:.2f}) and a hysteresis model rises with its input: "
+                           f"if the sensor counts the other way (a distance to the "
+                           f"target), negate the displacement (pihyst fit "
+                           f"--displacement-gain -1, or fit(u, -y))", column="output")
         raise FitError(f"the displacement does not follow the voltage: the best model "
                        f"explains only {100 * max(explained, 0.0):.0f} % of its variance on "
                        f"the samples it is judged on (pure noise, or the wrong columns?)",
@@ -89,6 +96,15 @@ def check_fit(rec, judged_rms, model):
                       f"{100 * width / span:.2g} % of the output span wide, so the model is "
                       f"a plain curve (is the displacement column the measured one?)",
                       InsufficientDataWarning, stacklevel=3)
+
+
+def _falling(u, y):
+    """The correlation of ``y`` with ``u`` where it is clearly negative (below -0.5: a
+    displacement that falls as the voltage rises), else None."""
+    if u.size < 2 or np.ptp(u) == 0 or np.ptp(y) == 0:
+        return None
+    r = float(np.corrcoef(u, y)[0, 1])
+    return r if r < -0.5 else None
 
 
 def loop_width(model):

@@ -146,6 +146,9 @@ class RecordReader:
         m, mm, um or nm (default: from the column name, else um).
     voltage_gain : float or None
         The voltage column times this is the actuator's voltage (default 1).
+    displacement_gain : float or None
+        The displacement column (in its unit) times this is the displacement (default 1;
+        -1 for a sensor that counts the other way, such as a distance to the target).
     lag : int
         The sensor answers this many samples late: displacement[k + lag] goes with
         voltage[k].
@@ -192,7 +195,8 @@ class RecordReader:
     def __init__(self, path: str | os.PathLike[str], *, voltage: str | int | None = None,
                  displacement: str | int | None = None, time: str | int | None = None,
                  rate: float | None = None, displacement_unit: str | None = None,
-                 voltage_gain: float | None = None, lag: int = 0,
+                 voltage_gain: float | None = None,
+                 displacement_gain: float | None = None, lag: int = 0,
                  skip_until: float | None = None, separator: str | None = None,
                  decimal_comma: bool | None = None, reader: Any = None,
                  sheet: str | None = None, units_row: bool | None = None,
@@ -246,6 +250,13 @@ class RecordReader:
             _finite(found.get("voltage_gain", 1.0), "the reader's metadata 'voltage_gain'"))
         if self.voltage_gain == 0:
             raise InvalidArgumentError("--voltage-gain must not be 0")
+        self.displacement_gain = (
+            _finite(displacement_gain, "--displacement-gain")
+            if displacement_gain is not None else
+            _finite(found.get("displacement_gain", 1.0),
+                    "the reader's metadata 'displacement_gain'"))
+        if self.displacement_gain == 0:
+            raise InvalidArgumentError("--displacement-gain must not be 0")
         self.unit, self.unit_from = self._unit(displacement_unit, found)
         self.named_units = {q: self._unit_in_name(q, pattern, factors) for q, pattern, factors
                             in (("time", _TIME_UNIT_IN_NAME, TIME_FACTORS),
@@ -648,6 +659,8 @@ class RecordReader:
                 meta[f"{q}_unit"] = self.named_units[q][0]
         if self.voltage_gain != 1.0:
             meta["voltage_gain"] = self.voltage_gain
+        if self.displacement_gain != 1.0:
+            meta["displacement_gain"] = self.displacement_gain
         if self.rate is not None:
             meta["rate_hz"] = self.rate
         if self.lag:
@@ -699,6 +712,8 @@ class RecordReader:
                 notes.append(f"{q} in {named[0]} ({named[2]}) -> {base}")
         if self.voltage_gain != 1.0 and "voltage" in self.refs:
             notes.append(f"voltage x {self.voltage_gain:g}")
+        if self.displacement_gain != 1.0 and "displacement" in self.refs:
+            notes.append(f"displacement x {self.displacement_gain:g}")
         if self.rate is not None:
             notes.append(f"{self.rate:g} Hz" + ("" if self.rate_why == "--rate"
                                                  else f" ({self.rate_why})"))
@@ -802,6 +817,10 @@ class _Transform:
         if "voltage" in block and r.voltage_gain != 1.0:
             block["voltage"] = self._scaled(block["voltage"], "voltage", r.voltage_gain,
                                             f"the voltage gain {r.voltage_gain:g}")
+        if "displacement" in block and r.displacement_gain != 1.0:
+            block["displacement"] = self._scaled(
+                block["displacement"], "displacement", r.displacement_gain,
+                f"the displacement gain {r.displacement_gain:g}")
         if "displacement" in block and r.unit != "um":
             block["displacement"] = self._scaled(
                 block["displacement"], "displacement", UNIT_FACTORS[r.unit],
@@ -1045,7 +1064,9 @@ def read_record(path: str | os.PathLike[str], **options: Any) -> Record:
     1-based number; a variable, ``NAME:K`` or ``K`` in array files; ``"none"`` to ignore
     a time column); ``rate`` (Hz, when there is no time column); ``displacement_unit``
     (m, mm, um, nm; else from the column name, else um); ``voltage_gain`` (the voltage
-    column times this is the actuator's voltage); ``lag`` (the sensor answers this many
+    column times this is the actuator's voltage); ``displacement_gain`` (the
+    displacement column times this is the displacement: -1 for a sensor counting the
+    other way); ``lag`` (the sensor answers this many
     samples late: displacement[k + lag] goes with voltage[k]); ``skip_until`` (seconds:
     drop the samples before); ``separator``, ``decimal_comma`` (text, when not found
     right); ``units_row`` (text: True, the line under the header holds the units; False,
