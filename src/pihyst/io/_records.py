@@ -882,7 +882,7 @@ def _text_column(src, quantity, spec, needed):
                 return None
             raise CSVError(src.path, d.first_line, 0,
                            f"no header line: name the columns by position, e.g. --voltage 1 "
-                           f"--displacement 2 ({d.n_fields} columns, {d.describe()})")
+                           f"--displacement 2 ({d.describe()})")
         if name not in src.columns:
             if not needed:
                 return None
