@@ -103,7 +103,8 @@ class Dialect:
         sep = {",": "comma", ";": "semicolon", "\t": "tab", None: "whitespace"}[self.separator]
         dec = ", decimal comma" if self.decimal == "," else ""
         head = (f"header on line {self.header_line}" if self.header_line else "no header")
-        return f"{sep}-separated{dec}, {head}, {self.n_fields} columns"
+        columns = "1 column" if self.n_fields == 1 else f"{self.n_fields} columns"
+        return f"{sep}-separated{dec}, {head}, {columns}"
 
     def where(self):
         """What data lines are compared with, for messages."""
