@@ -26,7 +26,8 @@ def _held_back_fit(u, y):
     res = fit(u, y, initial_state="settle", holdout=0.5, refit=False)
     rep = res.report.to_dict()
     assert rep["data"]["initial_state"] == "settle" and rep["data"]["settle_samples"] > 0
-    layout = FitOptions.from_arguments(initial_state="settle", holdout=0.5).frame(u, y).layout
+    rec = FitOptions.from_arguments(initial_state="settle", holdout=0.5).frame(u, y)
+    layout = rec.shifted(rep["data"]["delay"]["samples"]).layout     # as it was fitted
     assert layout.indices("held_back").min() > layout.indices("fit").max()   # the end
     assert rep["data"]["held_back_samples"] == layout.count("held_back") > 0
     best = res.report.family(res.report.chosen)
