@@ -102,6 +102,18 @@ def test_an_iterative_compensator_only_when_clearly_more_accurate():
     assert _choose([bw, _cand("modified-pi", 7, 0.2)])[0].name == "bouc-wen"
 
 
+def test_without_held_back_data_the_lowest_bic_is_chosen():
+    # n ln(RMS^2) + p ln n: 7 more weights must lower the fitted RMS by more than
+    # about 7 ln(n) / (2 n) = 2.4 % (n = 1000) to be worth it
+    big, small = _cand("big", 9, 0.100), _cand("small", 2, 0.1005)
+    choice = choose([big, small], minor_loops_known=True, unknown_reason=None,
+                    judged_on_held_back=False, n_fitted=1000)
+    assert choice.chosen.name == "small"
+    choice = choose([big, _cand("small", 2, 0.103)], minor_loops_known=True,
+                    unknown_reason=None, judged_on_held_back=False, n_fitted=1000)
+    assert choice.chosen.name == "big"
+
+
 def test_bounds_exclude_and_say_why():
     cands = [_cand("big", 130, 0.15, worst=2e-5), _cand("small", 5, 0.30, worst=2e-7)]
     choice = _decide(cands, max_operators=10)
