@@ -258,7 +258,10 @@ def test_a_record_of_much_travel_is_windowed_for_bouc_wen_and_the_shape_search(m
 
 @pytest.mark.parametrize("kwargs", [{"n_operators": 4}, {"thresholds": [0, 10, 30]},
                                     {"candidates": list(np.linspace(0, 60, 8))},
-                                    {"offset": 0.0}, {"initial_state": "zero"},
+                                    # 42 s on a loaded machine; the way options reach
+                                    # the fit with creep is the same for the others
+                                    pytest.param({"offset": 0.0}, marks=pytest.mark.slow),
+                                    {"initial_state": "zero"},
                                     {"bounds": (0, 1)}, {"nonnegative": False}])
 def test_a_fit_with_sample_times_takes_every_option_the_fit_without_them_takes(kwargs):
     """With sample times the structure is chosen again on the record with its creep

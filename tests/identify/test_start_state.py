@@ -46,7 +46,10 @@ def test_a_record_from_the_zero_state_is_fitted_from_it(name, record, noise):
     assert np.all(np.asarray(result.model.initial_state) == 0)
 
 
-@pytest.mark.parametrize("name", ["classical", "multislope"])
+# the start-state probe is a classical PI whatever the actuator: the multislope truth
+# is the same decision on another loop shape (18 s on a loaded machine)
+@pytest.mark.parametrize("name", ["classical",
+                                  pytest.param("multislope", marks=pytest.mark.slow)])
 def test_a_record_at_rest_stays_cycled(name):
     zero = _truths()[name]
     truth = zero.replace(initial_state=cycled_state(zero, 150.0))
@@ -59,7 +62,8 @@ def test_a_record_at_rest_stays_cycled(name):
 def test_a_given_state_is_not_second_guessed():
     truth = _truths()["classical"]
     u = signals.decaying_triangles(period_s=60.0, dt=0.1)[1]
-    result = pihyst.fit(u, truth.predict(u), initial_state="cycled")
+    # decided before any family is fitted: one family shows it (every family took 18 s)
+    result = pihyst.fit(u, truth.predict(u), initial_state="cycled", family="classical")
     data = result.report.to_dict()["data"]
     assert data["initial_state"] == "cycled" and data["initial_state_choice"] is None
 
