@@ -36,17 +36,19 @@ def test_fit_adopts_the_lag_by_default_and_the_file_carries_it(tmp_path, capsys)
     data, u, y = lagged_record(tmp_path)
     out = tmp_path / "m.json"
     assert main(["fit", str(data), "-o", str(out), "--model", "classical"]) == 0
-    text = capsys.readouterr().out
-    assert f"input delay {D} samples" in text and f"y[k + {D}]" in text
     model = pihyst.load_model(out)
     assert model.delay == D and model.sample_period == pytest.approx(1e-3)
+    delay = model.metadata["fit"]["data"]["delay"]
+    assert delay["samples"] == D and delay["auto"] and delay["confirmation"]["samples"] == D
     half = u.size // 2                   # after the first cycles (the state is cycled)
     e = model.predict(u)[half:] - y[half:]
     assert np.sqrt(np.mean(e ** 2)) < 0.01 * np.ptp(y)
     assert main(["fit", str(data), "-o", str(out), "--model", "classical", "--delay",
                  "0"]) == 0
-    assert pihyst.load_model(out).delay == 0
-    assert "delay='auto'" in capsys.readouterr().out     # the note on the lag it ignored
+    given = pihyst.load_model(out).metadata["fit"]
+    assert pihyst.load_model(out).delay == 0 and not given["data"]["delay"]["auto"]
+    # the lag it was told to ignore is what the record favours: said undetermined
+    assert given["data"]["delay"]["best"] == D and len(given["undetermined"]) == 1
 
 
 @pytest.mark.parametrize("time_column", [False, True])

@@ -10,6 +10,7 @@ import pytest
 
 import pihyst
 from pihyst.cli import main
+from pihyst.identify._report import FitReport
 from pihyst.io import read_columns, write_columns
 
 
@@ -35,10 +36,11 @@ def test_fit_saves_a_model_that_loads_and_predicts(tmp_path, capsys):
     data, u, y = record(tmp_path)
     out = tmp_path / "model.json"
     assert main(["fit", str(data), "-o", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert "chosen:" in text and "held-back RMS" in text and f"wrote {out}" in text
     model = pihyst.load_model(out)
-    assert model.metadata["fit"]["family"] in text
+    fitted = model.metadata["fit"]
+    assert fitted["family"] in pihyst.identify.FAMILY_NAMES
+    assert fitted["data"]["held_back_samples"] > 0 and fitted["final"]["refit"]
+    assert fitted["creep"]["decision"]["kept"] == (model.creep is not None)
     pred = tmp_path / "pred.csv"
     assert main(["predict", str(out), str(data), "-o", str(pred)]) == 0
     cols, _ = read_columns(pred, ["displacement_um"])
@@ -54,19 +56,28 @@ def test_fit_one_family_with_given_thresholds(tmp_path, capsys):
     model = pihyst.load_model(out)
     assert model.family == "classical"
     np.testing.assert_array_equal(model.thresholds, [0, 10, 30])
-    assert "classical" in capsys.readouterr().out
+    assert model.metadata["fit"]["threshold_choice"] is None      # given, not chosen
 
 
-def test_json_report(tmp_path, capsys):
+def test_json_report_and_the_text_printed_are_the_same_report(tmp_path, capsys):
+    """The command prints the fit's report (its wording: identify/test_report_text.py),
+    then one line on the file written; --json prints the report's data instead."""
     data, *_ = record(tmp_path)
     out = tmp_path / "m.json"
-    assert main(["fit", str(data), "--model", "multislope", "--n-operators", "4", "--json",
-                 "-o", str(out)]) == 0
+    options = ["fit", str(data), "--model", "multislope", "--n-operators", "4", "--no-creep",
+               "-o", str(out)]
+    assert main(options + ["--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert rep["chosen"] == "multislope"
     fam = rep["families"][0]
     assert fam["n_operators"] == 4 and len(fam["threshold_choice"]["reasons"]) == 4
     assert fam["errors"]["held_back"]["rms"] >= 0
+    out.unlink()
+    assert main(options) == 0
+    text = capsys.readouterr().out
+    assert f"\n{FitReport(rep)}\n\nwrote {out}: multislope model, 4 operators (pihyst " \
+           f"predict {out} INPUT.csv -o OUT.csv)\n" in text
+    assert text.count("\n") == str(FitReport(rep)).count("\n") + 4   # + read line, wrote
 
 
 @pytest.mark.parametrize("lo, hi", [(0.0, 3.6), (-150.0, 150.0)])
@@ -140,20 +151,21 @@ def test_entry_point(tmp_path):
     data, *_ = record(tmp_path)
     out = tmp_path / "m.json"
     proc = subprocess.run([sys.executable, "-m", "pihyst", "fit", str(data), "--model",
-                           "classical", "--n-operators", "3", "-o", str(out)],
+                           "classical", "--n-operators", "3", "--json", "-o", str(out)],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
-    assert "why each threshold" in proc.stdout
     assert pihyst.load_model(out).n_operators == 3
+    report = json.loads(proc.stdout)                # the report of that fit
+    assert report["chosen"] == "classical"
+    assert len(report["families"][0]["threshold_choice"]["reasons"]) == 3
 
 
 def test_creep_is_decided_with_a_time_column_and_skipped_with_a_broken_one(tmp_path, capsys):
+    # with a time column creep is decided: test_fit_saves_a_model_that_loads_and_predicts
     data, u, y = record(tmp_path)
     out = tmp_path / "model.json"
-    assert main(["fit", str(data), "-o", str(out)]) == 0
-    assert "creep: " in capsys.readouterr().out       # the decision is reported
     assert main(["fit", str(data), "--no-creep", "-o", str(out)]) == 0
-    assert "creep: " not in capsys.readouterr().out
+    assert "creep" not in pihyst.load_model(out).metadata["fit"]           # not tried
     # time running backwards: fitted without creep, and a warning says where
     t = np.arange(u.size, dtype=float)
     t[40] = 1.0
@@ -161,7 +173,7 @@ def test_creep_is_decided_with_a_time_column_and_skipped_with_a_broken_one(tmp_p
     write_columns(broken, {"time_s": t, "voltage_V": u, "displacement_um": y})
     assert main(["fit", str(broken), "-o", str(out)]) == 0
     captured = capsys.readouterr()
-    assert "creep: " not in captured.out
+    assert "creep" not in pihyst.load_model(out).metadata["fit"]
     warning = [line for line in captured.err.splitlines() if "time column is not used" in line]
     assert len(warning) == 1 and "broken.csv:" in warning[0] and "sample 40" in warning[0]
     # ... and when the fit then fails, its error is the only line (no warning first)

@@ -40,11 +40,13 @@ def test_validate_record_is_judged_and_reported(tmp_path, data, capsys):
     out = tmp_path / "m.json"
     assert main(["fit", str(data), "--validate", str(other), "--max-operators", "6",
                  "-o", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert "validation" in text and "validation record:" in text
     model = pihyst.load_model(out)
     assert model.n_operators <= 6
-    assert "validation record" in model.metadata["fit"]["held_back_by_kind"]
+    fitted = model.metadata["fit"]
+    validation = fitted["data"]["validation"]              # the other file, judged
+    assert validation["samples"] == ramps([0, 150, 0, 100, 50, 130, 20, 150, 0]).size
+    assert set(fitted["held_back_by_kind"]) >= {"validation record"}
+    assert fitted["final"]["errors"]["validation"]["rms"] > 0
 
 
 def test_delay_option(tmp_path, data, capsys):

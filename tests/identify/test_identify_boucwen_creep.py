@@ -76,6 +76,10 @@ def test_model_with_creep_round_trips(fitted, tmp_path):
     assert pihyst.load_model(path) == model
 
 
+# the rule that keeps creep or leaves it out is the same for every family
+# (_creep._judge): quick with a classical PI in test_identify_creep.py; Bouc-Wen's joint
+# creep fit quick above (test_creep_recovered_and_predicts_held_levels)
+@pytest.mark.slow
 def test_default_fit_keeps_creep_where_held_back_cycles_need_it(record):
     t, u, y = record
     res = pihyst.fit(u, y, t=t, family="bouc-wen", input_range=(0.0, 150.0))
@@ -85,6 +89,7 @@ def test_default_fit_keeps_creep_where_held_back_cycles_need_it(record):
     assert res.report.to_dict()["creep"]["kept"]
 
 
+@pytest.mark.slow
 def test_default_fit_leaves_out_creep_an_actuator_does_not_have(truth, record):
     t, u, _ = record
     y = truth.replace(creep=None).predict(u) + \

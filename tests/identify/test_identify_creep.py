@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import pihyst
+from pihyst.identify._constants import ADOPT_GAIN, TOLERANCE
 from pihyst.identify._creep import log_t_basis
 from pihyst.model import ClassicalPI, Creep
 from pihyst.sim import signals
@@ -102,7 +103,9 @@ def test_a_lagged_record_with_creep_gets_both(truth):
     assert model.delay == d and model.sample_period == pytest.approx(0.1)
     assert model.creep is not None
     rep = res.report.to_dict()["data"]["delay"]
-    assert rep["samples"] == d and rep["auto"] and "more than 5 %" in rep["rule"]
+    assert rep["samples"] == d and rep["auto"] and rep.get("refused") is None
+    conf = rep["confirmation"]               # the fitted structure confirms it (rule 2)
+    assert conf["samples"] == d and conf["rms_d"] < (1 - ADOPT_GAIN) * conf["rms_0"]
     assert model.metadata["fit"]["data"]["delay"]["samples"] == d
     e = model.predict(u, t=t) - y
     assert np.sqrt(np.mean(e ** 2)) < 0.01
@@ -119,8 +122,7 @@ def test_default_fit_with_times_keeps_creep_where_held_back_cycles_need_it(truth
     decision = res.report.to_dict()["creep"]
     assert decision["kept"] and res.model.creep is not None
     assert decision["held_back_rms_with"] < 0.98 * decision["held_back_rms_without"]
-    assert res.model.metadata["fit"]["creep"]["decision"]["kept"]
-    assert "creep: kept" in str(res.report)
+    assert res.model.metadata["fit"]["creep"]["decision"] == decision
     # without the sample times nothing changes: no creep, no decision
     plain = pihyst.fit(u, y, **AUTO_KW)
     assert plain.model.creep is None and "creep" not in plain.report.to_dict()
@@ -134,7 +136,9 @@ def test_default_fit_with_times_leaves_out_creep_an_actuator_does_not_have(truth
     res = pihyst.fit(u, y, t=t, **AUTO_KW)
     decision = res.report.to_dict()["creep"]
     assert not decision["kept"] and res.model.creep is None
-    assert "not kept" in str(res.report) and "%" in decision["reason"]
+    # judged, and not better by more than the tolerance
+    assert decision["held_back_rms_with"] >= (1 - TOLERANCE) * decision["held_back_rms_without"]
+    assert res.model.metadata["fit"]["creep"]["decision"] == decision
 
 
 @pytest.fixture(scope="module")
@@ -163,7 +167,9 @@ def test_default_fit_with_times_estimates_creep_with_each_kind_of_model(record_a
     best = min(tried, key=lambda e: e["held_back_rms_with"])
     assert decision["family_with"] == best["family_with"] == res.report.chosen == "classical"
     assert decision["held_back_rms_with"] == best["held_back_rms_with"]
-    assert "creep estimated with bouc-wen: bouc-wen holds back" in str(res.report)
+    other = next(e for e in tried if e["family"] == "bouc-wen")
+    assert other["family_with"] == "bouc-wen"
+    assert other["held_back_rms_with"] > best["held_back_rms_with"]
 
 
 def test_other_kind_is_not_tried_where_creep_could_not_make_it_win(record_at_rest,
@@ -176,17 +182,26 @@ def test_other_kind_is_not_tried_where_creep_could_not_make_it_win(record_at_res
 
     t, u, y = record_at_rest
     monkeypatch.setattr(_creep, "BOUCWEN_CREEP_REACH", 1.0)
+    judged = []                      # the kinds of model whose creep estimate was judged
+    real = _creep._Trial.judged
+
+    def spy(self, start, *args, **kwargs):
+        judged.append(start.family)
+        return real(self, start, *args, **kwargs)
+    monkeypatch.setattr(_creep._Trial, "judged", spy)
     decision = pihyst.fit(u, y, t=t, family=["classical", "bouc-wen"]).report.to_dict()["creep"]
-    assert "creep_estimated_with" not in decision
-    assert decision["other_kind_not_tried"].startswith("bouc-wen: its held-back RMS")
+    assert judged == ["classical"]                  # bouc-wen's estimate never fitted
+    assert decision.get("creep_estimated_with") is None and decision["other_kind_not_tried"]
     assert decision["family_with"] == "classical"
 
 
 def test_creep_auto_without_held_back_cycles_says_why(record):
     t, u, y = record
     res = pihyst.fit(u, y, t=t, holdout=None, **AUTO_KW)
-    assert res.model.creep is None
-    assert "nothing held back" in res.report.to_dict()["creep"]["reason"]
+    assert res.model.creep is None and res.report.to_dict()["data"]["held_back_samples"] == 0
+    decision = res.report.to_dict()["creep"]
+    assert not decision["kept"]
+    assert decision.get("held_back_rms_with") is None         # decided before any trial
 
 
 def test_creep_option_is_checked(record):

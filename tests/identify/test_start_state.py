@@ -41,13 +41,15 @@ def test_a_record_from_the_zero_state_is_fitted_from_it(name, record, noise):
     data = result.report.to_dict()["data"]
     assert data["initial_state"] == "zero"
     rms = data["initial_state_choice"]["probe_fitted_rms"]
-    assert rms["zero"] < 0.5 * rms["cycled"]
-    assert "chosen from the record" in str(result.report)
+    assert set(rms) == {"cycled", "zero"} and rms["zero"] < 0.5 * rms["cycled"]
     assert _stair_error(result.model, truth) < (0.002 if noise == 0 else 0.005)
     assert np.all(np.asarray(result.model.initial_state) == 0)
 
 
-@pytest.mark.parametrize("name", ["classical", "multislope"])
+# the start-state probe is a classical PI whatever the actuator: the multislope truth
+# is the same decision on another loop shape (18 s on a loaded machine)
+@pytest.mark.parametrize("name", ["classical",
+                                  pytest.param("multislope", marks=pytest.mark.slow)])
 def test_a_record_at_rest_stays_cycled(name):
     zero = _truths()[name]
     truth = zero.replace(initial_state=cycled_state(zero, 150.0))
@@ -60,7 +62,8 @@ def test_a_record_at_rest_stays_cycled(name):
 def test_a_given_state_is_not_second_guessed():
     truth = _truths()["classical"]
     u = signals.decaying_triangles(period_s=60.0, dt=0.1)[1]
-    result = pihyst.fit(u, truth.predict(u), initial_state="cycled")
+    # decided before any family is fitted: one family shows it (every family took 18 s)
+    result = pihyst.fit(u, truth.predict(u), initial_state="cycled", family="classical")
     data = result.report.to_dict()["data"]
     assert data["initial_state"] == "cycled" and data["initial_state_choice"] is None
 
@@ -92,8 +95,9 @@ def test_a_sine_growing_from_mid_range_is_fitted_whole(lo, hi):
     result = pihyst.fit(u, y, family="classical", input_range=(lo, hi))
     data = result.report.to_dict()["data"]
     assert data["initial_state"] == "zero"
-    assert set(data["initial_state_choice"]["probe_fitted_rms"]) == {"rise", "fall", "zero"}
-    assert "too late to settle" in str(result.report)
+    rms = data["initial_state_choice"]["probe_fitted_rms"]
+    assert set(rms) == {"rise", "fall", "zero"} and rms["zero"] == min(rms.values())
+    assert data["settle_samples"] == 0            # fitted whole, not from a settling sweep
     assert result.model.n_operators >= 3
     # other signals, both started by a full cycle (which wipes out either start state)
     rng = np.random.default_rng(0)
