@@ -22,6 +22,7 @@ class Source:
     compute: Callable
     slow: bool
     doc: str
+    data: bool = False        # needs the measured data sets (skipped, saying why, without)
 
     def available_from(self, options):
         """Whether the figures can be had quickly from a file named in ``options``."""
@@ -31,9 +32,9 @@ class Source:
         return self.compute(options)
 
 
-def source(slow=False):
+def source(slow=False, data=False):
     def register(fn):
-        SOURCES[fn.__name__] = Source(fn.__name__, fn, slow, (fn.__doc__ or "").strip())
+        SOURCES[fn.__name__] = Source(fn.__name__, fn, slow, (fn.__doc__ or "").strip(), data)
         return fn
     return register
 
@@ -129,6 +130,36 @@ def paper_beam(options):
 
 
 @source()
+def constants(options):
+    """The rules' constants as the code holds them (the choice's tolerance, the delay
+    rule, the subset search, the command line's range slack and reach rule) and the
+    simulated beams' parameters (creep per time decade, smallest and largest over the
+    beams; sensor noise; supply step; the beam's mode), in the units the text quotes."""
+    from pihyst.cli import frames, model_inputs
+    from pihyst.identify import _constants, _delay, _options, _subsets
+    from pihyst.sim import PLANT_NAMES, _plant, make_plant
+
+    creep = [100 * make_plant(name).creep_per_decade for name in PLANT_NAMES]
+    return {"choice_pct": 100 * _constants.TOLERANCE,
+            "delay": {"adopt_pct": 100 * _constants.ADOPT_GAIN,
+                      "max_samples": _delay.MAX_SAMPLES},
+            "size_pct": 100 * _constants.SIZE_TOLERANCE,
+            "kp_undetermined_pct": 100 * _constants.KP_UNDETERMINED_TOLERANCE,
+            "n_candidates": _options.DEFAULT_N_CANDIDATES,
+            "max_exhaustive": _subsets.DEFAULT_MAX_EXHAUSTIVE,
+            "rest_pct": 100 * _constants.REST_TOLERANCE,
+            "weak_explained_pct": 100 * _constants.WEAK_EXPLAINED,
+            "min_loop_width_pct": 100 * _constants.MIN_LOOP_WIDTH,
+            "range_slack_pct": 100 * model_inputs.TOLERANCE,
+            "out_of_reach_pct": 100 * frames.MAX_OUT_OF_REACH,
+            "beams": {"creep_pct_per_decade": {"min": min(creep), "max": max(creep)},
+                      "paper_beam_creep_pct_per_decade":
+                          100 * make_plant("paper-beam").creep_per_decade,
+                      "noise_um": _plant.NOISE_UM, "supply_step_mV": 1e3 * _plant.SUPPLY_STEP_V,
+                      "mode_hz": _plant.BEAM_RESONANCE_HZ}}
+
+
+@source()
 def paper(options):
     """The paper's published numbers as pihyst records them (pihyst.paper), which the
     report prints beside its own."""
@@ -151,7 +182,7 @@ def demo(options):
     return _demo_derived(metrics)
 
 
-@source()
+@source(data=True)
 def p885_data(options):
     """The P-885 identification record as it is (Model_Vi_Do.dat, column 5): the range of
     the sensor's absolute readings (µm)."""
@@ -165,7 +196,7 @@ def p885_data(options):
     return {"sensor_min_um": float(y.min()), "sensor_max_um": float(y.max())}
 
 
-@source(slow=True)
+@source(slow=True, data=True)
 def p885_pair(options):
     """The P-885 pair as benchmarks/bench_identify.py judges it: pihyst.fit on
     Model_Vi_Do.dat (default, and delay=0), each family's model predicting the
@@ -202,6 +233,57 @@ def p885_pair(options):
     return out
 
 
+def _data_root():
+    from pihyst.io import datasets
+
+    root = datasets.data_root()
+    if root is None:
+        raise LookupError("the measured data sets are not here ($PIHYST_DATA or "
+                          "../shared/data; make data)")
+    return root
+
+
+@source(slow=True, data=True)
+def measured_heldback(options):
+    """The README's table of held-back RMS on the measured sets, as
+    benchmarks/bench_identify.py fits them (the first cycle settles the operators, fit on
+    the first half, judged on the second, no refit): the default fit, with delay=0, and
+    a classical PI of 20 equally spaced thresholds in [0, S/2) with the delay the rule
+    adopts and without; per set, the chosen family's operators and the delay (samples,
+    and ms at the record's rate)."""
+    import warnings
+
+    from pihyst import fit
+    from pihyst.exceptions import PihystWarning
+    from pihyst.io import datasets
+
+    root = _data_root()
+    smart = np.genfromtxt(root / datasets.SMART_DIR / "hysteresis_v_150_1hz.csv",
+                          delimiter=",", usecols=1)
+    rates = {"p885": 200.0, "smart": 1.0 / float(np.median(np.diff(smart)))}
+    out = {}
+    for key, load in (("p885", datasets.p885), ("smart", datasets.smarthysteresis)):
+        u, y = load(root)
+        S = float(u.max() - u.min())
+        twenty = np.arange(20) * (S / 2) / 20
+        entry = {}
+        for label, kw in (("default", {}), ("delay0", {"delay": 0}),
+                          ("classical20", {"family": "classical", "thresholds": twenty}),
+                          ("classical20_delay0", {"family": "classical",
+                                                  "thresholds": twenty, "delay": 0})):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", PihystWarning)
+                res = fit(u, y, initial_state="settle", holdout=0.5, refit=False, **kw)
+            rep = res.report.to_dict()
+            chosen = res.report.family(res.report.chosen)
+            delay = rep["data"]["delay"]["samples"]
+            entry[label] = {"rms": chosen["errors"]["held_back"]["rms"],
+                            "n_operators": chosen["n_operators"], "delay": delay,
+                            "delay_ms": 1e3 * delay / rates[key]}
+        out[key] = entry
+    return out
+
+
 @source(slow=True)
 def tracking_beams(options):
     """Feedforward tracking on every simulated beam as tests/inverse/test_tracking.py
@@ -231,6 +313,91 @@ def tracking_beams(options):
             uncompensated.append(100 * np.mean(np.abs(measured - y_d)) / span)
     return {"compensated_pct": {"min": min(compensated), "max": max(compensated)},
             "uncompensated_pct": {"min": min(uncompensated), "max": max(uncompensated)}}
+
+
+@source(slow=True, data=True)
+def p885_commands(options):
+    """The README's commands on the P-885 stack as written (Measured data): fit
+    Model_Vi_Do.dat (--voltage 1 --displacement 5 --lag 1 --rate 200), then compensate
+    examples/desired_triangle_200Hz.csv --relative; what they print: the model's delay,
+    operators, the rest point the relative frame starts from and the displacement the
+    model reaches within its voltage range (in the relative and in the model's frame)."""
+    import os
+    import re
+    import tempfile
+
+    from pihyst.io import datasets
+
+    data = _data_root() / datasets.P885_DIR
+    with tempfile.TemporaryDirectory() as tmp:
+        model = os.path.join(tmp, "p885.json")
+        fitted = _run_cli("fit", str(data / "Model_Vi_Do.dat"), "--voltage", "1",
+                          "--displacement", "5", "--lag", "1", "--rate", "200", "-o", model)
+        comp = _run_cli("compensate", model,
+                        str(_repo() / "examples" / "desired_triangle_200Hz.csv"),
+                        "--relative", "-o", os.path.join(tmp, "u.csv"))
+    m = re.search(r"wrote \S+: \S+ model, (\d+) operators, input delay (\d+) samples", fitted)
+    rest = re.search(r"rest point at \S+ V \(([-\d.e]+) µm in the model's frame", comp)
+    reach = re.search(r"reachable displacement: \[([-\d.e]+), ([-\d.e]+)\] µm", comp)
+    if not (m and rest and reach):
+        raise RuntimeError(f"pihyst fit/compensate printed something else:\n{fitted}\n{comp}")
+    y0 = float(rest.group(1))
+    lo, hi = float(reach.group(1)), float(reach.group(2))
+    return {"n_operators": int(m.group(1)), "delay": int(m.group(2)), "rest_um": y0,
+            "reach": {"min": lo, "max": hi}, "reach_abs": {"min": y0 + lo, "max": y0 + hi}}
+
+
+def _run_cli(*args):
+    """``pihyst ARGS`` in this process: what it prints (exit status 0, else an error)."""
+    import contextlib
+    import io
+
+    from pihyst.cli import main
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        status = main(list(args))
+    if status != 0:
+        raise RuntimeError(f"pihyst {' '.join(args)}: exit status {status}")
+    return buf.getvalue()
+
+
+@source(slow=True)
+def learning_stages(options):
+    """The README's learning table, as benchmarks/bench_learn.py computes it (its own
+    functions): per named stage and scan rate (10, 50, 100 Hz; the tuned paper-beam stage
+    at 100 Hz), the static inverse's RMS error, the learned voltages' replay after 10
+    trials, the replay in multiples of the sensor noise, and the static inverse's error
+    (trial 0's, as the benchmark prints its gain) over the replay's."""
+    import sys
+    import warnings
+
+    from pihyst.exceptions import PihystWarning
+
+    sys.path.insert(0, str(_repo() / "benchmarks"))
+    try:
+        import bench_learn as bench
+    finally:
+        sys.path.remove(str(_repo() / "benchmarks"))
+    keys = {"paper-beam": "paper_beam", "lens": "lens", "s-shaped": "s_shaped",
+            "remanent": "remanent"}
+    out = {"noise_um": bench.NOISE_UM, "trials": bench.TRIALS}
+    for _label, name, modes, seed, _tuned in bench.STAGES:
+        def make(r, noise=True, name=name, modes=modes, seed=seed):
+            return bench.named_stage(name, modes, seed if r == bench.CLOCK_HZ else seed + 100,
+                                     r, noise)
+        rates = [100.0] if name == "paper-beam" else [10.0, 50.0, 100.0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            rows, _ = bench.run_stage(make, modes[0][0], rates)
+        entry = {}
+        for rate, _n, res, replay, outside, _sent, _secs, _ham, static in rows:
+            entry[f"hz{rate:g}"] = {"static": static, "t0": float(res.rms[0]),
+                                    "replay": replay, "x_noise": replay / bench.NOISE_UM,
+                                    "x_below": float(res.rms[0]) / replay,
+                                    "x_below_static": static / replay, "outside": outside}
+        out[keys[name]] = entry
+    return out
 
 
 @source(slow=True)

@@ -45,18 +45,23 @@ def test_the_quick_figures_are_true(checker, entries):
     n, problems, skipped = checker.check(entries, slow=False)
     assert n > 0
     assert not problems, "\n".join(map(str, problems))
+    from figure_sources import SOURCES
+
     from pihyst.io import datasets
-    assert set(skipped) <= {"demo", "p885_pair", "rig_commands", "tracking_beams"} | (
-        {"p885_data"} if datasets.data_root() is None else set())
+    slow = {name for name, src in SOURCES.items() if src.slow}
+    data = {name for name, src in SOURCES.items() if src.data}
+    assert set(skipped) <= slow | (data if datasets.data_root() is None else set())
 
 
 @pytest.mark.slow
 def test_the_slow_figures_are_true(checker, entries):
     n, problems, skipped = checker.check(entries, slow=True)
     # only what needs the measured data sets may be left out, and only without them
+    from figure_sources import SOURCES
+
     from pihyst.io import datasets
-    assert not skipped or (datasets.data_root() is None
-                           and set(skipped) <= {"p885_pair", "p885_data"})
+    data = {name for name, src in SOURCES.items() if src.data}
+    assert not skipped or (datasets.data_root() is None and set(skipped) <= data)
     assert not problems, "\n".join(map(str, problems))
 
 
