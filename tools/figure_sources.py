@@ -140,7 +140,10 @@ def constants(options):
     from pihyst.sim import PLANT_NAMES, _plant, make_plant
 
     creep = [100 * make_plant(name).creep_per_decade for name in PLANT_NAMES]
-    return {"choice_pct": 100 * _constants.TOLERANCE,
+    import pihyst
+    ms, cl = pihyst.MultislopePI([0.0], [1.0]), pihyst.ClassicalPI([0.0], [1.0])
+    return {"multislope": {"U": ms.U, "a": ms.a, "b": ms.b, "h": ms.h},
+            "input_range": list(cl.input_range),"choice_pct": 100 * _constants.TOLERANCE,
             "delay": {"adopt_pct": 100 * _constants.ADOPT_GAIN,
                       "max_samples": _delay.MAX_SAMPLES},
             "size_pct": 100 * _constants.SIZE_TOLERANCE,
@@ -153,6 +156,7 @@ def constants(options):
             "range_slack_pct": 100 * model_inputs.TOLERANCE,
             "out_of_reach_pct": 100 * frames.MAX_OUT_OF_REACH,
             "beams": {"creep_pct_per_decade": {"min": min(creep), "max": max(creep)},
+                      "creep": {name.replace("-", "_"): c for name, c in zip(PLANT_NAMES, creep)},
                       "paper_beam_creep_pct_per_decade":
                           100 * make_plant("paper-beam").creep_per_decade,
                       "noise_um": _plant.NOISE_UM, "supply_step_mV": 1e3 * _plant.SUPPLY_STEP_V,
@@ -397,6 +401,58 @@ def learning_stages(options):
                                     "x_below": float(res.rms[0]) / replay,
                                     "x_below_static": static / replay, "outside": outside}
         out[keys[name]] = entry
+    return out
+
+
+@source(slow=True)
+def creep_holds(options):
+    """docs/theory/creep.md's table, as benchmarks/bench_creep.py computes it: every
+    simulated beam (seed 1) fitted on decaying triangles without creep (no sample times)
+    and with creep (creep=True), judged on staircases held 10 s and 60 s per level
+    (validation: the voltage staircase predicted; tracking: a staircase of desired
+    displacements over 2-95 % of the model's rise through its compensator), mean absolute
+    error in % of the range; the fitted creep's gain sum and lag count; and, over the
+    three Preisach beams, the smallest and largest error without and with creep."""
+    import warnings
+
+    import pihyst
+    from pihyst.exceptions import PihystWarning
+    from pihyst.sim import PLANT_NAMES, make_plant, signals
+
+    def pct(err, ref):
+        return 100.0 * float(np.mean(np.abs(err))) / float(np.ptp(ref))
+
+    out = {}
+    for name in PLANT_NAMES:
+        beam = make_plant(name, seed=1)
+        t, u = signals.decaying_triangles()
+        y = beam.run(u, t)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            models = (pihyst.fit(u, y).model, pihyst.fit(u, y, t=t, creep=True).model)
+        entry = {"gain_sum": float(models[1].creep.gain.sum()),
+                 "n_lags": models[1].creep.n_lags}
+        for hold in (10.0, 60.0):
+            ts, us = signals.staircase(step_s=hold)
+            row = {}
+            for key, m in zip(("without", "with"), models):
+                beam.reset()
+                ys = beam.run(us, ts)
+                val = pct(m.predict(us, t=ts) - ys, ys)
+                rise = m.predict(np.array([0.0, m.input_range[1]]))
+                lo = rise[0] + 0.02 * (rise[1] - rise[0])
+                hi = rise[0] + 0.95 * (rise[1] - rise[0])
+                td, yd = signals.staircase(u_min=lo, u_max=hi, step_s=hold)
+                comp = pihyst.compensate(m, yd, t=td)
+                beam.reset()
+                row[key] = {"validation": val, "tracking": pct(beam.run(comp.voltage, td) - yd, yd)}
+            entry[f"hold{hold:g}"] = row
+        out[name.replace("-", "_")] = entry
+    preisach = [out[n] for n in ("paper_beam", "lens", "s_shaped")]
+    for key in ("without", "with"):
+        vals = [e[h][key][j] for e in preisach for h in ("hold10", "hold60")
+                for j in ("validation", "tracking")]
+        out[f"preisach_{key}"] = {"min": min(vals), "max": max(vals)}
     return out
 
 
