@@ -164,6 +164,45 @@ def constants(options):
 
 
 @source()
+def link_budget(options):
+    """The rig's link budget as benchmarks/bench_rig.py measures it (its configuration):
+    per supply baud rate (19 200, 115 200) with and without a readback every tick, the
+    bytes per tick, their time on the wire (8N1, the sensor at 115 200 baud), the busy
+    time per tick through the emulated instruments in virtual time (every tick overruns,
+    so it is the shortest period) and the highest tick rate it allows."""
+    from pihyst.rig import Rig, VoltageProgram
+
+    bench = _benchmark("bench_rig")
+    out = {}
+    for baud in (19200, 115200):
+        for readback in (True, False):
+            with Rig(bench.config(baud, 1000.0, readback)) as rig:
+                result = rig.run(VoltageProgram(np.linspace(0.0, 100.0, 200)),
+                                 handle_signals=False)
+            busy = float(np.mean(result.column("busy_s", "run")))
+            supply_bytes = 13 + 8 + ((8 + 9) if readback else 0)
+            sensor_bytes = 6 + 17
+            wire = supply_bytes * 10 / baud + sensor_bytes * 10 / 115200
+            out[f"b{baud}_{'readback' if readback else 'plain'}"] = {
+                "bytes": supply_bytes + sensor_bytes, "wire_ms": 1e3 * wire,
+                "busy_ms": 1e3 * busy, "max_rate_hz": 1 / busy}
+    return out
+
+
+def _benchmark(name):
+    """The module benchmarks/NAME.py (its functions and constants)."""
+    import importlib
+    import sys
+
+    path = str(_repo() / "benchmarks")
+    sys.path.insert(0, path)
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(path)
+
+
+@source()
 def paper(options):
     """The paper's published numbers as pihyst records them (pihyst.paper), which the
     report prints beside its own."""
@@ -373,16 +412,11 @@ def learning_stages(options):
     at 100 Hz), the static inverse's RMS error, the learned voltages' replay after 10
     trials, the replay in multiples of the sensor noise, and the static inverse's error
     (trial 0's, as the benchmark prints its gain) over the replay's."""
-    import sys
     import warnings
 
     from pihyst.exceptions import PihystWarning
 
-    sys.path.insert(0, str(_repo() / "benchmarks"))
-    try:
-        import bench_learn as bench
-    finally:
-        sys.path.remove(str(_repo() / "benchmarks"))
+    bench = _benchmark("bench_learn")
     keys = {"paper-beam": "paper_beam", "lens": "lens", "s-shaped": "s_shaped",
             "remanent": "remanent"}
     out = {"noise_um": bench.NOISE_UM, "trials": bench.TRIALS}
