@@ -487,6 +487,9 @@ def creep_holds(options):
         vals = [e[h][key][j] for e in preisach for h in ("hold10", "hold60")
                 for j in ("validation", "tracking")]
         out[f"preisach_{key}"] = {"min": min(vals), "max": max(vals)}
+    rem = [out["remanent"][h]["with"][j] for h in ("hold10", "hold60")
+           for j in ("validation", "tracking")]
+    out["remanent_with"] = {"min": min(rem), "max": max(rem)}
     return out
 
 
