@@ -113,3 +113,21 @@ def test_every_occurrence_is_checked(checker):
     line = lambda offset: offset  # noqa: E731
     problems = checker.check_entry(e, {"p": 41.38}, "peak 41.38 µm; later peak 41.3 µm", line)
     assert len(problems) == 1 and "quotes 41.3 " in str(problems[0])
+
+
+def test_script_only_sources_run_only_when_asked(checker, monkeypatch):
+    import figure_sources
+
+    calls = []
+
+    def compute(options):
+        calls.append(options)
+        return {"x": 78.6}
+
+    monkeypatch.setitem(figure_sources.SOURCES, "fake", figure_sources.Source(
+        "fake", compute, slow=True, doc="", data=False, script=True))
+    e = checker.Entry(file="README.md", quote="(paper: {x} %), and its inverse", source="fake")
+    n, problems, skipped = checker.check([e], slow=True)
+    assert (n, problems, calls) == (0, [], []) and skipped == {"fake": "script only (--all)"}
+    n, problems, skipped = checker.check([e], slow=True, script=True)
+    assert (n, problems, skipped, len(calls)) == (1, [], {}, 1)
