@@ -208,6 +208,19 @@ def _benchmark(name):
 
 
 @source()
+def rig_example(options):
+    """The rig example the README and docs/rig.md run: examples/rig/emulated.toml's tick
+    rate and examples/rig/desired_triangle.csv's peak and duration."""
+    from pihyst.rig import load_config
+
+    cfg = load_config(str(_repo() / "examples" / "rig" / "emulated.toml"))
+    t, y = np.genfromtxt(_repo() / "examples" / "rig" / "desired_triangle.csv", delimiter=",",
+                         skip_header=2, unpack=True)
+    return {"rate_hz": cfg.rig.rate_hz, "peak_um": float(y.max()),
+            "duration_s": float(t[-1] - t[0])}
+
+
+@source()
 def paper(options):
     """The paper's published numbers as pihyst records them (pihyst.paper), which the
     report prints beside its own."""
