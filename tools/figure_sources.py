@@ -165,7 +165,21 @@ def constants(options):
                       "paper_beam_creep_pct_per_decade":
                           100 * make_plant("paper-beam").creep_per_decade,
                       "noise_um": _plant.NOISE_UM, "supply_step_mV": 1e3 * _plant.SUPPLY_STEP_V,
-                      "mode_hz": _plant.BEAM_RESONANCE_HZ}}
+                      "mode_hz": _plant.BEAM_RESONANCE_HZ, "damping": _plant.BEAM_DAMPING},
+            "stage": _stage_defaults()}
+
+
+def _stage_defaults():
+    """pihyst.sim.make_stage's defaults: its mode (Hz, damping in %), delay (ticks),
+    clock (kHz) and sensor noise (µm)."""
+    import inspect
+
+    from pihyst.sim import make_stage
+
+    d = {k: p.default for k, p in inspect.signature(make_stage).parameters.items()}
+    (hz, zeta), = d["modes"]
+    return {"mode_hz": hz, "damping_pct": 100 * zeta, "delay_ticks": d["delay_samples"],
+            "clock_khz": d["rate_hz"] / 1e3, "noise_um": d["noise_um"]}
 
 
 @source()
@@ -218,6 +232,15 @@ def rig_example(options):
                          skip_header=2, unpack=True)
     return {"rate_hz": cfg.rig.rate_hz, "peak_um": float(y.max()),
             "duration_s": float(t[-1] - t[0])}
+
+
+@source()
+def learning_settings(options):
+    """benchmarks/bench_learn.py's settings as the README describes them: the clock (kHz),
+    the sensor noise (µm), the trials, the voltage limits (V)."""
+    bench = _benchmark("bench_learn")
+    return {"clock_khz": bench.CLOCK_HZ / 1e3, "noise_um": bench.NOISE_UM,
+            "trials": bench.TRIALS, "u_min": bench.U_MIN, "u_max": bench.U_MAX}
 
 
 @source()
