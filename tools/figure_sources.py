@@ -250,6 +250,20 @@ def learning_settings(options):
 
 
 @source()
+def simulate_defaults(options):
+    """`pihyst simulate`'s option defaults, from the command line's own parser (the
+    beam's top voltage, which is not an option default, from the beam)."""
+    from pihyst.cli import build_parser
+    from pihyst.sim import make_plant
+
+    args = build_parser().parse_args(["simulate", "-o", "x.csv"])
+    out = {k: v for k, v in vars(args).items() if isinstance(v, (int, float))
+           and not isinstance(v, bool)}
+    out["beam_u_max"] = make_plant(args.plant).u_max
+    return out
+
+
+@source()
 def paper(options):
     """The paper's published numbers as pihyst records them (pihyst.paper), which the
     report prints beside its own."""
