@@ -300,6 +300,21 @@ def p885_data(options):
     return {"sensor_min_um": float(y.min()), "sensor_max_um": float(y.max())}
 
 
+@source(data=True)
+def smart_data(options):
+    """The SmartHysteresis record as it is (hysteresis_v_150_1hz.csv): when its voltage
+    steps from 0 (s), the --skip-until the README and docs/records.md give (the step plus
+    the second pihyst.io.datasets lets the actuator settle) and its sample rate (Hz)."""
+    from pihyst.io import datasets
+
+    a = np.genfromtxt(_data_root() / datasets.SMART_DIR / "hysteresis_v_150_1hz.csv",
+                      delimiter=",", usecols=(1, 3))
+    t, u = a[:, 0], a[:, 1]
+    step = float(t[np.flatnonzero(u != 0)[0]])
+    return {"step_s": step, "skip_until_s": step + datasets.SMART_SETTLE_S,
+            "rate_hz": 1.0 / float(np.median(np.diff(t)))}
+
+
 @source(slow=True, data=True)
 def p885_pair(options):
     """The P-885 pair as benchmarks/bench_identify.py judges it: pihyst.fit on
