@@ -5,8 +5,8 @@ Each source computes its figures with the current code and returns them as a nes
 dict; a placeholder ``{a.b}`` of a quote names ``values["a"]["b"]``. Quick sources take
 a few seconds at most and run in the quick tests; slow ones (the demo's study, fits of
 the measured sets and of the simulated beams' records, the learning benchmark's stages)
-in the slow tests and under ``check_figures.py --all``; script-only ones (minutes: the
-FSM's state-space fits) under ``check_figures.py --all`` alone. Sources that need the
+in the slow tests and under ``check_figures.py --all``; script-only ones
+(``script``: minutes each) under ``check_figures.py --all`` alone. Sources that need the
 measured data sets (``data``) are skipped, saying why, without them.
 """
 
@@ -566,40 +566,6 @@ def creep_holds(options):
     rem = [out["remanent"][h]["with"][j] for h in ("hold10", "hold60")
            for j in ("validation", "tracking")]
     out["remanent_with"] = {"min": min(rem), "max": max(rem)}
-    return out
-
-
-@source(data=True, script=True)
-def fsm(options):
-    """The CubeSpec fine steering mirror as benchmarks/bench_fsm.py judges it (its own
-    functions): per amplitude (100 mV, 300 mV), the state-space model and the Hammerstein
-    model fitted on the training realisations, the RMS error over all three outputs of
-    the test realisations' second period (µm); and the published baselines it quotes."""
-    import warnings
-
-    from pihyst.dynamics import fit_hammerstein_ss, fit_state_space
-    from pihyst.exceptions import PihystWarning
-
-    bench = _benchmark("bench_fsm")
-    root = _data_root()
-    if not (root / bench.FSM_DIR).is_dir():
-        raise LookupError(f"the FSM data set is not here ({bench.FSM_DIR})")
-    out = {"published": {lv: {k: v for k, v in pub.items() if v is not None}
-                         for lv, pub in bench.PUBLISHED.items()}}
-    for level in ("100mV", "300mV"):
-        train = bench.fsm_records(root, level, "train")
-        test = bench.fsm_records(root, level, "test")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", PihystWarning)
-            lin = fit_state_space(train, bench.PERIOD, orders=bench.FSM_ORDERS)
-            ham = fit_hammerstein_ss(train, bench.PERIOD, linear=lin, refinements=2,
-                                     max_nfev=10)
-        entry = {"order": lin.order}
-        for key, predict in (("state_space", lin.predict), ("hammerstein", ham.predict)):
-            err = np.vstack([predict(u)[bench.PERIOD:] - y[bench.PERIOD:] for u, y in test])
-            entry[key] = float(np.sqrt(np.mean(err ** 2)))
-            entry[f"{key}_per_output"] = [float(e) for e in np.sqrt(np.mean(err ** 2, axis=0))]
-        out[f"mv{level[:3]}"] = entry
     return out
 
 
