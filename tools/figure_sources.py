@@ -573,7 +573,8 @@ def creep_holds(options):
 def rig_commands(options):
     """The rig commands of the README and docs/rig.md as written (emulated instruments,
     virtual time): record the loop, fit it, track examples/rig/desired_triangle.csv open
-    loop and with --feedback 1,10; the tracking errors as the command prints them."""
+    loop and with --feedback 1,10, and open loop with `pihyst fit --model multislope`'s
+    model of the same loop; the tracking errors as the command prints them."""
     import contextlib
     import io
     import os
@@ -595,10 +596,16 @@ def rig_commands(options):
             return buf.getvalue()
 
         loop, model = os.path.join(tmp, "loop.csv"), os.path.join(tmp, "model.json")
+        multislope = os.path.join(tmp, "multislope.json")
         run("rig", "record", "--config", config, "-o", loop)
         run("fit", loop, "-o", model)
-        for key, extra in (("open_loop", ()), ("feedback", ("--feedback", "1,10"))):
-            text = run("rig", "track", model, desired, "--config", config, *extra,
+        run("fit", loop, "--model", "multislope", "-o", multislope)
+        with open(multislope, encoding="utf-8") as f:
+            out["multislope_n_operators"] = len(json.load(f)["weights"])
+        for key, fitted, extra in (("open_loop", model, ()),
+                                   ("feedback", model, ("--feedback", "1,10")),
+                                   ("multislope_open_loop", multislope, ())):
+            text = run("rig", "track", fitted, desired, "--config", config, *extra,
                        "-o", os.path.join(tmp, f"{key}.csv"))
             m = re.search(r"mean absolute ([\d.e-]+) µm.*; RMS ([\d.e-]+) µm; max "
                           r"([\d.e-]+) µm", text)
