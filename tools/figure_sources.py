@@ -569,6 +569,49 @@ def creep_holds(options):
     return out
 
 
+@source(script=True)
+def learning_fresh(options):
+    """bench_learn.py --fresh 4 3000 (its own functions): four random stages it never
+    saw (random_plant's hysteresis and creep scaled to 45 µm, one or two modes from
+    500 Hz - 2 kHz), each at 10, 50, 100 Hz and fmode/8: the first mode (Hz, damping %),
+    the replay after 10 trials, in multiples of the noise, trial 0's error (the static
+    inverse) and its ratio to the replay; over the stages that meet the targets (<= 3x
+    the noise at 10, 50, 100 Hz, >= 25x below the static inverse at 100 Hz) the range of
+    those figures, and the one that fails."""
+    import warnings
+
+    from pihyst.exceptions import PihystWarning
+
+    bench = _benchmark("bench_learn")
+    out, met, failed = {}, [], []
+    for seed in range(3000, 3004):
+        modes = bench.random_stage(seed)[1]
+
+        def make(r, noise=True, seed=seed):
+            return bench.random_stage(seed, r, bench.RANDOM_RANGE_UM, noise)[0]
+        fmode = modes[0][0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            rows, _ = bench.run_stage(make, fmode, [10.0, 50.0, 100.0, fmode / 8])
+        entry = {"mode_hz": fmode, "mode_khz": fmode / 1e3, "damping_pct": 100 * modes[0][1]}
+        for (_rate, _n, res, replay, _out, _sent, _secs, _ham, _static), key in zip(
+                rows, ("hz10", "hz50", "hz100", "fmode8")):
+            entry[key] = {"replay": replay, "x_noise": replay / bench.NOISE_UM,
+                          "t0": float(res.rms[0]), "x_below": float(res.rms[0]) / replay}
+        ok = (all(entry[k]["x_noise"] <= 3 for k in ("hz10", "hz50", "hz100"))
+              and entry["hz100"]["x_below"] >= 25)
+        (met if ok else failed).append(entry)
+        out[f"s{seed}"] = entry
+    noise = [e[k]["x_noise"] for e in met for k in ("hz10", "hz50", "hz100")]
+    below = [e["hz100"]["x_below"] for e in met]
+    out["met"] = {"n": len(met), "x_noise": {"min": min(noise, default=np.nan),
+                                             "max": max(noise, default=np.nan)},
+                  "x_below_100": {"min": min(below, default=np.nan),
+                                  "max": max(below, default=np.nan)}}
+    out["failed"] = failed[0] if len(failed) == 1 else {"n": len(failed)}
+    return out
+
+
 @source(slow=True)
 def rig_commands(options):
     """The rig commands of the README and docs/rig.md as written (emulated instruments,
