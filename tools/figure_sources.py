@@ -6,7 +6,8 @@ dict; a placeholder ``{a.b}`` of a quote names ``values["a"]["b"]``. Quick sourc
 a few seconds at most and run in the quick tests; slow ones (the demo's study, fits of
 the measured sets and of the simulated beams' records, the learning benchmark's stages)
 in the slow tests and under ``check_figures.py --all``; script-only ones
-(``script``: minutes each) under ``check_figures.py --all`` alone. Sources that need the
+(``script``: minutes each, the learning benchmark's fresh stages) under
+``check_figures.py --all`` alone. Sources that need the
 measured data sets (``data``) are skipped, saying why, without them.
 """
 
