@@ -8,6 +8,7 @@ default half a unit of the last digit quoted: the value, rounded as printed).
 
     python tools/check_figures.py              # the quick sources
     python tools/check_figures.py --all        # also the slow ones (the demo, measured sets)
+                                               # and the script-only ones (minutes each)
     python tools/check_figures.py --all --demo-metrics out/demo/metrics.json
     python tools/check_figures.py --coverage   # figures in the text that no entry covers
 
@@ -138,9 +139,10 @@ def check_entry(entry, values, text, line_of):
     return problems
 
 
-def check(entries, *, slow=False, options=None):
-    """Check ``entries`` whose source is quick (and slow ones too when ``slow``); returns
-    (number of figures checked, mismatches, {source skipped: why})."""
+def check(entries, *, slow=False, script=False, options=None):
+    """Check ``entries`` whose source is quick (slow ones too when ``slow``, and those
+    that only the script runs, taking minutes, when ``script`` as well); returns (number
+    of figures checked, mismatches, {source skipped: why})."""
     from figure_sources import SOURCES  # tools/ on sys.path (main() puts it there)
 
     options = options or {}
@@ -152,6 +154,9 @@ def check(entries, *, slow=False, options=None):
         src = SOURCES[entry.source]
         if src.slow and not slow and not src.available_from(options):
             skipped[entry.source] = "slow (--all)"
+            continue
+        if src.script and not script:
+            skipped[entry.source] = "script only (--all)"
             continue
         if entry.source in skipped:
             continue
@@ -214,7 +219,7 @@ def main(argv=None):
             print(f"{'all':<36} {cov:>4} of {total:>4}")
             return 0
         options = {"demo_metrics": args.demo_metrics}
-        n, problems, skipped = check(entries, slow=args.all, options=options)
+        n, problems, skipped = check(entries, slow=args.all, script=args.all, options=options)
     except RegistryError as err:
         print(f"check_figures: error: {err}", file=sys.stderr)
         return 2

@@ -87,7 +87,7 @@ def test_validate_a_model_on_its_own_prediction_and_a_shifted_record(tmp_path, c
     out = capsys.readouterr().out
     assert "start state: the model file's (--initial-state model); all 401 samples judged" \
         in out
-    assert "displacement in nm (column name 'd_nm') -> um" in out
+    assert "displacement in nm (column name 'd_nm') -> µm" in out
     assert "as the model is                    2         2         2     5.16 %" in out
     assert "mostly an offset of +2 µm" in out
     assert figure.read_text().lstrip().startswith("<?xml")
@@ -371,7 +371,7 @@ def test_errors_after_skip_until_name_the_files_line(tmp_path, capsys, text, arg
      "{src}:4:2: column 'voltage_V': 10 times the voltage gain 1e+308 is too large")
     for command in ("predict", "validate")] + [
     ("validate", ["--displacement-unit", "m"],
-     "{src}:3:3: column 'displacement_um': 1e+303 times 1e+06 (m to um) is too large"),
+     "{src}:3:3: column 'displacement_um': 1e+303 times 1e+06 (m to µm) is too large"),
 ] + [
     (command, ["--rate", "1e-310", "--time", "none"],
      "{src}: sample 1: its time 1 / --rate 1e-310 Hz is too large for a double")

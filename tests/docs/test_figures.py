@@ -45,18 +45,24 @@ def test_the_quick_figures_are_true(checker, entries):
     n, problems, skipped = checker.check(entries, slow=False)
     assert n > 0
     assert not problems, "\n".join(map(str, problems))
+    from figure_sources import SOURCES
+
     from pihyst.io import datasets
-    assert set(skipped) <= {"demo", "p885_pair", "rig_commands", "tracking_beams"} | (
-        {"p885_data"} if datasets.data_root() is None else set())
+    slow = {name for name, src in SOURCES.items() if src.slow}
+    data = {name for name, src in SOURCES.items() if src.data}
+    assert set(skipped) <= slow | (data if datasets.data_root() is None else set())
 
 
 @pytest.mark.slow
 def test_the_slow_figures_are_true(checker, entries):
     n, problems, skipped = checker.check(entries, slow=True)
     # only what needs the measured data sets may be left out, and only without them
+    from figure_sources import SOURCES
+
     from pihyst.io import datasets
-    assert not skipped or (datasets.data_root() is None
-                           and set(skipped) <= {"p885_pair", "p885_data"})
+    data = {name for name, src in SOURCES.items() if src.data}
+    script = {name for name, src in SOURCES.items() if src.script}
+    assert set(skipped) - script <= (data if datasets.data_root() is None else set())
     assert not problems, "\n".join(map(str, problems))
 
 
@@ -107,3 +113,21 @@ def test_every_occurrence_is_checked(checker):
     line = lambda offset: offset  # noqa: E731
     problems = checker.check_entry(e, {"p": 41.38}, "peak 41.38 µm; later peak 41.3 µm", line)
     assert len(problems) == 1 and "quotes 41.3 " in str(problems[0])
+
+
+def test_script_only_sources_run_only_when_asked(checker, monkeypatch):
+    import figure_sources
+
+    calls = []
+
+    def compute(options):
+        calls.append(options)
+        return {"x": 78.6}
+
+    monkeypatch.setitem(figure_sources.SOURCES, "fake", figure_sources.Source(
+        "fake", compute, slow=True, doc="", data=False, script=True))
+    e = checker.Entry(file="README.md", quote="(paper: {x} %), and its inverse", source="fake")
+    n, problems, skipped = checker.check([e], slow=True)
+    assert (n, problems, calls) == (0, [], []) and skipped == {"fake": "script only (--all)"}
+    n, problems, skipped = checker.check([e], slow=True, script=True)
+    assert (n, problems, skipped, len(calls)) == (1, [], {}, 1)

@@ -76,7 +76,7 @@ def register(sub):
     p.add_argument("--max-latency", metavar="SECONDS", type=positive_number,
                    help="choose only among models whose compensator takes at most SECONDS "
                         "per sample in the worst case (estimated from the model's "
-                        "structure), e.g. 5e-7 for 0.5 us (seconds, as pihyst.fit's "
+                        "structure), e.g. 5e-7 for 0.5 µs (seconds, as pihyst.fit's "
                         "max_latency)")
     p.add_argument("--no-creep", action="store_true",
                    help="do not fit creep (default: with a time column, or --rate, creep is "

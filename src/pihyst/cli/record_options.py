@@ -39,7 +39,7 @@ def add_record_options(p, what="the record", unused=None):
                    help="sample rate, for a record without a time column")
     add("--displacement-unit", choices=UNITS, metavar="UNIT",
                    help="unit of the displacement column: m, mm, um, nm (default: from "
-                        "the column name, else um)")
+                        "the column name, else µm)")
     add("--voltage-gain", metavar="G", type=float,
                    help="the actuator's voltage is G x the voltage column (a record of an "
                         "amplifier's input)")

@@ -23,6 +23,7 @@ from pihyst.io._array_sources import ArraySource, function_source, open_array_so
 from pihyst.io._inputs import kind_of
 from pihyst.io._lab_formats import GUESSES, TableSource, open_lab_source
 from pihyst.io._text_source import TextSource
+from pihyst.model._units import display_unit
 
 QUANTITIES = ("voltage", "displacement", "time")
 DEFAULT_NAMES = {"voltage": "voltage_V", "displacement": "displacement_um", "time": "time_s"}
@@ -705,7 +706,7 @@ class RecordReader:
                  for q in QUANTITIES if q in self.labels]
         notes = []
         if "displacement" in self.refs and self.unit != "um":
-            notes.append(f"displacement in {self.unit} ({self.unit_from}) -> um")
+            notes.append(f"displacement in {display_unit(self.unit)} ({self.unit_from}) -> µm")
         for q, base in (("voltage", "V"), ("time", "s")):
             named = self.named_units.get(q)
             if named is not None:
@@ -824,7 +825,7 @@ class _Transform:
         if "displacement" in block and r.unit != "um":
             block["displacement"] = self._scaled(
                 block["displacement"], "displacement", UNIT_FACTORS[r.unit],
-                f"{UNIT_FACTORS[r.unit]:g} ({r.unit} to um)")
+                f"{UNIT_FACTORS[r.unit]:g} ({display_unit(r.unit)} to µm)")
         if "time" not in block and r.rate is not None:
             with np.errstate(over="ignore"):
                 t = (self.raw_rows + np.arange(n)) / r.rate

@@ -148,7 +148,7 @@ class RigConfig:
                   if s.protocol == "modbus-rtu" else
                   f"ascii @{s.baudrate} set {s.set_command!r}")
         return (f"{self.source}: supply {s.port} ({supply}); sensor {n.port} ({n.protocol} "
-                f"@{n.baudrate} output {n.output} x{n.scale_um:g} um sign {n.sign:+d}); "
+                f"@{n.baudrate} output {n.output} x{n.scale_um:g} µm sign {n.sign:+d}); "
                 f"rate {r.rate_hz:g} Hz")
 
 

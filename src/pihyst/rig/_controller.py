@@ -261,7 +261,7 @@ class Controller:
                 ys = {y for y, _ in self._recent}
                 us = [u for _, u in self._recent if not math.isnan(u)]
                 if len(ys) == 1 and us and max(us) - min(us) > s.stuck_volts:
-                    self._stop(f"sensor value stuck at {r.displacement_um:g} um for "
+                    self._stop(f"sensor value stuck at {r.displacement_um:g} µm for "
                                f"{s.stuck_ticks} ticks while the voltage moved "
                                f"{max(us) - min(us):.3g} V")
 

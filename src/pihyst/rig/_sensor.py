@@ -49,7 +49,7 @@ class KeyenceSensor:
 
     def describe(self):
         return (f"KEYENCE {self.cfg.protocol[8:].upper()} at {self.cfg.port}, output "
-                f"{self.cfg.output} ({self.command!r}), {self.cfg.scale_um:g} um per unit, "
+                f"{self.cfg.output} ({self.command!r}), {self.cfg.scale_um:g} µm per unit, "
                 f"sign {self.cfg.sign:+d}")
 
 

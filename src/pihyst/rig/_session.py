@@ -5,6 +5,7 @@ import datetime
 import os
 
 from pihyst._version import __version__
+from pihyst.model._units import display_unit
 from pihyst.rig import _serial_handlers
 from pihyst.rig._clock import VirtualClock, WallClock
 from pihyst.rig._controller import Controller, check_limits
@@ -129,7 +130,7 @@ def metadata(rig, program, notes=()):
     lines = [f"pihyst {__version__} rig run log",
              f"start: {datetime.datetime.now(datetime.timezone.utc).isoformat(timespec='seconds')}",
              f"program: {program.describe()}",
-             f"reference unit: {program.reference_unit}",
+             f"reference unit: {display_unit(program.reference_unit)}",
              f"rate: {r.rate_hz:g} Hz; limits: {r.u_min:g} .. {r.u_max:g} V; slew: {slew}",
              f"instruments: {rig.describe()}",
              f"supply: {rig.supply.describe()}",

@@ -189,9 +189,9 @@ class TrackProcedure(RigProcedure):
 
     model = Parameter("Model (JSON)", default="model.json")
     desired = Parameter("Desired displacement (CSV)", default="examples/rig/desired_triangle.csv")
-    kp = FloatParameter("Feedback KP", units="V/um", minimum=0.0, default=0.0)
-    ki = FloatParameter("Feedback KI", units="V/(um*s)", minimum=0.0, default=0.0)
-    kd = FloatParameter("Feedback KD", units="V*s/um", minimum=0.0, default=0.0)
+    kp = FloatParameter("Feedback KP", units="V/µm", minimum=0.0, default=0.0)
+    ki = FloatParameter("Feedback KI", units="V/(µm*s)", minimum=0.0, default=0.0)
+    kd = FloatParameter("Feedback KD", units="V*s/µm", minimum=0.0, default=0.0)
 
     def startup(self):
         config = self.load_config()
