@@ -246,3 +246,22 @@ def test_manifest_says_which_files_have_a_units_row(tmp_path, capsys):
         tmp_path, folder / "a.csv", "--units-row", "--model", "classical")
     assert pihyst.load_model(out / "b.json") == _fit_alone(
         tmp_path, folder / "b.csv", "--no-units-row", "--model", "classical")
+
+
+def test_the_model_files_name_their_record_as_pihyst_fits_do(tmp_path, capsys):
+    """fit-many's model file carries what pihyst fit's carries about its record (columns,
+    units, samples, the reading options), not only the file's name."""
+    records = make_fleet_dir(tmp_path)
+    for bad in ("text.csv", "short.csv"):
+        (records / bad).unlink()
+    out = tmp_path / "models"
+    assert main(["fit-many", str(records), "-o", str(out), "--model", "classical"]) == 0
+    single = tmp_path / "one.json"
+    assert main(["fit", str(records / "act1.csv"), "--model", "classical", "-o",
+                 str(single)]) == 0
+    capsys.readouterr()
+    rows, _ = _summary(out)
+    many = pihyst.load_model(out / rows["act1.csv"]["model_file"]).metadata["source"]
+    alone = pihyst.load_model(single).metadata["source"]
+    assert many["record"] == alone["record"] and many["record"]["columns"]
+    assert many["data"] == alone["data"]

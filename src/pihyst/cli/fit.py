@@ -237,7 +237,7 @@ def run(args):
         **model.metadata,
         "source": {"data": args.data, "command": f"pihyst {__version__} fit "
                                                  + options_text(args),
-                   "record": _plain(record.metadata)}})
+                   "record": plain_metadata(record.metadata)}})
     save_model(model, args.output)
     if time_note is not None:
         print(f"pihyst: warning: {time_note}", flush=True, file=sys.stderr)
@@ -324,7 +324,7 @@ def sample_period(args, path=None):
     return float(np.median(steps)) if steps.size else None
 
 
-def _plain(meta):
+def plain_metadata(meta):
     """The record's metadata as JSON-ready values."""
     return {k: (v if isinstance(v, (str, int, float, bool, type(None))) else
                 {str(a): str(b) for a, b in v.items()} if isinstance(v, dict) else str(v))

@@ -24,6 +24,7 @@ from pihyst.cli.fit import (
     _holdout,
     _thresholds,
     add_size_options,
+    plain_metadata,
     read_for_fit,
     sample_period,
 )
@@ -322,10 +323,12 @@ def run(args):
         if model.delay:     # the delay holds at the record's sample period, as pihyst fit's
             model = model.replace(sample_period=sample_period(
                 file_args, os.path.join(args.folder, outcome.record)))
+        record = records[outcome.record]
         model = model.replace(metadata={
             **model.metadata,
             "source": {"data": os.path.join(args.folder, outcome.record),
-                       "command": f"{command} " + options_text(file_args)}})
+                       "command": f"{command} " + options_text(file_args),
+                       "record": plain_metadata(record.metadata)}})
         save_model(model, os.path.join(args.output, model_files[outcome.record]))
         written[outcome.record] = model_files[outcome.record]
         if outcome.record in notes:
