@@ -63,8 +63,9 @@ class Serial(SerialBase):
         self.is_open = True
 
     def close(self):
+        # as pyserial's own ports: io.RawIOBase.close would flush, which raises
+        # PortNotOpenError on a closed port (so every close raised, and a second one too)
         self.is_open = False
-        super().close()
 
     def _reconfigure_port(self):
         pass
