@@ -12,12 +12,13 @@ replies (the device sees garbage), as on a real line.
 import threading
 import urllib.parse
 from collections import deque
+from typing import Any
 
 import serial
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
 SCHEME = "pihystsim"
-_REGISTRY = {}
+_REGISTRY: dict[str, tuple[Any, Any]] = {}  # name -> (device, clock)
 _LOCK = threading.Lock()
 
 

@@ -420,12 +420,12 @@ class AsciiSupply:
                 echo = echo[len(self._prompt):]
             if echo != sent:
                 raise RigError(f"supply: expected the echo {sent!r}, got {echo!r}")
-        reply = b""
+        raw = b""
         if query:
-            reply = read_line(port, self._term, "supply")[:-len(self._term)]
+            raw = read_line(port, self._term, "supply")[:-len(self._term)]
         elif self._prompt:
-            reply = read_line(port, self._prompt, "supply")[:-len(self._prompt)]
-        reply = reply.decode("ascii", "replace").strip()
+            raw = read_line(port, self._prompt, "supply")[:-len(self._prompt)]
+        reply = raw.decode("ascii", "replace").strip()
         if self._prompt:
             reply = reply.lstrip(c.prompt).strip()
         if reply and (not query or "ERR" in reply.upper()):
