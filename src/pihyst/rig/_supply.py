@@ -282,6 +282,8 @@ class ModbusRtuSupply:
 
         Raises
         ------
+        InvalidArgumentError
+            No watchdog is configured.
         OSError
             A communication error.
 
@@ -297,8 +299,9 @@ class ModbusRtuSupply:
         1.0
         """
         c = self.cfg
-        assert c.watchdog_register is not None and c.watchdog_s is not None, \
-            "arm_watchdog without a configured watchdog"
+        if c.watchdog_register is None or c.watchdog_s is None:
+            raise InvalidArgumentError("supply: no watchdog configured ([supply] watchdog_s "
+                                       "and watchdog_register)")
         self.instrument.write_register(c.watchdog_register,
                                        int(round(c.watchdog_s * c.watchdog_scale)), 0, 6)
 
@@ -307,6 +310,8 @@ class ModbusRtuSupply:
 
         Raises
         ------
+        InvalidArgumentError
+            No watchdog is configured.
         OSError
             A communication error.
 
@@ -321,8 +326,9 @@ class ModbusRtuSupply:
         ...     rig.emulators.supply_state.watchdog_s
         0.0
         """
-        assert self.cfg.watchdog_register is not None, \
-            "disarm_watchdog without a configured watchdog"
+        if self.cfg.watchdog_register is None:
+            raise InvalidArgumentError("supply: no watchdog configured ([supply] "
+                                       "watchdog_register)")
         self.instrument.write_register(self.cfg.watchdog_register, 0, 0, 6)
 
     def close(self) -> None:
@@ -594,6 +600,8 @@ class AsciiSupply:
 
         Raises
         ------
+        InvalidArgumentError
+            No watchdog is configured.
         RigError
             No reply, a wrong echo, or an error message from the supply.
 
@@ -608,7 +616,9 @@ class AsciiSupply:
         ...     rig.emulators.supply_state.watchdog_s
         1.0
         """
-        assert self.cfg.watchdog_command is not None, "arm_watchdog without a watchdog"
+        if self.cfg.watchdog_command is None:
+            raise InvalidArgumentError("supply: no watchdog configured ([supply] watchdog_s "
+                                       "and watchdog_command)")
         self._command(self.cfg.watchdog_command.format(seconds=self.cfg.watchdog_s))
 
     def disarm_watchdog(self) -> None:
@@ -616,6 +626,8 @@ class AsciiSupply:
 
         Raises
         ------
+        InvalidArgumentError
+            No watchdog is configured.
         RigError
             No reply, a wrong echo, or an error message from the supply.
 
@@ -630,7 +642,9 @@ class AsciiSupply:
         ...     rig.emulators.supply_state.watchdog_s
         0.0
         """
-        assert self.cfg.watchdog_command is not None, "disarm_watchdog without a watchdog"
+        if self.cfg.watchdog_command is None:
+            raise InvalidArgumentError("supply: no watchdog configured ([supply] "
+                                       "watchdog_command)")
         self._command(self.cfg.watchdog_command.format(seconds=0.0))
 
     def close(self) -> None:

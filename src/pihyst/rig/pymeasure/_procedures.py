@@ -645,17 +645,16 @@ def _parameter_keywords(cls: type) -> Callable[..., None]:
     ones silently); its signature names them, for ``help()``."""
     names = [name for name, value in inspect.getmembers(cls) if isinstance(value, Parameter)]
 
-    def __init__(self: RigProcedure, **values: Any) -> None:
-        unknown = sorted(set(values) - set(names))
-        if unknown:
-            raise TypeError(f"{cls.__name__}() got an unexpected keyword argument "
-                            f"{unknown[0]!r}; its Parameters are {', '.join(names)}")
-        self._set_parameters(**values)
-
     self_parameter = inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)
-    __init__.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+    signature = inspect.Signature(
         [self_parameter] + [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
                                               default=None) for name in names])
+
+    def __init__(self: RigProcedure, **values: Any) -> None:
+        signature.bind(self, **values)    # TypeError for a keyword that is no Parameter
+        self._set_parameters(**values)
+
+    __init__.__signature__ = signature  # type: ignore[attr-defined]
     __init__.__qualname__ = f"{cls.__qualname__}.__init__"
     __init__.__doc__ = (f"{cls.__name__}'s Parameters ({', '.join(names)}) as keywords; "
                         "None: the Parameter's default.")
