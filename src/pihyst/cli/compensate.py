@@ -4,6 +4,8 @@
 Streams the record block by block; --slew-rate first reads the times once to find the
 smallest step."""
 
+import argparse
+
 import numpy as np
 
 from pihyst._version import __version__
@@ -27,7 +29,7 @@ from pihyst.io import ColumnWriter, load_model
 from pihyst.model._units import output_unit
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "compensate", help="voltages that make a model follow a desired displacement",
         description="Invert MODEL.json exactly, sample by sample, on the desired "
@@ -134,7 +136,7 @@ def check_limits(u_min, u_max, model, model_path):
                          f"(the model's input range is [{lo:g}, {hi:g}])")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     refuse_unused(args, 'compensate', 'DESIRED', NO_VOLTAGE)
     check_output(args.output)
     model = load_model(args.model)
@@ -218,6 +220,8 @@ def run(args):
             if writer is not None:
                 writer.abort()
             raise
+        if writer is None:      # the readers refuse a record without samples first
+            raise UsageError(f"{args.desired}: no samples")
         writer.close()
         print(reader.describe())
     print(frame_line)

@@ -1,5 +1,6 @@
 """pihyst demo [--out DIR]: the paper's study end to end on the simulated beam."""
 
+import argparse
 import os
 import time
 
@@ -11,7 +12,7 @@ from pihyst.sim import PLANT_NAMES
 DEFAULT_OUT = "pihyst-demo"
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "demo", help="the paper's study end to end on the simulated beam, as a report",
         description="Reproduce Xu et al. (2020) on pihyst's simulated piezo beam: record "
@@ -42,7 +43,7 @@ def _printer(prefix):
     return say
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     try:
         from pihyst.study import write_report
     except ImportError as err:                       # matplotlib is an optional dependency
@@ -78,9 +79,11 @@ def run(args):
           f"{paper['tracking']['mean_abs']}), RMS {h['tracking_rms_multislope_um']:.4f} µm "
           f"(paper {paper['tracking']['rms']:.4f}), {h['tracking_mean_abs_pct_of_range']:.2f} "
           f"% of the range")
-    if study.rig is not None:
-        o, f = study.rig.tracking["open_loop"], study.rig.tracking["feedback"]
+    from pihyst.study._rig_study import RigStudy
+    if isinstance(study.rig, RigStudy):       # the study's field is typed object
+        rig = study.rig
+        o, f = rig.tracking["open_loop"], rig.tracking["feedback"]
         print(f"  through the emulated instruments: mean |error| open loop {o['mean_abs']:.4f} "
               f"µm, with feedback {f['mean_abs']:.4f} µm; busy "
-              f"{study.rig.timing['record']['busy_mean_ms']:.1f} ms per tick at "
-              f"{study.rig.rate_hz:g} Hz")
+              f"{rig.timing['record']['busy_mean_ms']:.1f} ms per tick at "
+              f"{rig.rate_hz:g} Hz")

@@ -1,5 +1,6 @@
 """pihyst export MODEL.json (--c | --flat) -o OUT [--name NAME] [--float]"""
 
+import argparse
 import os
 
 from pihyst._atomic import write_atomically
@@ -9,7 +10,7 @@ from pihyst.io import load_model
 from pihyst.io._export import CORE_HEADERS, c_header, c_identifier, core_prefix, flat_text
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "export", help="a model for a controller: C header, or the shared library's file",
         description="Write MODEL.json for use outside Python: --c writes a C header with the "
@@ -37,7 +38,7 @@ def _size(model):
     return size
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     model = load_model(args.model)
     if args.flat:
         if args.float or args.name:

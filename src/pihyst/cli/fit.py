@@ -2,6 +2,7 @@
 [--validate OTHER.csv] [--delay N|auto] [--max-operators N] [--max-latency SECONDS] [--json]
 -o MODEL.json"""
 
+import argparse
 import math
 import sys
 import warnings
@@ -26,7 +27,7 @@ from pihyst.model._delay import MAX_DELAY_SAMPLES
 _QUANTITIES = {"input": "voltage", "output": "displacement"}
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "fit", help="fit hysteresis models to a measured loop",
         description="Fit PI-type models to the voltage_V and displacement_um columns of "
@@ -192,7 +193,7 @@ def _error(err, record):
     return UsageError(f"{record.source}: {err}")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     check_output(args.output)
     thresholds = _thresholds(args.thresholds)
     holdout = _holdout(args.holdout)

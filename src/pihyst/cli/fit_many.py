@@ -45,7 +45,7 @@ class RecordsFailed(UsageError):
     """Some records could not be fitted (the others were written): exit status 2."""
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "fit-many", help="fit a model to every record of a folder (a fleet), in parallel "
                          "on a Dask cluster if asked",
@@ -295,7 +295,7 @@ def _progress(outcome):
         print(f"  {outcome.record}: FAILED: {outcome.error}", flush=True)
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     options = _options(args)
     paths, model_files, skipped = _records(args.folder, args.pattern)
     per_file = _manifest(args.manifest, args, [os.path.basename(p) for p in paths])

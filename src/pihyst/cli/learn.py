@@ -28,7 +28,7 @@ def add_learning_options(p):
                    help="learn only harmonics up to HZ (default: all the trials can measure)")
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "learn", help="learn the feedforward of a repeated scan on a simulated stage",
         description="Iterative learning of one period of voltages (pihyst.learn): each "
@@ -185,7 +185,7 @@ def _scan(args, stage_range, fmode):
     return y
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     from pihyst.learn import learn_periodic
     from pihyst.sim import make_stage
     if not args.u_min < args.u_max or not (0 <= args.u_min and args.u_max <= 150):

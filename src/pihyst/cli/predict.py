@@ -3,10 +3,12 @@
 Streams the record block by block (an hour at 10 kHz in bounded memory), except with
 --initial-state settle, which needs the record's range first."""
 
+import argparse
+
 import numpy as np
 
 from pihyst._version import __version__
-from pihyst.cli.errors import check_output
+from pihyst.cli.errors import UsageError, check_output
 from pihyst.cli.model_inputs import (
     InputRange,
     add_initial_state_option,
@@ -26,7 +28,7 @@ from pihyst.io import ColumnWriter, load_model
 from pihyst.model._units import output_unit
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser("predict", help="displacement a model predicts for a voltage signal",
                        description="Run MODEL.json on the voltage of INPUT (voltage_V, or "
                                    "--voltage COL) and write time_s, voltage_V and the "
@@ -42,7 +44,7 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     refuse_unused(args, 'predict', 'INPUT', NO_DISPLACEMENT)
     check_output(args.output)
     model = load_model(args.model)
@@ -95,6 +97,8 @@ def run(args):
             if writer is not None:
                 writer.abort()
             raise
+        if writer is None:      # the readers refuse a record without samples first
+            raise UsageError(f"{args.input}: no samples")
         writer.close()
         print(reader.describe())
     if limits.note():

@@ -1,5 +1,6 @@
 """pihyst report DATA.csv [--out DIR]: fit and compare models on a measured loop."""
 
+import argparse
 import os
 import time
 
@@ -10,7 +11,7 @@ from pihyst.cli.errors import UsageError
 from pihyst.cli.record_options import add_record_options, options_text, read_from_args
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "report", help="fit-and-compare report from a measured loop (no simulator)",
         description="Fit the conventional PI and the multislope PI with the paper's "
@@ -41,7 +42,7 @@ def add_figure_format_option(p):
                    help="also write the figures as svg or pdf (repeatable); PNG always")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     try:
         from pihyst.study import write_report
     except ImportError as err:

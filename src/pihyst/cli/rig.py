@@ -8,6 +8,7 @@ virtual time unless --real-time).
 import argparse
 import math
 import sys
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from pihyst.io import load_model
 from pihyst.model._units import output_unit
 from pihyst.rig._per_tick import column_per_tick
 from pihyst.sim.signals import MAX_SAMPLES as MAX_TICKS
+
+if TYPE_CHECKING:
+    from pihyst.rig import RunResult
 
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
@@ -40,7 +44,7 @@ def _common(p, output=True):
                        help="force every log row to the disk (survives a power cut)")
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "rig", help="run the experiment on the instruments (or emulated ones)",
         description="Drive the high-voltage supply and read the laser displacement sensor "
@@ -249,7 +253,7 @@ def _report(result, args, rig):
 
 
 # ----------------------------------------------------------------------------- actions
-def run_check(args):
+def run_check(args: argparse.Namespace) -> None:
     config = _config(args)
     from pihyst.rig import RigError
     with _open(args, config) as rig:
@@ -272,7 +276,7 @@ def run_check(args):
     print(f"sensor: {rig.sensor.describe()}: {value}")
 
 
-def run_record(args):
+def run_record(args: argparse.Namespace) -> None:
     from pihyst.rig import VoltageProgram
     config = _config(args)
     r = config.rig
@@ -328,7 +332,7 @@ def _gains(text):
     return gains + [0.0] * (3 - len(gains))
 
 
-def run_track(args):
+def run_track(args: argparse.Namespace) -> None:
     from pihyst import metrics
     from pihyst.rig import FeedbackProgram, FeedforwardProgram
     config = _config(args)
@@ -349,8 +353,9 @@ def run_track(args):
             program = FeedforwardProgram(model, desired, r.u_min, r.u_max, max_step,
                                          description=args.desired)
         else:
+            kp, ki, kd = gains
             program = FeedbackProgram(model, desired, r.u_min, r.u_max, 1.0 / r.rate_hz,
-                                      *gains, max_step=max_step, description=args.desired)
+                                      kp, ki, kd, max_step=max_step, description=args.desired)
     except ValueError as err:
         raise UsageError(f"{args.model}: {err}") from None
     _check_output(args.output)
@@ -398,7 +403,7 @@ def _reach_note(model, desired, lo, hi):
             run.n_saturated)
 
 
-def run_emulate(args):
+def run_emulate(args: argparse.Namespace) -> None:
     import signal
     import threading
 
@@ -453,7 +458,7 @@ def _trial_log(output, trial):
     return f"{stem}.trial-{trial:02d}{ext or '.csv'}"
 
 
-def run_learn(args):
+def run_learn(args: argparse.Namespace) -> None:
     """Each trial one rig run (module notes of pihyst.learn: ``run_period``)."""
     from pihyst.cli.learn import desired_period, print_learning, write_learning
     from pihyst.learn import learn_periodic
@@ -468,7 +473,7 @@ def run_learn(args):
     if args.output.lower().endswith((".h5", ".hdf5")):
         raise UsageError(f"-o {args.output}: pihyst rig learn writes CSV")
     _check_output(args.output)
-    trials = []
+    trials: "list[RunResult]" = []
     with _open(args, config) as rig:
         def run_period(u):
             trial = len(trials)

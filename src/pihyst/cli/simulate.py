@@ -1,5 +1,7 @@
 """pihyst simulate --plant NAME --signal KIND [options] -o DATA.csv"""
 
+import argparse
+
 from pihyst._version import __version__
 from pihyst.cli.errors import (
     UsageError,
@@ -16,7 +18,7 @@ from pihyst.sim import signals
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "simulate", help="record a loop from a simulated piezo beam",
         description="Drive a simulated beam (not a PI model: Preisach or Bouc-Wen hysteresis "
@@ -90,7 +92,7 @@ def make_signal(args, u_max):
         raise UsageError(f"--signal {kind} with {options}: {err}") from None
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     check_output(args.output)
     plant = plant_from_options(args)
     u_max = plant.u_max if args.u_max is None else args.u_max

@@ -4,6 +4,8 @@ Feedforward tracking on a simulated beam: desired displacement -> compensator (t
 inverse of MODEL.json) -> voltages -> simulated beam -> measured displacement.
 """
 
+import argparse
+
 import numpy as np
 
 from pihyst._version import __version__
@@ -28,7 +30,7 @@ from pihyst.io import load_model, write_columns
 from pihyst.sim.signals import MAX_SAMPLES
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "track", help="track a desired displacement on a simulated beam by feedforward",
         description="Compensate the desired displacement_um of DESIRED.csv with the exact "
@@ -63,7 +65,7 @@ def _limits(args, model, plant):
     return lo, hi
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     refuse_unused(args, 'track', 'DESIRED', NO_VOLTAGE)
     check_output(args.output)
     model = load_model(args.model)

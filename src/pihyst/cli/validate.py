@@ -1,6 +1,7 @@
 """pihyst validate MODEL.json DATA [record options] [--initial-state MODE] [--figure FILE]
 [--json]: a model judged on a second record."""
 
+import argparse
 import json
 import os
 
@@ -22,7 +23,7 @@ from pihyst.model._units import output_unit
 FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
 
-def register(sub):
+def register(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     p = sub.add_parser(
         "validate", help="judge a model on a record: errors overall and per cycle",
         description="Predict the voltage of DATA with MODEL.json and compare with the "
@@ -45,7 +46,7 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def run(args):
+def run(args: argparse.Namespace) -> None:
     from pihyst.io import load_model
     if args.figure and os.path.splitext(args.figure)[1].lower() not in FIGURE_FORMATS:
         raise UsageError(f"--figure {args.figure}: use a .png, .svg or .pdf file name")

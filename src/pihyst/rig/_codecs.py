@@ -5,6 +5,7 @@ emulated instruments (the drivers' own Modbus frames are built by minimalmodbus)
 
 import re
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from pihyst.exceptions import InvalidArgumentError
@@ -12,11 +13,22 @@ from pihyst.exceptions import InvalidArgumentError
 # ----------------------------------------------------------------------------- Modbus RTU
 
 
-def crc16_modbus(data):
+def crc16_modbus(data: bytes) -> int:
     """CRC-16/Modbus: reflected polynomial 0xA001, initial value 0xFFFF.
+
+    Parameters
+    ----------
+    data : bytes
+        The bytes the CRC covers (a Modbus RTU frame without its CRC).
+
+    Returns
+    -------
+    int
+        The CRC, 0..0xFFFF (sent low byte first).
 
     Examples
     --------
+    >>> from pihyst.rig import crc16_modbus
     >>> hex(crc16_modbus(b"123456789"))       # the catalogue check value
     '0x4b37'
     """
@@ -28,22 +40,39 @@ def crc16_modbus(data):
     return crc
 
 
-def with_crc(frame):
+def with_crc(frame: bytes) -> bytes:
     """The frame followed by its CRC, low byte first (as on the wire)."""
     return bytes(frame) + struct.pack("<H", crc16_modbus(frame))
 
 
-def crc_ok(frame):
-    """True if the last two bytes of ``frame`` are the CRC of the rest."""
+def crc_ok(frame: bytes) -> bool:
+    """Whether the last two bytes of ``frame`` are the CRC of the rest.
+
+    Parameters
+    ----------
+    frame : bytes
+        A Modbus RTU frame with its CRC (low byte first).
+
+    Returns
+    -------
+    bool
+        True if the CRC is right (False for a frame shorter than 4 bytes).
+
+    Examples
+    --------
+    >>> from pihyst.rig import crc_ok
+    >>> crc_ok(bytes.fromhex("010300000001840a")), crc_ok(bytes.fromhex("010300000001840b"))
+    (True, False)
+    """
     return len(frame) >= 4 and struct.pack("<H", crc16_modbus(frame[:-2])) == frame[-2:]
 
 
-def register_count(fmt):
+def register_count(fmt: str) -> int:
     """Registers a setpoint of format ``fmt`` occupies."""
     return 1 if fmt == "uint16" else 2
 
 
-def encode_registers(value, fmt, word_order="big"):
+def encode_registers(value: float, fmt: str, word_order: str = "big") -> list[int]:
     """Register words (16-bit ints) holding ``value`` (already in register units).
 
     Integers are rounded; ``word_order`` 'little' puts the low word first (CDAB).
@@ -73,7 +102,7 @@ def encode_registers(value, fmt, word_order="big"):
     return words[::-1] if word_order == "little" else words
 
 
-def decode_registers(words, fmt, word_order="big"):
+def decode_registers(words: Sequence[int], fmt: str, word_order: str = "big") -> float:
     """Inverse of :func:`encode_registers`."""
     if fmt == "uint16":
         return float(words[0])
@@ -87,7 +116,7 @@ MODBUS_EXCEPTIONS = {1: "illegal function", 2: "illegal data address",
                      3: "illegal data value", 4: "server device failure"}
 
 
-def request_length(buffer):
+def request_length(buffer: bytes | bytearray) -> int | None:
     """Length of the Modbus RTU request at the start of ``buffer`` for the function codes
     a supply needs (03 read holding registers, 06 write single register, 16 write multiple
     registers), None while incomplete, -1 for a function code this module does not know."""
@@ -119,35 +148,76 @@ KEYENCE_PARAMETER_ERROR = {"keyence-lk-g5000": 62, "keyence-lk-g3000": 22}
 
 
 class KeyenceError(IOError):
-    """The controller answered ``ER,<command>,<code>``."""
+    """The controller answered ``ER,<command>,<code>``.
 
-    def __init__(self, command, code, dialect="keyence-lk-g5000"):
+    Parameters
+    ----------
+    command : str
+        The command it refused (as in the reply).
+    code : int
+        The error code of the reply.
+    dialect : str
+        ``"keyence-lk-g5000"`` or ``"keyence-lk-g3000"``: what the code means.
+
+    Examples
+    --------
+    >>> from pihyst.rig import KeyenceError
+    >>> print(KeyenceError("MS", 62))
+    sensor error ER,MS,62 (parameter range error)
+    """
+
+    def __init__(self, command: str, code: int, dialect: str = "keyence-lk-g5000") -> None:
         self.command, self.code = command, code
         meaning = KEYENCE_ERRORS[dialect].get(code, "unknown error code")
         super().__init__(f"sensor error ER,{command},{code:02d} ({meaning})")
 
 
 class ReplyError(IOError):
-    """A reply that is not what the protocol allows (garbled, truncated, wrong command)."""
+    """A reply that is not what the protocol allows (garbled, truncated, wrong command).
+
+    Examples
+    --------
+    >>> from pihyst.rig import ReplyError
+    >>> from pihyst.rig._codecs import parse_reply
+    >>> try:
+    ...     parse_reply("MS,0?,+0001.0000", "MS,01")
+    ... except ReplyError as err:
+    ...     print(err)
+    reply 'MS,0?,+0001.0000' does not answer 'MS,01'
+    """
 
 
 @dataclass(frozen=True)
 class Reading:
-    """One sensor value: ``value`` in the sensor's units, None unless ``status`` is 'ok'
-    ('over-range+', 'over-range-' or 'invalid' otherwise)."""
+    """One sensor value, as the sensor reported it.
 
-    value: float = None
+    Parameters
+    ----------
+    value : float or None
+        The value in the sensor's units; None unless ``status`` is ``"ok"``.
+    status : str
+        ``"ok"``, ``"over-range+"``, ``"over-range-"`` or ``"invalid"``.
+
+    Examples
+    --------
+    >>> from pihyst.rig import Reading
+    >>> Reading(12.5).valid, Reading(None, "invalid").valid
+    (True, False)
+    """
+
+    value: float | None = None
     status: str = "ok"
 
     @property
-    def valid(self):
+    def valid(self) -> bool:
+        """True if the status is ``"ok"``."""
         return self.status == "ok"
 
 
 _NUMBER = re.compile(r"[+-] *\d+(?:\.\d+)?|\d+(?:\.\d+)?")
 
 
-def parse_value(field):
+def parse_value(field: str) -> Reading:
     """One value field of a Keyence reply: a signed decimal of any width, or the markers
     ``+FFFFFFF`` / ``-FFFFFFF`` (over-range) and ``XXXXXXXX`` (invalid, alarm).
 
@@ -166,7 +236,7 @@ def parse_value(field):
     return Reading(float(field.replace(" ", "")), "ok")
 
 
-def format_value(value, decimals=4, width=None):
+def format_value(value: float, decimals: int = 4, width: int | None = None) -> str:
     """A value as the controller prints it: sign, zero-padded digits, ``decimals`` places;
     ``width`` (digits and point) defaults to 4 integer digits.
 
@@ -180,7 +250,7 @@ def format_value(value, decimals=4, width=None):
     return f"{value:+0{width + 1}.{decimals}f}"
 
 
-def parse_reply(reply, command, dialect="keyence-lk-g5000"):
+def parse_reply(reply: str, command: str, dialect: str = "keyence-lk-g5000") -> list[Reading]:
     """Values of a reply to ``command`` (without CR): ``MS,01,+0012.3456`` to ``MS,01``
     (LK-G5000) or ``M1,+01.2345`` to ``M1`` (LK-G3000). Raises :class:`KeyenceError`
     for ``ER,...`` and :class:`ReplyError` for anything else unexpected.

@@ -18,10 +18,21 @@ else:  # pragma: no cover
 
 
 class ConfigError(ValueError):
-    """A rig configuration could not be used; the message is one line."""
+    """A rig configuration could not be used; the message is one line naming the file,
+    the line where it can be found, and the key.
+
+    Examples
+    --------
+    >>> from pihyst.rig import ConfigError, parse_config
+    >>> try:
+    ...     parse_config("[supply]\\nscale = -1\\n", source="rig.toml")
+    ... except ConfigError as err:
+    ...     print(err)
+    rig.toml:2: [supply] scale: must be a positive number, got -1.0
+    """
 
 
-def char_bits(port_config):
+def char_bits(port_config: "SupplyConfig | SensorConfig") -> int:
     """Bits on the wire per byte: start, 8 data, parity (unless N), stop bits."""
     return 1 + 8 + (port_config.parity != "N") + port_config.stopbits
 
@@ -36,13 +47,50 @@ REGISTER_MAX = {"uint16": 0xFFFF, "uint32": 0xFFFFFFFF, "float32": 3.40282346638
 
 @dataclass(frozen=True)
 class LoopSettings:
-    """[rig]: the controller loop and its safety limits."""
+    """[rig]: the controller loop and its safety limits.
+
+    Parameters
+    ----------
+    rate_hz : float
+        The loop's rate (Hz): one setpoint and one reading per tick.
+    u_min, u_max : float
+        The voltage limits (V); no command leaves them. ``u_min`` must be 0.
+    slew_V_per_s : float or None
+        The largest voltage change per second (None: no slew limit).
+    ramp_V_per_s : float or None
+        The rate of the ramps from and to 0 V at the start and end of a run (None: the
+        slew limit, else 50 V/s).
+    max_comm_errors : int
+        Consecutive failed exchanges that stop a run.
+    max_invalid_readings : int
+        Consecutive invalid sensor readings that stop a run.
+    max_overruns : int
+        Consecutive overruns (a tick later than its period) that stop a run.
+    watchdog_periods : float
+        A loop stall this long (in periods) zeroes the output.
+    readback_every : int
+        Ticks between readbacks of the supply's voltage (when it has a readback).
+    readback_tolerance_V : float
+        The largest difference between setpoint and readback (V).
+    stuck_ticks : int
+        A reading unchanged this many ticks while the voltage moves ``stuck_volts``
+        stops the run (0: off).
+    stuck_volts : float
+        See ``stuck_ticks`` (V).
+
+    Examples
+    --------
+    >>> from pihyst.rig import LoopSettings
+    >>> loop = LoopSettings(rate_hz=50.0, slew_V_per_s=100.0)
+    >>> loop.period_s, loop.start_ramp_V_per_s
+    (0.02, 100.0)
+    """
 
     rate_hz: float = 20.0
     u_min: float = 0.0
     u_max: float = 150.0
-    slew_V_per_s: float = None            # None: no slew limit
-    ramp_V_per_s: float = None            # start ramp; default: the slew limit, else 50 V/s
+    slew_V_per_s: float | None = None     # None: no slew limit
+    ramp_V_per_s: float | None = None     # start ramp; default: the slew limit, else 50 V/s
     max_comm_errors: int = 3              # consecutive failed exchanges that stop a run
     max_invalid_readings: int = 5         # consecutive invalid readings that stop a run
     max_overruns: int = 10                # consecutive overruns that stop a run
@@ -54,11 +102,13 @@ class LoopSettings:
     stuck_volts: float = 5.0
 
     @property
-    def period_s(self):
+    def period_s(self) -> float:
+        """The loop's period (s)."""
         return 1.0 / self.rate_hz
 
     @property
-    def start_ramp_V_per_s(self):
+    def start_ramp_V_per_s(self) -> float:
+        """The rate of the start and end ramps (V/s)."""
         if self.ramp_V_per_s is not None:
             return self.ramp_V_per_s
         return self.slew_V_per_s if self.slew_V_per_s is not None else 50.0
@@ -66,7 +116,69 @@ class LoopSettings:
 
 @dataclass(frozen=True)
 class SupplyConfig:
-    """[supply]: the programmable high-voltage supply."""
+    """[supply]: the programmable high-voltage supply.
+
+    Parameters
+    ----------
+    port : str
+        A serial device or a pyserial URL (``pihystsim://supply``: the emulated one).
+    baudrate : int
+        Bits per second.
+    protocol : str
+        ``"modbus-rtu"`` or ``"ascii"`` (a line protocol: SCPI-like, MDT693B-like).
+    timeout_s : float
+        How long to wait for a reply (s).
+    parity : str
+        ``"N"``, ``"E"`` or ``"O"`` (Modbus RTU's default is E).
+    stopbits : int
+        1 or 2.
+    address : int
+        Modbus: the slave address, 1..247.
+    setpoint_register : int
+        Modbus: the first holding register of the setpoint.
+    setpoint_format : str
+        Modbus: ``"uint16"``, ``"uint32"`` or ``"float32"``.
+    word_order : str
+        Modbus: ``"big"`` (high word first) or ``"little"`` (CDAB).
+    scale : float
+        Modbus: register units per volt.
+    output_register : int or None
+        Modbus: the register that switches the output (1 on, 0 off), if any.
+    readback_register : int or None
+        Modbus: the register of the measured output voltage (same format and scale as
+        the setpoint), if any.
+    terminator : str
+        ASCII: the end of a line.
+    set_command : str
+        ASCII: the command that sets the voltage, a template with ``{volts}``.
+    query_command : str or None
+        ASCII: the command that reads the output voltage back (``"MEAS:VOLT?"``), if
+        any.
+    output_on_command, output_off_command : str or None
+        ASCII: the commands that switch the output, if any.
+    echo : bool
+        ASCII: the device echoes each command.
+    prompt : str
+        ASCII: what the device sends when it is ready again (``">"``), if anything.
+    reply_pattern : str
+        ASCII: a regular expression that finds the number in a reply.
+    watchdog_s : float or None
+        The supply's communication watchdog: its output goes off after this long without
+        a request; armed at the start of a run when set.
+    watchdog_register : int or None
+        Modbus: the register that holds the watchdog's timeout.
+    watchdog_scale : float
+        Modbus: the watchdog register's units per second (1000: ms).
+    watchdog_command : str or None
+        ASCII: the command that arms the watchdog, a template with ``{seconds}`` (0
+        disarms).
+
+    Examples
+    --------
+    >>> from pihyst.rig import SupplyConfig
+    >>> SupplyConfig(protocol="ascii", set_command="V {volts:.1f}").set_command.format(volts=12)
+    'V 12.0'
+    """
 
     port: str = "/dev/ttyUSB0"
     baudrate: int = 19200
@@ -80,27 +192,55 @@ class SupplyConfig:
     setpoint_format: str = "float32"
     word_order: str = "big"
     scale: float = 1.0                    # register units per volt
-    output_register: int = None           # 1 = on, 0 = off
-    readback_register: int = None         # same format and scale as the setpoint
+    output_register: int | None = None    # 1 = on, 0 = off
+    readback_register: int | None = None  # same format and scale as the setpoint
     # ASCII line protocol
     terminator: str = "\r\n"
     set_command: str = "VOLT {volts:.2f}"
-    query_command: str = None             # e.g. "MEAS:VOLT?"
-    output_on_command: str = None         # e.g. "OUTP ON"
-    output_off_command: str = None
+    query_command: str | None = None      # e.g. "MEAS:VOLT?"
+    output_on_command: str | None = None  # e.g. "OUTP ON"
+    output_off_command: str | None = None
     echo: bool = False                    # the device echoes each command
     prompt: str = ""                      # sent by the device when it is ready again
     reply_pattern: str = r"[-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
     # the supply's communication watchdog: output off after watchdog_s without a request
-    watchdog_s: float = None              # armed at the start of a run when set
-    watchdog_register: int = None         # Modbus: holds the timeout (function 06) ...
+    watchdog_s: float | None = None       # armed at the start of a run when set
+    watchdog_register: int | None = None  # Modbus: holds the timeout (function 06) ...
     watchdog_scale: float = 1000.0        # ... in these units per second (1000: ms)
-    watchdog_command: str = None          # ASCII: e.g. "WDOG {seconds:.1f}" (0 disarms)
+    watchdog_command: str | None = None   # ASCII: e.g. "WDOG {seconds:.1f}" (0 disarms)
 
 
 @dataclass(frozen=True)
 class SensorConfig:
-    """[sensor]: the laser displacement sensor."""
+    """[sensor]: the laser displacement sensor.
+
+    Parameters
+    ----------
+    port : str
+        A serial device or a pyserial URL (``pihystsim://sensor``: the emulated one).
+    baudrate : int
+        Bits per second.
+    protocol : str
+        ``"keyence-lk-g5000"`` or ``"keyence-lk-g3000"``.
+    parity : str
+        ``"N"``, ``"E"`` or ``"O"``.
+    stopbits : int
+        1 or 2.
+    output : int
+        The sensor head's output number (1..12 on an LK-G5000, 1..2 on an LK-G3000).
+    scale_um : float
+        Micrometres per reported unit.
+    sign : int
+        1, or -1 when the sensor counts the other way.
+    timeout_s : float
+        How long to wait for a reply (s).
+
+    Examples
+    --------
+    >>> from pihyst.rig import SensorConfig
+    >>> SensorConfig(protocol="keyence-lk-g3000", output=2).output
+    2
+    """
 
     port: str = "/dev/ttyUSB1"
     baudrate: int = 115200
@@ -115,7 +255,35 @@ class SensorConfig:
 
 @dataclass(frozen=True)
 class EmulatorConfig:
-    """[emulator]: the simulated instruments (ignored on a real rig)."""
+    """[emulator]: the simulated instruments (ignored on a real rig).
+
+    Parameters
+    ----------
+    plant : str
+        The simulated beam the instruments drive (a name of ``pihyst.sim.PLANT_NAMES``).
+    seed : int
+        The seed of the sensor's noise.
+    supply_delay_s, sensor_delay_s : float
+        Each instrument's processing time per request (s).
+    sensor_decimals : int
+        Digits after the point in the sensor's replies (0..6).
+    sensor_range_um : float
+        A reading above this in magnitude is over-range (µm).
+    supply_max_V : float
+        The supply's own limit (V).
+    supply_step_V : float
+        The supply's setpoint resolution (V).
+    supply_watchdog_s : float
+        When above 0, the supply's output goes off after this long without a request.
+    supply_reply : str
+        ASCII supply: the reply to ``query_command``, a template with ``{volts}``.
+
+    Examples
+    --------
+    >>> from pihyst.rig import EmulatorConfig
+    >>> EmulatorConfig().plant
+    'paper-beam'
+    """
 
     plant: str = "paper-beam"
     seed: int = 0
@@ -131,7 +299,29 @@ class EmulatorConfig:
 
 @dataclass(frozen=True)
 class RigConfig:
-    """The whole configuration; ``source`` is the file it came from."""
+    """The whole configuration, as :func:`parse_config` and :func:`load_config` return it.
+
+    Parameters
+    ----------
+    rig : LoopSettings
+        [rig]: the loop and its limits.
+    supply : SupplyConfig
+        [supply].
+    sensor : SensorConfig
+        [sensor].
+    emulator : EmulatorConfig
+        [emulator].
+    source : str
+        The file it came from.
+    text : str
+        The text of that file.
+
+    Examples
+    --------
+    >>> from pihyst.rig import LoopSettings, RigConfig
+    >>> RigConfig(rig=LoopSettings(rate_hz=10.0)).rig.period_s
+    0.1
+    """
 
     rig: LoopSettings = field(default_factory=LoopSettings)
     supply: SupplyConfig = field(default_factory=SupplyConfig)
@@ -140,8 +330,20 @@ class RigConfig:
     source: str = "<defaults>"
     text: str = ""
 
-    def describe(self):
-        """One line for log metadata."""
+    def describe(self) -> str:
+        """One line that says what the configuration drives, for log metadata.
+
+        Returns
+        -------
+        str
+            Source, ports, protocols and rate.
+
+        Examples
+        --------
+        >>> from pihyst.rig import RigConfig
+        >>> print(RigConfig().describe()[:70])
+        <defaults>: supply /dev/ttyUSB0 (modbus-rtu @19200 addr 1 setpoint reg
+        """
         s, n, r = self.supply, self.sensor, self.rig
         supply = (f"{s.protocol} @{s.baudrate} addr {s.address} setpoint reg "
                   f"{s.setpoint_register} {s.setpoint_format}/{s.word_order} x{s.scale:g}"
@@ -344,8 +546,35 @@ def _validate_watchdog(check, cfg):
                        "{seconds} or {seconds:.1f} for the timeout")
 
 
-def parse_config(text, source="<string>"):
-    """A :class:`RigConfig` from TOML text; ``source`` names it in error messages."""
+def parse_config(text: str, source: str = "<string>") -> RigConfig:
+    """A :class:`RigConfig` from TOML text, checked.
+
+    Parameters
+    ----------
+    text : str
+        TOML with the sections [rig], [supply], [sensor] and [emulator] (each optional;
+        missing keys take their defaults).
+    source : str
+        What to call the text in error messages.
+
+    Returns
+    -------
+    RigConfig
+        The configuration.
+
+    Raises
+    ------
+    ConfigError
+        Text that is not TOML, an unknown section or key, or a value out of its range
+        (one line: ``SOURCE:LINE: [section] key: ...``).
+
+    Examples
+    --------
+    >>> from pihyst.rig import parse_config
+    >>> cfg = parse_config("[rig]\\nrate_hz = 50\\n[supply]\\nport = 'pihystsim://supply'\\n")
+    >>> cfg.rig.rate_hz, cfg.supply.port, cfg.sensor.protocol
+    (50.0, 'pihystsim://supply', 'keyence-lk-g5000')
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -364,8 +593,34 @@ def parse_config(text, source="<string>"):
     return cfg
 
 
-def load_config(path):
-    """Read and check a rig configuration file."""
+def load_config(path: str | os.PathLike[str]) -> RigConfig:
+    """Read and check a rig configuration file (TOML, see :func:`parse_config`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    RigConfig
+        The configuration, with the file as its source.
+
+    Raises
+    ------
+    ConfigError
+        A file that cannot be read, is not UTF-8 text, or holds a bad configuration.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from pihyst.rig import load_config
+    >>> path = os.path.join(tempfile.mkdtemp(), "rig.toml")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("[rig]\\nrate_hz = 100\\n")
+    >>> load_config(path).rig.period_s
+    0.01
+    """
     path = os.fspath(path)
     try:
         with open(path, encoding="utf-8-sig") as f:

@@ -14,7 +14,9 @@ The run starts at 0 V with the output on and ramps to the program's first voltag
 
 import math
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -30,22 +32,98 @@ RESIDUAL_WAIT_S = 1.0
 
 @dataclass
 class RunResult:
-    """What a run did: why it stopped, its ticks, its timing."""
+    """What a run did: why it stopped, its ticks, its timing.
+
+    Parameters
+    ----------
+    reason : str
+        Why the run stopped (``"end of the program"``, or what stopped it).
+    completed : bool
+        The program ran to its end.
+    records : list of TickRecord
+        Every tick: the ramp up, the run and the shutdown.
+    period_s : float
+        The loop's period (s).
+    overruns : int
+        Ticks that ended after the next tick's deadline.
+    final_voltage_V : float
+        The last voltage sent.
+    zeroed : bool
+        0 V was sent and the output switched off at the end.
+
+    Examples
+    --------
+    >>> from pihyst.rig import Rig, VoltageProgram, parse_config
+    >>> config = parse_config('[rig]\\nrate_hz = 10.0\\n'
+    ...                       '[supply]\\nport = "pihystsim://supply"\\n'
+    ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+    >>> with Rig(config) as rig:
+    ...     result = rig.run(VoltageProgram([0.0, 20.0, 40.0, 20.0]), handle_signals=False)
+    >>> result.completed, result.zeroed, len(result.column("voltage_V", phase="run"))
+    (True, True, 4)
+    """
 
     reason: str                  # why the run stopped
     completed: bool              # the program ran to its end
-    records: list = field(repr=False)
+    records: list[TickRecord] = field(repr=False)
     period_s: float = 0.0
     overruns: int = 0
     final_voltage_V: float = NAN
     zeroed: bool = False         # 0 V was sent and the output switched off at the end
 
-    def column(self, name, phase=None):
+    def column(self, name: str, phase: str | None = None) -> np.ndarray:
+        """One number column of the ticks, as floats.
+
+        Parameters
+        ----------
+        name : str
+            A number column of :class:`TickRecord` (``"voltage_V"``,
+            ``"displacement_um"``, ``"late_s"``, ...).
+        phase : str or None
+            Only the ticks of this phase (``"ramp-up"``, ``"run"``, ``"shutdown"``);
+            None: all.
+
+        Returns
+        -------
+        ndarray
+            One value per tick.
+
+        Examples
+        --------
+        >>> from pihyst.rig import Rig, VoltageProgram, parse_config
+        >>> config = parse_config('[rig]\\nrate_hz = 10.0\\n'
+        ...                       '[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> with Rig(config) as rig:
+        ...     result = rig.run(VoltageProgram([0.0, 20.0, 40.0, 20.0]), handle_signals=False)
+        >>> result.column("voltage_V", phase="run")
+        array([ 0., 20., 40., 20.])
+        """
         rows = [r for r in self.records if phase is None or r.phase == phase]
         return np.array([getattr(r, name) for r in rows], dtype=float)
 
-    def timing(self):
-        """Loop timing: lateness of tick starts (jitter), busy time per tick, overruns."""
+    def timing(self) -> dict[str, float]:
+        """Loop timing: lateness of tick starts (jitter), busy time per tick, overruns.
+
+        Returns
+        -------
+        dict of str to float
+            ``ticks`` and ``overruns`` (counts), ``period_ms``, ``jitter_mean_ms``,
+            ``jitter_p99_ms``, ``jitter_max_ms``, ``busy_mean_ms``, ``busy_max_ms`` and
+            ``utilisation_pct`` (only the counts for a run without ticks).
+
+        Examples
+        --------
+        >>> from pihyst.rig import Rig, VoltageProgram, parse_config
+        >>> config = parse_config('[rig]\\nrate_hz = 10.0\\n'
+        ...                       '[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> with Rig(config) as rig:
+        ...     result = rig.run(VoltageProgram([0.0, 20.0, 40.0, 20.0]), handle_signals=False)
+        >>> timing = result.timing()
+        >>> timing["period_ms"], timing["overruns"], timing["ticks"] == len(result.records)
+        (100.0, 0, True)
+        """
         late = self.column("late_s")
         busy = self.column("busy_s")
         if late.size == 0:
@@ -65,8 +143,10 @@ class Controller:
 
     Parameters
     ----------
-    supply, sensor
-        Drivers (see :mod:`pihyst.rig._supply`, :mod:`pihyst.rig._sensor`).
+    supply : ModbusRtuSupply or AsciiSupply
+        The supply's driver.
+    sensor : KeyenceSensor
+        The sensor's driver.
     settings : LoopSettings
         Rate, limits, slew and the stop criteria ([rig] of the configuration).
     log : CsvRunLog, optional
@@ -81,10 +161,25 @@ class Controller:
     stop_requested : callable, optional
         Asked after every tick; True stops the run safely (reason 'stop requested'), as a
         GUI's abort button does (``pihyst.rig.pymeasure``).
+
+    Examples
+    --------
+    >>> from pihyst.rig import Rig, Controller, VoltageProgram, parse_config
+    >>> config = parse_config('[rig]\\nrate_hz = 10.0\\n'
+    ...                       '[supply]\\nport = "pihystsim://supply"\\n'
+    ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+    >>> with Rig(config) as rig:
+    ...     controller = Controller(rig.supply, rig.sensor, config.rig, clock=rig.clock,
+    ...                             handle_signals=False)
+    ...     result = controller.run(VoltageProgram([10.0, 20.0]))
+    >>> result.reason, rig.emulators.supply_state.last_setpoint_V
+    ('end of the program', 0.0)
     """
 
-    def __init__(self, supply, sensor, settings, *, log=None, clock=WallClock, watchdog=None,
-                 handle_signals=True, stop_requested=None):
+    def __init__(self, supply: Any, sensor: Any, settings: Any, *, log: Any = None,
+                 clock: Any = WallClock, watchdog: bool | None = None,
+                 handle_signals: bool = True,
+                 stop_requested: Callable[[], bool] | None = None) -> None:
         self.supply, self.sensor, self.settings = supply, sensor, settings
         self.log = log
         self.clock = clock
@@ -93,11 +188,11 @@ class Controller:
         self.handle_signals = handle_signals
         self.stop_requested = stop_requested
         self._supply_lock = threading.RLock()
-        self._log_error = None          # why the log failed; it is not written to after
+        self._log_error: str | None = None  # why the log failed; not written to after
 
     # ------------------------------------------------------------------ helpers
     @property
-    def log_error(self):
+    def log_error(self) -> str | None:
         """Why the log could not be written (None: it could)."""
         return self._log_error
 
@@ -266,18 +361,49 @@ class Controller:
                                f"{max(us) - min(us):.3g} V")
 
     # ------------------------------------------------------------------ run
-    def run(self, program):
-        """Run ``program`` to its end or to a stop; always ends at 0 V, output off. Rig
-        limits the supply may not be sent are an InvalidArgumentError before anything is
-        sent (:func:`check_limits`)."""
+    def run(self, program: Any) -> RunResult:
+        """Run ``program`` to its end or to a stop; always end at 0 V, output off.
+
+        Parameters
+        ----------
+        program : VoltageProgram, FeedforwardProgram or FeedbackProgram
+            What to drive, tick by tick (or any object with their interface).
+
+        Returns
+        -------
+        RunResult
+            Why it stopped, and every tick.
+
+        Raises
+        ------
+        InvalidArgumentError
+            Rig limits the supply may not be sent, before anything is sent.
+        Exception
+            An unexpected error of the program or a driver, raised again after the safe
+            stop (Ctrl-C, SIGTERM and the stop criteria end the run with a reason
+            instead).
+
+        Examples
+        --------
+        >>> from pihyst.rig import Rig, Controller, VoltageProgram, parse_config
+        >>> config = parse_config('[rig]\\nrate_hz = 10.0\\n'
+        ...                       '[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> with Rig(config) as rig:
+        ...     controller = rig.controller(handle_signals=False)
+        ...     result = controller.run(VoltageProgram([10.0, 20.0, 30.0]))
+        >>> result.completed, result.final_voltage_V
+        (True, 0.0)
+        """
         s = self.settings
         check_limits(self.supply, s)
-        self.records, self.tick, self.overruns = [], 0, 0
+        self.records: list[TickRecord] = []
+        self.tick, self.overruns = 0, 0
         self._comm_errors = self._invalid = self._consecutive_overruns = 0
         self._last_error = ""
         self._first_cause = None
         self._log_error = None
-        self._recent = []
+        self._recent: list[tuple[float, float]] = []
         self._watchdog = None
         max_step = None if s.slew_V_per_s is None else s.slew_V_per_s * s.period_s
         self.guard = SetpointGuard(s.u_min, s.u_max, max_step)
@@ -445,7 +571,7 @@ def _from(device, err):
     return text if text.startswith(device) else f"{device}: {text}"
 
 
-def check_limits(supply, settings):
+def check_limits(supply: Any, settings: Any) -> None:
     """InvalidArgumentError unless ``supply`` may be sent every voltage within the rig's
     limits ``settings.u_min``..``u_max`` (the guard keeps every setpoint in them, and the
     checks are monotone: the two ends suffice)."""

@@ -11,6 +11,8 @@ bytes take on the wire. Times are seconds of the emulators' clock.
 import re
 import struct
 from abc import ABC, abstractmethod
+from collections.abc import Container, Iterable
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +28,7 @@ from pihyst.rig._codecs import (
     with_crc,
 )
 from pihyst.rig._config import char_bits
-from pihyst.rig._faults import FaultSet
+from pihyst.rig._faults import Fault, FaultSet
 from pihyst.rig._plants import make_plant
 
 
@@ -55,18 +57,18 @@ class SimulatedBeam:
         self.displacement = float(self.plant.run(np.array([u]), np.array([self._t]))[0])
         return self.displacement
 
-    def poll(self, t):
+    def poll(self, t: float) -> None:
         for poll in self.pollers:
             poll(t)
 
-    def apply(self, volts, t):
+    def apply(self, volts: float, t: float) -> None:
         """The voltage across the beam changes to ``volts`` at time ``t``."""
         # one sample at the new voltage: the plant interpolates from its last sample
         if volts != self.voltage:
             self.voltage = float(volts)
             self._run(t)
 
-    def measure(self, t):
+    def measure(self, t: float) -> float:
         """Displacement (um, with the plant's sensor noise) at time ``t``."""
         self.poll(t)
         return self._run(t)
@@ -86,20 +88,21 @@ class Device(ABC):
         self.requests = 0
         self.t0 = 0.0
 
-    def vanished(self, t):
+    def vanished(self, t: float) -> bool:
         return self.faults.vanished(t - self.t0)
 
-    def poll(self, t):
+    def poll(self, t: float) -> None:
         """Time passes without a request (what a device does on its own, e.g. a supply's
         watchdog switching the output off); nothing by default."""
         return None
 
     @abstractmethod
-    def receive(self, data, t):
+    def receive(self, data: bytes, t: float) -> list[tuple[float, bytes]]:
         """Bytes ``data`` arrived complete at time ``t``: the replies, as a list of
         ``(ready_time, bytes)``."""
 
-    def _answer(self, reply, t, kinds):
+    def _answer(self, reply: bytes, t: float,
+                kinds: Container[str]) -> list[tuple[float, bytes]]:
         """Apply the reply faults of ``kinds`` to ``reply`` sent at ``t``."""
         ready = t + self.delay_s
         fault = self.faults.pick(t - self.t0, kinds)
@@ -151,7 +154,7 @@ class SupplyState:
         return round(self.setpoint_V / self.step_V) * self.step_V if self.step_V else \
             self.setpoint_V
 
-    def poll(self, t):
+    def poll(self, t: float) -> None:
         if (self.watchdog_s > 0 and self.last_request is not None and self.output_on
                 and t > self.last_request + self.watchdog_s):
             self.output_on = False
@@ -233,10 +236,10 @@ class ModbusSupply(Device):
         self._setpoint_words = list(words)
         st.set_voltage(volts, t)
 
-    def poll(self, t):
+    def poll(self, t: float) -> None:
         self.state.poll(t)
 
-    def receive(self, data, t):
+    def receive(self, data: bytes, t: float) -> list[tuple[float, bytes]]:
         char = self.char_bits / self.baudrate
         # a silence of more than 3.5 characters ends a frame (Modbus over serial line 2.5.1.1)
         if self._last_byte_t is not None and t - len(data) * char - self._last_byte_t > 3.5 * char:
@@ -300,7 +303,7 @@ def _max_value(cfg):
     return {"uint16": 0xFFFF, "uint32": 0xFFFFFFFF, "float32": 3.4e38}[cfg.setpoint_format]
 
 
-def template_regex(template, name="volts"):
+def template_regex(template: str, name: str = "volts") -> re.Pattern[str]:
     """A regular expression matching what a command template produces, with one group
     for the number ``name``: 'VOLT {volts:.2f}' -> 'VOLT\\ ([-+]?[0-9.eE+-]+)'."""
     parts = re.split(r"\{" + name + r"(?::[^}]*)?\}", template)
@@ -324,10 +327,10 @@ class AsciiSupply(Device):
                           template_regex(cfg.watchdog_command, "seconds"))
         self._buffer = b""
 
-    def poll(self, t):
+    def poll(self, t: float) -> None:
         self.state.poll(t)
 
-    def receive(self, data, t):
+    def receive(self, data: bytes, t: float) -> list[tuple[float, bytes]]:
         term = self.cfg.terminator.encode()
         self._buffer += data
         replies = []
@@ -406,7 +409,7 @@ class KeyenceSensor(Device):
             return self._stuck_text
         return text
 
-    def receive(self, data, t):
+    def receive(self, data: bytes, t: float) -> list[tuple[float, bytes]]:
         self._buffer += data
         replies = []
         while b"\r" in self._buffer:
@@ -462,15 +465,32 @@ class Emulators:
     Parameters
     ----------
     config : RigConfig
+        The instruments to emulate ([supply], [sensor], [emulator]).
     plant : str, optional
         Simulated beam (default: ``config.emulator.plant``).
     faults : iterable of Fault
         Faults to inject.
     t0 : float
         The emulators' clock at start (fault times count from there).
+
+    Examples
+    --------
+    A Modbus request to the emulated supply, as bytes (write 50.0 V as float32 to the
+    setpoint registers 10-11 of slave 1):
+
+    >>> from pihyst.rig import Emulators, parse_config
+    >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+    ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+    >>> emulators = Emulators(config)
+    >>> from pihyst.rig._codecs import with_crc
+    >>> request = with_crc(bytes.fromhex("0110000a00020442480000"))
+    >>> replies = emulators.supply.receive(request, t=0.0)
+    >>> emulators.supply_state.last_setpoint_V, replies[0][1].hex()
+    (50.0, '0110000a000261ca')
     """
 
-    def __init__(self, config, plant=None, faults=(), t0=0.0):
+    def __init__(self, config: Any, plant: str | None = None, faults: Iterable[Fault] = (),
+                 t0: float = 0.0) -> None:
         e = config.emulator
         self.config = config
         self.plant = make_plant(plant or e.plant, seed=e.seed)
@@ -482,6 +502,7 @@ class Emulators:
                                         e.supply_watchdog_s, output_switch=switch)
         supply_faults = FaultSet(f for f in faults if f.device == "supply")
         sensor_faults = FaultSet(f for f in faults if f.device == "sensor")
+        self.supply: ModbusSupply | AsciiSupply
         if s.protocol == "modbus-rtu":
             self.supply = ModbusSupply(s, self.supply_state, supply_faults, e.supply_delay_s)
         else:
@@ -491,9 +512,27 @@ class Emulators:
                                     e.sensor_decimals, e.sensor_range_um)
         self.supply.t0 = self.sensor.t0 = t0
 
-    def add_fault(self, fault):
+    def add_fault(self, fault: Fault) -> None:
+        """Inject ``fault`` from now on (into the supply or the sensor, by its device).
+
+        Parameters
+        ----------
+        fault : Fault
+            The fault.
+
+        Examples
+        --------
+        >>> from pihyst.rig import Emulators, Fault, parse_config
+        >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> emulators = Emulators(config)
+        >>> emulators.add_fault(Fault("no-reply", "sensor"))
+        >>> emulators.sensor.receive(b"MS,01\\r", t=0.0)
+        []
+        """
         (self.supply if fault.device == "supply" else self.sensor).faults.add(fault)
 
     @property
-    def devices(self):
+    def devices(self) -> dict[str, "Device"]:
+        """The emulated devices by role: ``{"supply": ..., "sensor": ...}``."""
         return {"supply": self.supply, "sensor": self.sensor}

@@ -12,12 +12,13 @@ replies (the device sees garbage), as on a real line.
 import threading
 import urllib.parse
 from collections import deque
+from typing import Any
 
 import serial
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
 SCHEME = "pihystsim"
-_REGISTRY = {}
+_REGISTRY: dict[str, tuple[Any, Any]] = {}  # name -> (device, clock)
 _LOCK = threading.Lock()
 
 
@@ -63,8 +64,9 @@ class Serial(SerialBase):
         self.is_open = True
 
     def close(self):
+        # as pyserial's own ports: io.RawIOBase.close would flush, which raises
+        # PortNotOpenError on a closed port (so every close raised, and a second one too)
         self.is_open = False
-        super().close()
 
     def _reconfigure_port(self):
         pass

@@ -3,20 +3,42 @@ and a program run on them into a log."""
 
 import datetime
 import os
+from collections.abc import Callable, Iterable
+from typing import Any
 
 from pihyst._version import __version__
 from pihyst.model._units import display_unit
 from pihyst.rig import _serial_handlers
 from pihyst.rig._clock import VirtualClock, WallClock
-from pihyst.rig._controller import Controller, check_limits
+from pihyst.rig._controller import Controller, RunResult, check_limits
 from pihyst.rig._emulators import Emulators
 from pihyst.rig._log import CsvRunLog
 from pihyst.rig._sensor import open_sensor
 from pihyst.rig._supply import open_supply
 
 
-def is_emulated(config):
-    """True if both ports of ``config`` are ``pihystsim://`` URLs (in-process emulators)."""
+def is_emulated(config: Any) -> bool:
+    """Whether both ports of ``config`` are ``pihystsim://`` URLs (in-process emulators).
+
+    Parameters
+    ----------
+    config : RigConfig
+        The configuration.
+
+    Returns
+    -------
+    bool
+        True if the supply's and the sensor's ports are both emulated.
+
+    Examples
+    --------
+    >>> from pihyst.rig import RigConfig, SensorConfig, SupplyConfig, is_emulated
+    >>> is_emulated(RigConfig(supply=SupplyConfig(port="pihystsim://supply"),
+    ...                       sensor=SensorConfig(port="pihystsim://sensor")))
+    True
+    >>> is_emulated(RigConfig())
+    False
+    """
     return all(_serial_handlers.url_name(c.port) is not None
                for c in (config.supply, config.sensor))
 
@@ -28,27 +50,48 @@ class Rig:
     Parameters
     ----------
     config : RigConfig
+        The instruments.
     emulate : bool, optional
         Start the emulated instruments in this process (default: when both ports are
         ``pihystsim://`` URLs).
     clock : clock, optional
         Default: a VirtualClock with emulators (runs take the time of their computation),
-        else the wall clock. ``real_time=True`` forces the wall clock.
+        else the wall clock.
+    real_time : bool
+        With emulators, run on the wall clock (runs take their real time).
     plant : str, optional
         The emulators' simulated beam (default: ``[emulator] plant``).
     faults : iterable of Fault
         Faults the emulators inject.
+
+    Raises
+    ------
+    RigError
+        A port that does not open (the ports already opened are closed).
+
+    Examples
+    --------
+    >>> from pihyst.rig import Fault, Rig, VoltageProgram, parse_config
+    >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+    ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+    >>> with Rig(config, faults=[Fault("no-reply", "sensor")]) as rig:
+    ...     result = rig.run(VoltageProgram([10.0] * 20), handle_signals=False)
+    >>> result.completed, result.zeroed
+    (False, True)
+    >>> result.reason[:35]
+    '3 consecutive communication errors '
     """
 
-    def __init__(self, config, *, emulate=None, clock=None, real_time=False, plant=None,
-                 faults=()):
+    def __init__(self, config: Any, *, emulate: bool | None = None, clock: Any = None,
+                 real_time: bool = False, plant: str | None = None,
+                 faults: Iterable[Any] = ()) -> None:
         self.config = config
         self.emulate = is_emulated(config) if emulate is None else emulate
         if clock is None:
             clock = VirtualClock() if self.emulate and not real_time else WallClock
         self.clock = clock
-        self.emulators = None
-        self._names = []
+        self.emulators: Emulators | None = None
+        self._names: list[tuple[str, Any]] = []
         if self.emulate:
             self.emulators = Emulators(config, plant=plant, faults=faults, t0=clock.now())
             for what, device in self.emulators.devices.items():
@@ -60,7 +103,8 @@ class Rig:
         else:
             supply_url, sensor_url = config.supply.port, config.sensor.port
         from pihyst.rig._ports import open_port
-        self.supply = self.sensor = None
+        self.supply: Any = None
+        self.sensor: Any = None
         try:
             s, n = config.supply, config.sensor
             self.supply = open_supply(s, clock, port=open_port(
@@ -71,7 +115,19 @@ class Rig:
             self.close()
             raise
 
-    def close(self):
+    def close(self) -> None:
+        """Close the drivers' ports and stop the emulators (a second close does nothing).
+
+        Examples
+        --------
+        >>> from pihyst.rig import Rig, parse_config
+        >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> rig = Rig(config)
+        >>> rig.close(); rig.close()
+        >>> rig.supply.port.is_open
+        False
+        """
         for driver in (self.supply, self.sensor):
             if driver is not None:
                 try:
@@ -82,34 +138,121 @@ class Rig:
             _serial_handlers.unregister(name, device)
         self._names = []
 
-    def __enter__(self):
+    def __enter__(self) -> "Rig":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
-        return False
 
-    def describe(self):
+    def describe(self) -> str:
+        """One line for the log: emulated or real instruments, virtual or real time.
+
+        Returns
+        -------
+        str
+            The line.
+
+        Examples
+        --------
+        >>> from pihyst.rig import Rig, parse_config
+        >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> with Rig(config) as rig:
+        ...     rig.describe()
+        "emulated instruments on the simulated beam 'paper-beam', virtual time"
+        """
         where = "emulated instruments" if self.emulate else "instruments"
         time_kind = "virtual time" if getattr(self.clock, "virtual", False) else "real time"
         beam = f" on the simulated beam '{self.emulators.plant.name}'" if self.emulators else ""
         return f"{where}{beam}, {time_kind}"
 
-    def controller(self, log=None, **kwargs):
-        return Controller(self.supply, self.sensor, self.config.rig, log=log,
-                          clock=self.clock, **kwargs)
+    def controller(self, log: Any = None, *, watchdog: bool | None = None,
+                   handle_signals: bool = True,
+                   stop_requested: Callable[[], bool] | None = None) -> Controller:
+        """A :class:`Controller` on this rig's drivers, limits and clock.
 
-    def run(self, program, log_path=None, *, notes=(), fsync=False, handle_signals=True):
-        """Run ``program`` into the log ``log_path`` (CSV, or HDF5 for .h5/.hdf5; None:
-        no file); returns the :class:`RunResult`. Rig limits the supply may not be sent
-        are an InvalidArgumentError before the log is opened."""
+        Parameters
+        ----------
+        log : CsvRunLog or None
+            Receives every tick and the notes.
+        watchdog : bool or None
+            Run the stall watchdog thread (default: with a wall clock only).
+        handle_signals : bool
+            Turn SIGINT and SIGTERM into a safe stop (main thread only).
+        stop_requested : callable or None
+            Asked after every tick; True stops the run safely.
+
+        Returns
+        -------
+        Controller
+            The controller.
+
+        Examples
+        --------
+        >>> from pihyst.rig import Rig, VoltageProgram, parse_config
+        >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> with Rig(config) as rig:
+        ...     result = rig.controller(handle_signals=False,
+        ...                             stop_requested=lambda: True).run(VoltageProgram([5.0]))
+        >>> result.reason
+        'stop requested'
+        """
+        return Controller(self.supply, self.sensor, self.config.rig, log=log,
+                          clock=self.clock, watchdog=watchdog, handle_signals=handle_signals,
+                          stop_requested=stop_requested)
+
+    def run(self, program: Any, log_path: str | os.PathLike[str] | None = None, *,
+            notes: Iterable[str] = (), fsync: bool = False,
+            handle_signals: bool = True) -> RunResult:
+        """Run ``program`` into a log; always end at 0 V, output off.
+
+        Parameters
+        ----------
+        program : VoltageProgram, FeedforwardProgram or FeedbackProgram
+            What to drive, tick by tick.
+        log_path : str, os.PathLike or None
+            The log: CSV, or HDF5 for ``.h5``/``.hdf5`` (needs h5py); None: no file.
+        notes : iterable of str
+            Lines added to the log's metadata.
+        fsync : bool
+            Force every row to the disk (see :class:`CsvRunLog`).
+        handle_signals : bool
+            Turn SIGINT and SIGTERM into a safe stop (main thread only).
+
+        Returns
+        -------
+        RunResult
+            Why it stopped, and every tick.
+
+        Raises
+        ------
+        InvalidArgumentError
+            Rig limits the supply may not be sent, before the log is opened.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from pihyst.rig import Rig, VoltageProgram, parse_config, read_run_log
+        >>> config = parse_config('[supply]\\nport = "pihystsim://supply"\\n'
+        ...                       '[sensor]\\nport = "pihystsim://sensor"\\n')
+        >>> path = os.path.join(tempfile.mkdtemp(), "run.csv")
+        >>> with Rig(config) as rig:
+        ...     result = rig.run(VoltageProgram([10.0, 20.0]), path, notes=["sample 3"],
+        ...                      handle_signals=False)
+        >>> columns, notes = read_run_log(path)
+        >>> len(columns["tick"]) == len(result.records), "sample 3" in notes
+        (True, True)
+        """
         check_limits(self.supply, self.config.rig)
-        log = None
+        log: Any = None
         if log_path is not None:
-            cls = CsvRunLog
+            lines = metadata(self, program, notes)
             if str(log_path).lower().endswith((".h5", ".hdf5")):
-                from pihyst.rig._hdf5 import Hdf5RunLog as cls
-            log = cls(log_path, metadata(self, program, notes), fsync=fsync)
+                from pihyst.rig._hdf5 import Hdf5RunLog
+                log = Hdf5RunLog(log_path, lines, fsync=fsync)
+            else:
+                log = CsvRunLog(log_path, lines, fsync=fsync)
         controller = self.controller(log, handle_signals=handle_signals)
         try:
             return controller.run(program)
@@ -123,7 +266,7 @@ class Rig:
                         raise
 
 
-def metadata(rig, program, notes=()):
+def metadata(rig: Rig, program: Any, notes: Iterable[str] = ()) -> list[str]:
     """The ``#`` lines at the top of a run log."""
     cfg, r = rig.config, rig.config.rig
     slew = "none" if r.slew_V_per_s is None else f"{r.slew_V_per_s:g} V/s"
@@ -143,7 +286,7 @@ def metadata(rig, program, notes=()):
     return lines
 
 
-def remove_quietly(path):
+def remove_quietly(path: str | os.PathLike[str]) -> None:
     try:
         os.remove(path)
     except OSError:

@@ -3,7 +3,9 @@ ticks) and a desired displacement resampled at the tick rate; and the record sig
 The same rules as ``pihyst rig track`` and ``record`` (docs/rig.md, Commands), from the
 layers below the rig (the command line's own helpers sit above it)."""
 
+from typing import Any
 
+import numpy as np
 
 from pihyst.exceptions import InvalidArgumentError
 from pihyst.io import load_model
@@ -13,7 +15,7 @@ from pihyst.sim import signals
 SIGNALS = ("triangle", "sine", "decaying-triangles", "random-ramps", "staircase")
 
 
-def model_at_tick(path, rate_hz):
+def model_at_tick(path: str, rate_hz: float) -> Any:
     """The model of ``path`` with its input delay in ticks of ``rate_hz`` (converted when
     exact; InvalidArgumentError naming the file otherwise)."""
     model = load_model(path)
@@ -27,25 +29,28 @@ def model_at_tick(path, rate_hz):
     return model.replace(delay=delay, sample_period=period)
 
 
-def desired_per_tick(path, rate_hz):
+def desired_per_tick(path: str, rate_hz: float) -> np.ndarray:
     """The ``displacement_um`` column of ``path``, one value per tick: resampled at the
     tick rate when the file has ``time_s`` (which must increase), else as it is."""
     return column_per_tick(path, "displacement_um", rate_hz)
 
 
-def signal_voltages(kind, u_min, u_max, period_s, cycles, dt):
+def signal_voltages(kind: str, u_min: float, u_max: float, period_s: float, cycles: int,
+                    dt: float) -> np.ndarray:
     """One voltage per tick of the record signal ``kind`` (one of :data:`SIGNALS`), with
     ``pihyst rig record``'s defaults for the options it does not take."""
-    common = {"u_min": u_min, "u_max": u_max, "dt": dt}
     if kind == "triangle":
-        return signals.triangle(period_s=period_s, n_cycles=cycles, **common)[1]
+        return signals.triangle(period_s=period_s, n_cycles=cycles, u_min=u_min, u_max=u_max,
+                                dt=dt)[1]
     if kind == "sine":
-        return signals.sine(period_s=period_s, n_cycles=cycles, **common)[1]
+        return signals.sine(period_s=period_s, n_cycles=cycles, u_min=u_min, u_max=u_max,
+                            dt=dt)[1]
     if kind == "decaying-triangles":
         return signals.decaying_triangles(period_s=period_s, n_triangles=5, ratio=0.7,
-                                          **common)[1]
+                                          u_min=u_min, u_max=u_max, dt=dt)[1]
     if kind == "random-ramps":
-        return signals.random_ramps(n_ramps=20, rate=None, seed=0, **common)[1]
+        return signals.random_ramps(n_ramps=20, rate=None, seed=0, u_min=u_min, u_max=u_max,
+                                    dt=dt)[1]
     if kind == "staircase":
-        return signals.staircase(n_steps=10, step_s=10.0, **common)[1]
+        return signals.staircase(n_steps=10, step_s=10.0, u_min=u_min, u_max=u_max, dt=dt)[1]
     raise InvalidArgumentError(f"signal {kind!r} is not one of {', '.join(SIGNALS)}")

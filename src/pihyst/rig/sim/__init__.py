@@ -6,6 +6,7 @@ each file's comments say what it answers. Needs ``pip install pyvisa-sim``.
 
 Examples
 --------
+>>> from pihyst.rig.sim import library
 >>> library("keyence.yaml").endswith("keyence.yaml@sim")
 True
 """
@@ -14,17 +15,69 @@ from importlib.resources import files
 
 from pihyst.exceptions import InvalidArgumentError
 
+__all__ = ["FILES", "library", "path"]
+
 FILES = ("keyence.yaml", "supplies.yaml")
 
 
-def path(name):
-    """The file ``name`` (one of :data:`FILES`) of this package."""
+def path(name: str) -> str:
+    """The file ``name`` (one of :data:`FILES`) of this package.
+
+    Parameters
+    ----------
+    name : str
+        ``"keyence.yaml"`` or ``"supplies.yaml"``.
+
+    Returns
+    -------
+    str
+        Its path.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A name that is not one of :data:`FILES`.
+
+    Examples
+    --------
+    >>> import os
+    >>> from pihyst.rig.sim import path
+    >>> os.path.isfile(path("supplies.yaml"))
+    True
+    """
     if name not in FILES:
         raise InvalidArgumentError(f"no pyvisa-sim file {name!r}; there are {', '.join(FILES)}")
     return str(files(__name__) / name)
 
 
-def library(name):
+def library(name: str) -> str:
     """The visa_library string that opens ``name`` with pyvisa-sim:
-    ``pyvisa.ResourceManager(library("keyence.yaml"))``."""
+    ``pyvisa.ResourceManager(library("keyence.yaml"))``.
+
+    Parameters
+    ----------
+    name : str
+        ``"keyence.yaml"`` or ``"supplies.yaml"``.
+
+    Returns
+    -------
+    str
+        ``PATH@sim``.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A name that is not one of :data:`FILES`.
+
+    Examples
+    --------
+    >>> import pyvisa
+    >>> from pihyst.rig.sim import library
+    >>> manager = pyvisa.ResourceManager(library("keyence.yaml"))
+    >>> sensor = manager.open_resource("ASRL1::INSTR", read_termination="\\r",
+    ...                                write_termination="\\r")
+    >>> sensor.query("MS,01")
+    'MS,01,+0012.3456'
+    >>> manager.close()
+    """
     return f"{path(name)}@sim"
