@@ -63,3 +63,20 @@ def test_loop_with_random_faults_and_timing(tmp_path, fault_list, rate, delay, b
         # (the setpoints travel as float32: a few uV of rounding)
         assert steps.max(initial=0.0) <= slew / rate + 1e-4
     assert np.all(np.diff(columns["time_s"]) > 0)
+
+
+def test_a_supply_that_refuses_a_few_zeroing_commands_is_zeroed_all_the_same(tmp_path):
+    """0 V and output off are sent again until the supply takes them (for ZERO_RETRY_S,
+    at least 3 times): five error replies at the end of the run once left the beam
+    charged after 3 tries."""
+    config = make_config(rig={"rate_hz": 10.0, "slew_V_per_s": None, "u_max": 120.0})
+    _, u = triangle(u_max=120.0, period_s=2.0, dt=0.1)
+    end = u.size * 0.1
+    faults = [Fault("error-code", "supply", start_s=end - 0.05, count=5)]
+    log = tmp_path / "run.csv"
+    with Rig(config, faults=faults) as rig:
+        result = rig.run(VoltageProgram(u), log, handle_signals=False)
+    emu = rig.emulators
+    assert emu.supply_state.last_setpoint_V == 0.0 and not emu.supply_state.output_on
+    _, notes = read_run_log(log)
+    assert "0 V sent and output off" in notes[-1] and result.reason

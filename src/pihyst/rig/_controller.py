@@ -28,6 +28,10 @@ from pihyst.rig._safety import SetpointGuard, SignalGuard, StopRun, Terminated, 
 NAN = math.nan
 #: how long the readback may take to fall to 0 V after the output is switched off
 RESIDUAL_WAIT_S = 1.0
+#: how long 0 V and output off are sent again after a failure (at least 3 times each): a
+#: supply that answers a few exchanges with errors or not at all (bus noise, a busy
+#: controller) is zeroed once it answers, however many of the run's tries it took
+ZERO_RETRY_S = 2.0
 
 
 @dataclass
@@ -521,14 +525,9 @@ class Controller:
         problems = []
         for what, call in (("0 V", lambda: self.supply.set_voltage(0.0)),
                            ("output off", self.supply.output_off)):
-            for attempt in range(3):
-                try:
-                    with self._supply_lock:
-                        call()
-                    break
-                except Exception as err:  # noqa: BLE001 - see the docstring
-                    if attempt == 2:
-                        problems.append(f"could not send {what}: {err}")
+            error = self._until_sent(call)
+            if error is not None:
+                problems.append(f"could not send {what}: {error}")
         if not problems and getattr(self.supply, "has_watchdog", False):
             try:
                 with self._supply_lock:
@@ -547,6 +546,22 @@ class Controller:
             self._note(f"stopped: {reason}; WARNING: {'; '.join(problems)} - the beam may "
                        "still be charged")
         return zeroed, self.guard.last if zeroed else NAN
+
+    def _until_sent(self, call):
+        """Send ``call`` to the supply until it succeeds, at least 3 times and for
+        ZERO_RETRY_S, a tick apart; None when sent, else the last error."""
+        give_up = self.clock.now() + ZERO_RETRY_S
+        attempt = 0
+        while True:
+            try:
+                with self._supply_lock:
+                    call()
+                return None
+            except Exception as err:  # noqa: BLE001 - as in _shutdown
+                attempt += 1
+                if attempt >= 3 and self.clock.now() >= give_up:
+                    return err
+            self.clock.sleep(self.settings.period_s)
 
     def _residual_voltage(self):
         """The readback after 0 V and output off when it stays above the tolerance for
