@@ -115,7 +115,7 @@ class KeyenceSensor:
         >>> from pihyst.rig import SensorConfig, open_sensor
         >>> sensor = open_sensor(SensorConfig(port="loop://", protocol="keyence-lk-g3000"))
         >>> sensor.describe()
-        "KEYENCE LK-G3000 at loop://, output 1 ('M1'), 1 um per unit, sign +1"
+        "KEYENCE LK-G3000 at loop://, output 1 ('M1'), 1 µm per unit, sign +1"
         >>> sensor.close()
         """
         return (f"KEYENCE {self.cfg.protocol[8:].upper()} at {self.cfg.port}, output "
