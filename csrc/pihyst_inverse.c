@@ -593,15 +593,31 @@ enum { RAMP_X1, RAMP_X2, RAMP_Y0, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N
  * that position, and the operator's index (as a real: exact up to 2^24 operators) */
 enum { LIST_KEY, LIST_END_MAX, LIST_INDEX, LIST_N };
 /* the running sum of the output: hi + lo, the changes summed since the last exact sum
- * (|change| each) and the scale at which it is taken again */
-enum { SUM_HI, SUM_LO, SUM_MOVED, SUM_BUDGET, SUM_N };
+ * (|change| each) and the scale at which it is taken again; the number of operators not
+ * known to be monotone (ramps_init); then, per list, where its
+ * last two binary searches ended (the next one starts there: tracking moves little) */
+enum { SUM_HI, SUM_LO, SUM_MOVED, SUM_BUDGET, SUM_ODD, SUM_HINTS, SUM_N = SUM_HINTS + 4 };
+/* cells of a search end at the start of the 1st, 2nd, 4th, then every RAMP_CELL_MAX-th
+ * ramp of the list beyond their start: small enough
+ * that the last cell's bisection stays short (bench-m4f: a KP jump of K = 134 took 22,400
+ * instructions with 8, 24,800 with 16 or none) */
+#define RAMP_CELL_MAX 8
 /* the ramp path keeps operator indices in reals */
 #define RAMP_MAX_K ((size_t)1 << 24)
 
-/* Scratch of a ramp model: RAMP_N arrays of K constants for the rising ramps, the same
- * for the falling ones (by operator), the two sorted lists (LIST_N arrays of K each), the
- * active set of a search (3 K), the running sum (SUM_N) */
-#define RAMP_SCRATCH(K) ((size_t)(2 * RAMP_N + 2 * LIST_N + 3) * (K) + SUM_N)
+/* Scratch of a ramp model, in blocks of K values: RAMP_N arrays of constants for the
+ * rising ramps, the same for the falling ones (by operator), the two sorted lists (LIST_N
+ * arrays each), the active set of a search (3 K), the cell it was gathered for (3 K, kept
+ * for the next sample), which operators are monotone (1 K), then the running sum (SUM_N
+ * values) */
+enum {
+    OFF_LISTS = 2 * RAMP_N,
+    OFF_ACTIVE = OFF_LISTS + 2 * LIST_N,
+    OFF_CELL = OFF_ACTIVE + 3,
+    OFF_MONOTONE = OFF_CELL + 3,
+    OFF_SUM = OFF_MONOTONE + 1
+};
+#define RAMP_SCRATCH(K) ((size_t)OFF_SUM * (K) + SUM_N)
 
 static real *ramp_array(const pihyst_compensator *c, int falling, int which)
 {
@@ -610,18 +626,15 @@ static real *ramp_array(const pihyst_compensator *c, int falling, int which)
 
 static real *list_array(const pihyst_compensator *c, int down, int which)
 {
-    return c->scratch + (size_t)(2 * RAMP_N + down * LIST_N + which) * c->work_model.n_ops;
+    return c->scratch + (size_t)(OFF_LISTS + down * LIST_N + which) * c->work_model.n_ops;
 }
 
-static real *active_set(const pihyst_compensator *c)
+static real *ramp_block(const pihyst_compensator *c, int offset)
 {
-    return c->scratch + (size_t)(2 * RAMP_N + 2 * LIST_N) * c->work_model.n_ops;
+    return c->scratch + (size_t)offset * c->work_model.n_ops;
 }
 
-static real *ramp_sum(const pihyst_compensator *c)
-{
-    return c->scratch + (size_t)(2 * RAMP_N + 2 * LIST_N + 3) * c->work_model.n_ops;
-}
+static real *ramp_sum(const pihyst_compensator *c) { return ramp_block(c, OFF_SUM); }
 
 /* a model the ramp path takes: every polyline a saturated ramp (pihyst_model_init) */
 static int ramp_model(const pihyst_model *m)
@@ -634,6 +647,30 @@ static int ramp_model(const pihyst_model *m)
 #else
 #define R_MAX DBL_MAX
 #endif
+
+/* 1 if the ramp's value (PIHYST_RAMP_VALUE) never decreases with u in floating point:
+ * each operation of y1 + (y2 - y1)(u - x1)/(x2 - x1) is monotone in u, the value at x1
+ * is y1 (= y0), so only the step to y2 at x2 can go down, from the value just below x2 */
+static int ramp_monotone(const pihyst_compensator *c, int side, size_t k)
+{
+    const real x1 = ramp_array(c, side, RAMP_X1)[k], x2 = ramp_array(c, side, RAMP_X2)[k];
+    const real y0 = ramp_array(c, side, RAMP_Y0)[k], y1 = ramp_array(c, side, RAMP_Y1)[k];
+    const real y2 = ramp_array(c, side, RAMP_Y2)[k], below = R_NEXTAFTER(x2, -R_INF);
+    return PIHYST_RAMP_VALUE(x1, x2, y0, y1, y2, below) <= y2;
+}
+
+/* 1 if R_k(u) <= F_k(u) at every u in floating point, for monotone ramps: the two are
+ * the same ramp, or R rises only after F has risen, from no higher and to no higher
+ * (x1 of R >= x2 of F, y0 and y2 of R <= those of F) */
+static int ramps_ordered(const pihyst_compensator *c, size_t k)
+{
+    int which, same = 1;
+    for (which = RAMP_X1; which <= RAMP_Y2; ++which)
+        same &= ramp_array(c, 0, which)[k] == ramp_array(c, 1, which)[k];
+    return same || (ramp_array(c, 0, RAMP_X1)[k] >= ramp_array(c, 1, RAMP_X2)[k] &&
+                    ramp_array(c, 0, RAMP_Y0)[k] <= ramp_array(c, 1, RAMP_Y0)[k] &&
+                    ramp_array(c, 0, RAMP_Y2)[k] <= ramp_array(c, 1, RAMP_Y2)[k]);
+}
 
 /* constants of every ramp, from points 1 and 2 of its polyline: x1, x2, y0 (the value
  * below x1: y1 but for the sign of a zero), y1, y2, dx/dy (0 for a flat ramp, at most
@@ -678,15 +715,58 @@ static void ramps_init(pihyst_compensator *c, real scale)
         }
     }
     ramp_sum(c)[SUM_BUDGET] = scale;
+    ramp_sum(c)[SUM_ODD] = RC(0.0);
+    for (k = 0; k < 4; ++k) ramp_sum(c)[SUM_HINTS + k] = RC(0.0);
+    for (k = 0; k < K; ++k) {
+        const int ok = ramp_monotone(c, 0, k) && ramp_monotone(c, 1, k) && ramps_ordered(c, k);
+        ramp_block(c, OFF_MONOTONE)[k] = ok ? RC(1.0) : RC(0.0);
+        if (!ok) ramp_sum(c)[SUM_ODD] += RC(1.0);
+    }
 }
 
-/* positions [*i0, *i1) of a sorted list whose ramps meet [a, b] in its coordinate (start
- * <= b, end >= a); the count */
-static size_t ramps_meeting(const real *key, const real *end_max, size_t K, real a, real b,
+/* The first i in [0, n] with v[i] >= x (strict: v[i] > x), v non-decreasing, found from
+ * the position *hint of the last search (galloping away from it, then bisecting):
+ * O(log |answer - hint|) comparisons. The answer becomes the next hint. */
+static size_t bound_from(const real *v, size_t n, real x, int strict, real *hint)
+{
+#define PIHYST_PAST(i) (strict ? v[i] > x : v[i] >= x)
+    size_t g = (size_t)*hint, lo, hi, step = 1;
+    if (g > n) g = n;
+    if (g == n || PIHYST_PAST(g)) { /* the answer is g or below */
+        hi = g;
+        while (hi >= step && PIHYST_PAST(hi - step)) {
+            hi -= step;
+            step *= 2;
+        }
+        lo = hi >= step ? hi - step + 1 : 0;
+    } else { /* above g */
+        lo = g + 1;
+        hi = n;
+        while (lo + step - 1 < n && !PIHYST_PAST(lo + step - 1)) {
+            lo += step;
+            step *= 2;
+        }
+        if (lo + step - 1 < n) hi = lo + step - 1;
+    }
+    while (lo < hi) { /* v[hi] past x, or hi = n */
+        const size_t mid = lo + (hi - lo) / 2;
+        if (PIHYST_PAST(mid)) hi = mid; else lo = mid + 1;
+    }
+#undef PIHYST_PAST
+    *hint = (real)lo;
+    return lo;
+}
+
+/* positions [*i0, *i1) of list `down` whose ramps reach into (a, b) in its coordinate
+ * (start < b, end > a: a ramp that ends at a or starts at b has the same value at a and
+ * b, and adds nothing to z between them); the count */
+static size_t ramps_meeting(const pihyst_compensator *c, int down, real a, real b,
                             size_t *i0, size_t *i1)
 {
-    *i0 = lower_bound(end_max, K, a);
-    *i1 = upper_bound(key, K, b);
+    const size_t K = c->work_model.n_ops;
+    real *hints = ramp_sum(c) + SUM_HINTS + 2 * down;
+    *i0 = bound_from(list_array(c, down, LIST_END_MAX), K, a, 1, hints);
+    *i1 = bound_from(list_array(c, down, LIST_KEY), K, b, 0, hints + 1);
     if (*i1 < *i0) *i1 = *i0;
     return *i1 - *i0;
 }
@@ -695,7 +775,7 @@ static size_t ramps_meeting(const real *key, const real *end_max, size_t K, real
  * changes added to hi + lo exactly (TwoSum) and their sizes to moved */
 static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real *index,
                                               size_t i0, size_t i1, real u, real *hi_,
-                                              real *lo_, real *moved_)
+                                              real *lo_, real *moved_, const real *skip)
 {
     pihyst_model *m = &c->work_model;
     const real *PIHYST_RESTRICT rx1 = ramp_array(c, 0, RAMP_X1), *PIHYST_RESTRICT rx2 = rx1 + m->n_ops;
@@ -711,6 +791,8 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
     for (i = i0; i < i1; ++i) {
         const size_t k = (size_t)index[i];
         const real old = f[k];
+        if (skip && skip[k] != RC(0.0)) continue;
+        {
         const real r = PIHYST_RAMP_VALUE(rx1[k], rx2[k], ry0[k], ry1[k], ry2[k], u);
         const real h = PIHYST_RAMP_VALUE(fx1[k], fx2[k], fy0[k], fy1[k], fy2[k], u);
         real v = h < old ? h : old; /* max2(r, min2(h, f)) as the model step */
@@ -722,6 +804,7 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
             hi = s;
             moved += R_FABS(t);
         }
+        }
     }
     *hi_ = hi;
     *lo_ = lo;
@@ -729,24 +812,30 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
 }
 
 /* The model step from u_p = c->u_last to u, visiting only the operators with a ramp
- * between them (section comment). Returns 0, having done nothing, if that would be more
- * than K visits (the full step is cheaper then). */
+ * between them (section comment). Going up, an operator whose ramps are monotone and
+ * R <= F (ramps_init) changes only if its rising ramp lies between them: its state lies in
+ * [R(u_p), F(u_p)] and F(u) >= F(u_p); going down likewise with the falling ramp. Returns
+ * 0, having done nothing, if that would be more than K / 2 visits (the full step is
+ * cheaper then). */
 static int ramps_step_sparse(pihyst_compensator *c, real u)
 {
     pihyst_model *m = &c->work_model;
     const size_t K = m->n_ops;
     const real u_p = c->u_last, a = u < u_p ? u : u_p, b = u < u_p ? u_p : u;
+    const int down = u < u_p, odd = ramp_sum(c)[SUM_ODD] > RC(0.0);
     real *sum = ramp_sum(c);
     real hi = sum[SUM_HI], lo = sum[SUM_LO], moved = sum[SUM_MOVED];
-    size_t r0, r1, f0, f1;
-    /* rising ramps meeting [a, b]; falling ones, in p = -u, meeting [-b, -a] */
-    size_t n = ramps_meeting(list_array(c, 0, LIST_KEY), list_array(c, 0, LIST_END_MAX), K, a,
-                             b, &r0, &r1);
-    n += ramps_meeting(list_array(c, 1, LIST_KEY), list_array(c, 1, LIST_END_MAX), K, -b, -a,
-                       &f0, &f1);
-    if (n > K) return 0;
-    ramps_update_listed(c, list_array(c, 0, LIST_INDEX), r0, r1, u, &hi, &lo, &moved);
-    ramps_update_listed(c, list_array(c, 1, LIST_INDEX), f0, f1, u, &hi, &lo, &moved);
+    size_t i0, i1, j0 = 0, j1 = 0;
+    /* the ramps of the direction meeting [a, b] (in p = -u going down); the other ones
+     * too if some operator is not monotone */
+    size_t n = down ? ramps_meeting(c, 1, -b, -a, &i0, &i1) : ramps_meeting(c, 0, a, b, &i0, &i1);
+    if (odd)
+        n += down ? ramps_meeting(c, 0, a, b, &j0, &j1) : ramps_meeting(c, 1, -b, -a, &j0, &j1);
+    if (2 * n > K) return 0;
+    ramps_update_listed(c, list_array(c, down, LIST_INDEX), i0, i1, u, &hi, &lo, &moved, NULL);
+    if (odd)
+        ramps_update_listed(c, list_array(c, !down, LIST_INDEX), j0, j1, u, &hi, &lo, &moved,
+                            ramp_block(c, OFF_MONOTONE));
     if (moved > sum[SUM_BUDGET]) { /* the exact sum again, in the model's order */
         hi = pihyst_internal_weighted_sum(K, m->weights, m->state, m->offset);
         lo = moved = RC(0.0);
@@ -772,7 +861,6 @@ static size_t ramps_gather(const pihyst_compensator *c, int up, real u_p, real L
                            real *PIHYST_RESTRICT a, real *PIHYST_RESTRICT b,
                            real *PIHYST_RESTRICT w)
 {
-    const size_t K = c->work_model.n_ops;
     const int side = !up;
     const real *PIHYST_RESTRICT index = list_array(c, side, LIST_INDEX);
     const real *PIHYST_RESTRICT x1 = ramp_array(c, side, RAMP_X1), *PIHYST_RESTRICT x2 = ramp_array(c, side, RAMP_X2);
@@ -780,8 +868,7 @@ static size_t ramps_gather(const pihyst_compensator *c, int up, real u_p, real L
     const real *PIHYST_RESTRICT inv = ramp_array(c, side, RAMP_INV), *PIHYST_RESTRICT s = ramp_array(c, side, RAMP_SLOPE);
     const real *PIHYST_RESTRICT f = c->work_model.state;
     size_t i, i1, n = 0;
-    ramps_meeting(list_array(c, side, LIST_KEY), list_array(c, side, LIST_END_MAX), K, L, H, &i,
-                  &i1);
+    ramps_meeting(c, side, L, H, &i, &i1);
     if (up) {
         for (; i < i1; ++i) {
             const size_t k = (size_t)index[i];
@@ -967,14 +1054,14 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
     const size_t K = c->work_model.n_ops;
     const real *key = list_array(c, !up, LIST_KEY);
     const real q = up ? u_p : -u_p, end = q + span;
-    real L = q, zL = RC(0.0), H, zH = RC(0.0), p, width, lin = RC(0.0);
-    real *act = active_set(c); /* the active set, 3 K (probe_active) */
+    real L = q, zL = RC(0.0), H = end, zH = RC(0.0), p = end, width, lin = RC(0.0);
+    real *act = ramp_block(c, OFF_ACTIVE), *cell_set = ramp_block(c, OFF_CELL);
     size_t n_active, cell = 1;
     ramp_probe r;
-    int i, halve = 0;
+    int i, halve = 0, found = 0;
     if (c->dir != (up ? 1 : -1)) { /* a reversal: nothing kept */
         c->dir = up ? 1 : -1;
-        c->next[0] = 0;
+        c->next[0] = c->next[1] = 0;
     }
     /* The segment of the last answer, kept (next[0] = 1) with its slope (slope[0]) and
      * right end (ahead): z is linear from q up to there, so while the answer stays
@@ -988,21 +1075,46 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
         }
         c->next[0] = 0;
     }
-    /* cells [L, H], H at the start of the 1st, 2nd, 4th, ... ramp beyond L, up to the
-     * window's end: the first whose z(H) reaches the target holds the answer. Each is
-     * gathered and probed once at its midpoint (H if L and H are adjacent numbers),
-     * which also gives z(H). */
-    for (;;) {
-        const size_t j = upper_bound(key, K, L); /* the first ramp starting beyond L */
+    /* The cell of the last search (next[1] = its operators + 1, base = its end): its
+     * operators' intervals stay as they were while the direction holds, so while q lies
+     * inside it a probe of its kept set replaces a gather. */
+    if (c->next[1] && q < c->base) {
+        H = c->base < end ? c->base : end;
+        n_active = c->next[1] - 1;
+        p = L + RC(0.5) * (H - L);
+        if (!(p > L && p < H)) p = H;
+        probe_active(&n_active, cell_set, cell_set + K, cell_set + 2 * K, act, act + K,
+                     act + 2 * K, L, H, zL, &lin, p, &zH, &r);
+        if (zH >= target) {
+            found = 1;
+        } else if (!(H < end)) { /* the window ends below the target */
+            *d = span;
+            return 0;
+        } else {
+            L = H;
+            zL = zH;
+        }
+    }
+    /* cells [L, H], H at the start of the 1st, 2nd, 4th, then RAMP_CELL_MAX-th ramp of
+     * the list beyond L, up to the window's end: the first whose z(H) reaches the target holds the answer. Each is
+     * gathered (and kept) and probed once at its midpoint (H if L and H are adjacent
+     * numbers), which also gives z(H). */
+    while (!found) {
+        /* the first ramp starting beyond L */
+        const size_t j = bound_from(key, K, L, 1, ramp_sum(c) + SUM_HINTS + 2 * !up + 1);
+        size_t n_cell;
         H = j < K && K - j >= cell ? key[j + cell - 1] : end;
         if (!(H < end)) H = end;
-        cell *= 2;
-        n_active = ramps_gather(c, up, u_p, L, H, act, act + K, act + 2 * K);
+        cell = cell < RAMP_CELL_MAX ? 2 * cell : RAMP_CELL_MAX;
+        n_cell = ramps_gather(c, up, u_p, L, H, cell_set, cell_set + K, cell_set + 2 * K);
+        c->base = H;
+        c->next[1] = n_cell + 1;
+        n_active = n_cell;
         lin = RC(0.0);
         p = L + RC(0.5) * (H - L);
         if (!(p > L && p < H)) p = H;
-        probe_active(&n_active, act, act + K, act + 2 * K, act, act + K, act + 2 * K, L, H, zL,
-                     &lin, p, &zH, &r);
+        probe_active(&n_active, cell_set, cell_set + K, cell_set + 2 * K, act, act + K,
+                     act + 2 * K, L, H, zL, &lin, p, &zH, &r);
         if (zH >= target) break;
         if (!(H < end)) { /* the window ends below the target */
             *d = span;
