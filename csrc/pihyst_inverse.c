@@ -602,20 +602,23 @@ enum { SUM_HI, SUM_LO, SUM_MOVED, SUM_BUDGET, SUM_ODD, SUM_HINTS, SUM_N = SUM_HI
  * that the last cell's bisection stays short (bench-m4f: a KP jump of K = 134 took 22,400
  * instructions with 8, 24,800 with 16 or none) */
 #define RAMP_CELL_MAX 8
+/* up to this many operators not known to be monotone are updated at every step of the
+ * ramp path's own model step; more, and those with a ramp between the two voltages */
+#define RAMP_ODD_FEW 8
 /* the ramp path keeps operator indices in reals */
 #define RAMP_MAX_K ((size_t)1 << 24)
 
 /* Scratch of a ramp model, in blocks of K values: RAMP_N arrays of constants for the
  * rising ramps, the same for the falling ones (by operator), the two sorted lists (LIST_N
  * arrays each), the active set of a search (3 K), the cell it was gathered for (3 K, kept
- * for the next sample), which operators are monotone (1 K), then the running sum (SUM_N
- * values) */
+ * for the next sample), the operators not known to be monotone (up to K indices), then
+ * the running sum (SUM_N values) */
 enum {
     OFF_LISTS = 2 * RAMP_N,
     OFF_ACTIVE = OFF_LISTS + 2 * LIST_N,
     OFF_CELL = OFF_ACTIVE + 3,
-    OFF_MONOTONE = OFF_CELL + 3,
-    OFF_SUM = OFF_MONOTONE + 1
+    OFF_ODD = OFF_CELL + 3,
+    OFF_SUM = OFF_ODD + 1
 };
 #define RAMP_SCRATCH(K) ((size_t)OFF_SUM * (K) + SUM_N)
 
@@ -717,11 +720,9 @@ static void ramps_init(pihyst_compensator *c, real scale)
     ramp_sum(c)[SUM_BUDGET] = scale;
     ramp_sum(c)[SUM_ODD] = RC(0.0);
     for (k = 0; k < 4; ++k) ramp_sum(c)[SUM_HINTS + k] = RC(0.0);
-    for (k = 0; k < K; ++k) {
-        const int ok = ramp_monotone(c, 0, k) && ramp_monotone(c, 1, k) && ramps_ordered(c, k);
-        ramp_block(c, OFF_MONOTONE)[k] = ok ? RC(1.0) : RC(0.0);
-        if (!ok) ramp_sum(c)[SUM_ODD] += RC(1.0);
-    }
+    for (k = 0; k < K; ++k) /* the operators not known to be monotone, listed */
+        if (!(ramp_monotone(c, 0, k) && ramp_monotone(c, 1, k) && ramps_ordered(c, k)))
+            ramp_block(c, OFF_ODD)[(size_t)ramp_sum(c)[SUM_ODD]++] = (real)k;
 }
 
 /* The first i in [0, n] with v[i] >= x (strict: v[i] > x), v non-decreasing, found from
@@ -775,7 +776,7 @@ static size_t ramps_meeting(const pihyst_compensator *c, int down, real a, real 
  * changes added to hi + lo exactly (TwoSum) and their sizes to moved */
 static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real *index,
                                               size_t i0, size_t i1, real u, real *hi_,
-                                              real *lo_, real *moved_, const real *skip)
+                                              real *lo_, real *moved_)
 {
     pihyst_model *m = &c->work_model;
     const real *PIHYST_RESTRICT rx1 = ramp_array(c, 0, RAMP_X1), *PIHYST_RESTRICT rx2 = rx1 + m->n_ops;
@@ -791,8 +792,6 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
     for (i = i0; i < i1; ++i) {
         const size_t k = (size_t)index[i];
         const real old = f[k];
-        if (skip && skip[k] != RC(0.0)) continue;
-        {
         const real r = PIHYST_RAMP_VALUE(rx1[k], rx2[k], ry0[k], ry1[k], ry2[k], u);
         const real h = PIHYST_RAMP_VALUE(fx1[k], fx2[k], fy0[k], fy1[k], fy2[k], u);
         real v = h < old ? h : old; /* max2(r, min2(h, f)) as the model step */
@@ -804,7 +803,6 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
             hi = s;
             moved += R_FABS(t);
         }
-        }
     }
     *hi_ = hi;
     *lo_ = lo;
@@ -814,28 +812,34 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
 /* The model step from u_p = c->u_last to u, visiting only the operators with a ramp
  * between them (section comment). Going up, an operator whose ramps are monotone and
  * R <= F (ramps_init) changes only if its rising ramp lies between them: its state lies in
- * [R(u_p), F(u_p)] and F(u) >= F(u_p); going down likewise with the falling ramp. Returns
- * 0, having done nothing, if that would be more than K / 2 visits (the full step is
- * cheaper then). */
+ * [R(u_p), F(u_p)] and F(u) >= F(u_p); going down likewise with the falling ramp. The
+ * other operators (none, on the default fit's models in single precision; 2 of 134 in
+ * double, whose ramps touch to an ulp) are visited through their other ramp too: all of
+ * them if they are few (RAMP_ODD_FEW), else those of the other list between u_p and u.
+ * Returns 0, having done nothing, if that would be more than K / 2 visits (the full step
+ * is cheaper then). */
 static int ramps_step_sparse(pihyst_compensator *c, real u)
 {
     pihyst_model *m = &c->work_model;
     const size_t K = m->n_ops;
     const real u_p = c->u_last, a = u < u_p ? u : u_p, b = u < u_p ? u_p : u;
-    const int down = u < u_p, odd = ramp_sum(c)[SUM_ODD] > RC(0.0);
     real *sum = ramp_sum(c);
+    const size_t n_odd = (size_t)sum[SUM_ODD];
+    const int down = u < u_p, few = n_odd <= RAMP_ODD_FEW;
     real hi = sum[SUM_HI], lo = sum[SUM_LO], moved = sum[SUM_MOVED];
     size_t i0, i1, j0 = 0, j1 = 0;
-    /* the ramps of the direction meeting [a, b] (in p = -u going down); the other ones
-     * too if some operator is not monotone */
+    /* the ramps of the direction reaching into (a, b) (in p = -u going down) */
     size_t n = down ? ramps_meeting(c, 1, -b, -a, &i0, &i1) : ramps_meeting(c, 0, a, b, &i0, &i1);
-    if (odd)
+    if (few)
+        n += n_odd;
+    else
         n += down ? ramps_meeting(c, 0, a, b, &j0, &j1) : ramps_meeting(c, 1, -b, -a, &j0, &j1);
     if (2 * n > K) return 0;
-    ramps_update_listed(c, list_array(c, down, LIST_INDEX), i0, i1, u, &hi, &lo, &moved, NULL);
-    if (odd)
-        ramps_update_listed(c, list_array(c, !down, LIST_INDEX), j0, j1, u, &hi, &lo, &moved,
-                            ramp_block(c, OFF_MONOTONE));
+    ramps_update_listed(c, list_array(c, down, LIST_INDEX), i0, i1, u, &hi, &lo, &moved);
+    if (few)
+        ramps_update_listed(c, ramp_block(c, OFF_ODD), 0, n_odd, u, &hi, &lo, &moved);
+    else
+        ramps_update_listed(c, list_array(c, !down, LIST_INDEX), j0, j1, u, &hi, &lo, &moved);
     if (moved > sum[SUM_BUDGET]) { /* the exact sum again, in the model's order */
         hi = pihyst_internal_weighted_sum(K, m->weights, m->state, m->offset);
         lo = moved = RC(0.0);

@@ -405,43 +405,61 @@ static void test_ramp_sparse_step_equals_model_step(void)
 }
 
 /* The sparse step's skips against ramps that rounding (or the envelope check's slack)
- * leaves out of order: operator 0's rising ramp ends above its falling envelope by delta,
- * within the slack pihyst_model_init allows (R <= F + slack), so going down across its
- * rising ramp its state drops to F although its falling ramp does not move; operator 1's
- * ramps are the same ramp; operator 2 is a KP kernel. The compensator's state must be the
- * model step's bit for bit after every sample. */
-static void test_ramp_sparse_step_out_of_order(void)
+ * leaves out of order: n_slack operators whose rising ramp ends above their falling
+ * envelope by delta, within the slack pihyst_model_init allows (R <= F + slack), so going
+ * down across their rising ramp their state drops to F although their falling ramp does
+ * not move; one operator whose ramps are the same ramp; one KP kernel; 12 kernels far
+ * off (so that the step stays sparse). With 1 such operator the compensator visits it at
+ * every step, with 10 (more than RAMP_ODD_FEW) through the other list. The compensator's
+ * state must be the model step's bit for bit after every sample. */
+static void out_of_order_case(size_t n_slack)
 {
-    static const size_t st[4] = {0, 4, 8, 12};
+    enum { KX = 24 };
+    static size_t st[KX + 1];
+    static real rx[4 * KX], ry[4 * KX], fx[4 * KX], fy[4 * KX];
+    static real scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(KX, 8 * KX)];
     const real delta = TOL(1e-13, 1e-6);
-    const real rx[12] = {0, 10, 20, 30, 40, 50, 60, 70, 40, 50, 60, 70};
-    const real ry[12] = {0, 0, 1 + delta, 1 + delta, 0, 0, 1, 1, 0, 0, 2, 2};
-    const real fx[12] = {70, 80, 90, 100, 40, 50, 60, 70, 0, 10, 20, 30};
-    const real fy[12] = {1, 1, 2, 2, 0, 0, 1, 1, 0, 0, 2, 2};
-    const real w[3] = {1.0, 0.5, 0.25};
-    static real scratch[PIHYST_COMPENSATOR_SCRATCH_LEN(3, 24)];
-    real coef_a[PIHYST_COEF_LEN(3)], coef_b[PIHYST_COEF_LEN(3)], coef_c[PIHYST_COEF_LEN(3)];
-    real st_a[3], st_b[3], st_c[3], u = 0.0;
+    /* x1, x2, y0 (= y1), y2 of the rising and falling ramp of each kind of operator */
+    static const real kinds[4][8] = {{10, 20, 0, 1, 80, 90, 1, 2},  /* R above F by delta */
+                                     {50, 60, 0, 1, 50, 60, 0, 1},  /* the same ramp */
+                                     {40, 50, 0, 2, 10, 20, 0, 2},  /* KP */
+                                     {95, 97, 0, 1, 92, 94, 0, 1}}; /* far off */
+    real w[KX], coef_a[PIHYST_COEF_LEN(KX)], coef_b[PIHYST_COEF_LEN(KX)];
+    real coef_c[PIHYST_COEF_LEN(KX)], st_a[KX], st_b[KX], st_c[KX], u;
+    const size_t K = n_slack + 14;
     pihyst_pwl p;
     pihyst_model ma, mb, mc;
     pihyst_compensator c;
-    size_t t, bad = 0, dropped = 0;
+    size_t t, k, bad = 0, dropped = 0;
+    for (k = 0; k <= K; ++k) st[k] = 4 * k;
+    for (k = 0; k < K; ++k) {
+        const real *d = kinds[k < n_slack ? 0 : k == n_slack ? 1 : k == n_slack + 1 ? 2 : 3];
+        const real top = k < n_slack ? d[3] + delta : d[3];
+        rx[4 * k] = d[0] - 5; rx[4 * k + 1] = d[0]; rx[4 * k + 2] = d[1]; rx[4 * k + 3] = d[1] + 5;
+        ry[4 * k] = ry[4 * k + 1] = d[2];
+        ry[4 * k + 2] = ry[4 * k + 3] = top;
+        fx[4 * k] = d[4] - 5; fx[4 * k + 1] = d[4]; fx[4 * k + 2] = d[5]; fx[4 * k + 3] = d[5] + 5;
+        fy[4 * k] = fy[4 * k + 1] = d[6];
+        fy[4 * k + 2] = fy[4 * k + 3] = d[7];
+        w[k] = k < n_slack ? (real)1.0 / (real)(k + 1) : k < n_slack + 2 ? (real)0.5 : (real)0.01;
+    }
     p.rise_start = st; p.rise_x = rx; p.rise_y = ry;
     p.fall_start = st; p.fall_x = fx; p.fall_y = fy;
-    CHECK(model_init(&ma, PIHYST_PWL, 3, NULL, w, 0.0, 0.0, 100.0, NULL, &p, coef_a, st_a,
+    CHECK(model_init(&ma, PIHYST_PWL, K, NULL, w, 0.0, 0.0, 100.0, NULL, &p, coef_a, st_a,
                      NULL) == PIHYST_OK);
-    CHECK(model_init(&mb, PIHYST_PWL, 3, NULL, w, 0.0, 0.0, 100.0, NULL, &p, coef_b, st_b,
+    CHECK(model_init(&mb, PIHYST_PWL, K, NULL, w, 0.0, 0.0, 100.0, NULL, &p, coef_b, st_b,
                      NULL) == PIHYST_OK);
-    CHECK(model_init(&mc, PIHYST_PWL, 3, NULL, w, 0.0, 0.0, 100.0, NULL, &p, coef_c, st_c,
+    CHECK(model_init(&mc, PIHYST_PWL, K, NULL, w, 0.0, 0.0, 100.0, NULL, &p, coef_c, st_c,
                      NULL) == PIHYST_OK);
     CHECK(pihyst_compensator_init(&c, &ma, NAN, NAN, INFINITY, 0.0, scratch, LEN_OF(scratch)) ==
           PIHYST_OK);
     CHECK((c.in_order & PIHYST_ORDER_RAMPS) != 0);
     pihyst_model_step(&mb, 0.0);
     for (t = 0; t < 4000; ++t) {
-        /* desired: the model's output for voltages that put operators 0 and 2 at their
+        /* desired: the model's output for voltages that put the first operators at their
          * tops (60 V), then leave them there (25 V), then step down to 15-16 V, across
-         * operator 0's rising ramp and operator 2's falling one only, then anywhere */
+         * the rising ramps of the first n_slack and the KP kernel's falling ramp only,
+         * then anywhere */
         const real before = st_a[0];
         u = t % 4 == 0   ? (real)60.0
             : t % 4 == 1 ? (real)25.0
@@ -449,11 +467,17 @@ static void test_ramp_sparse_step_out_of_order(void)
                          : (real)(100.0 * (double)kern_uniform());
         pihyst_compensator_step(&c, pihyst_model_step(&mc, u), NULL);
         pihyst_model_step(&mb, c.u_last);
-        bad += memcmp(st_a, st_b, sizeof st_a) != 0;
+        bad += memcmp(st_a, st_b, K * sizeof *st_a) != 0;
         dropped += st_a[0] < before && c.u_last < (real)20.0 && c.u_last > (real)10.0;
     }
     CHECK(bad == 0);
     CHECK(dropped > 0); /* the case happened */
+}
+
+static void test_ramp_sparse_step_out_of_order(void)
+{
+    out_of_order_case(1);
+    out_of_order_case(10);
 }
 
 /* the small-K kernels: a block equals the same samples stepped one at a time, any K */
