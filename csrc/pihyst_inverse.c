@@ -529,20 +529,23 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  * Sorted ramps. At init the operators are listed twice (ramps_init): by the start x1 of
  * their rising ramp, and by the start -x2 of their falling ramp in the negated voltage
  * p = -u; with each position the greatest ramp end (x2, resp. -x1) up to it, a
- * non-decreasing sequence. The ramps that meet an interval [a, b] (start <= b and
- * end >= a) then lie between two binary searches, exactly and for any ramps (unequal
+ * non-decreasing sequence. The ramps that reach into an interval (a, b) (start < b and
+ * end > a) then lie between two binary searches, exactly and for any ramps (unequal
  * widths, coincident or scattered starts): the positions from the first whose greatest
- * end reaches a to the last whose start is at most b. On a grid of centres (what
+ * end exceeds a to the last whose start is below b. On a grid of centres (what
  * pihyst.identify builds) that is the operators of the one or two centres the interval
- * touches; a ramp much wider than the others lengthens every range after it.
+ * touches; a ramp much wider than the others lengthens every range after it. The
+ * searches start where the list's last search ended (bound_from): tracking moves little.
  *
  * Model step (ramps_step_sparse). f_k <- max(R_k(u), min(F_k(u), f_k)) changes nothing
  * when R_k and F_k both have the same value at u as at the last voltage u_p (both on the
  * same flat part: the ramp formula returns y0 or y2 there, the same bits): with a state
- * the last step left, f = max(R(u_p), min(F(u_p), f')), the update is idempotent. So
- * only the operators with a rising or a falling ramp meeting [min(u, u_p), max(u, u_p)]
- * are updated, by the model step's own expression: the state stays the model step's bit
- * for bit. The output is kept as a running sum: y += w_k (f_new - f_old) for each change,
+ * the last step left, f = max(R(u_p), min(F(u_p), f')), the update is idempotent. For an
+ * operator whose ramps are monotone and ordered (R <= F at every float; ramps_init) it
+ * also changes nothing when only its ramp of the other direction moves. So only the
+ * operators whose ramp of the direction reaches into (min(u, u_p), max(u, u_p)) are
+ * updated, with the few others, by the model step's own expression: the state stays the
+ * model step's bit for bit. The output is kept as a running sum: y += w_k (f_new - f_old) for each change,
  * accumulated exactly (TwoSum: hi + lo is the exact sum of the rounded changes), so it
  * drifts from the model step's sum only by the rounding of each change, at most eps
  * times |change|; once the changes since the last exact sum add up to the output scale
@@ -551,7 +554,7 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  * Between those sums |y_last - model step's y| <= about 2 (K + 2) eps times the scale,
  * below the compensator's equality band tol = 4 (K + 2) eps times the scale (the
  * model step's own sum is within (K + 2) eps of the exact one, and so was the sum the
- * running one started from). When more operators would be visited than K, the full
+ * running one started from). When more operators would be visited than K / 2, the full
  * model step runs instead (and gives the exact sum).
  *
  * Search. From u_p with state f, going up, operator k follows R_k from its crossing
@@ -571,12 +574,14 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  * ramp's end, so the sorted list of the direction gives the operators that can add to z
  * in any bracket. The search (solve_ramps):
  *   - tracking: the last answer's segment is kept (slope and right end); an answer
- *     inside it needs no visit at all;
- *   - else cells: from L = q, the bracket [L, H] ends at the start of the next ramp
- *     beyond L, then 2, 4, 8, ... starts further; its operators are gathered
- *     (ramps_gather) and probed once at the midpoint, which also gives z(H). The first
- *     cell whose z(H) reaches the target holds the answer (none: the window's end is
- *     taken and flagged, as on the lists);
+ *     inside it needs no visit at all; else the cell of the last search is probed
+ *     again from its kept operators (their intervals do not change while the direction
+ *     holds);
+ *   - else cells: from L = q, the bracket [L, H] ends at the start of the next ramp of
+ *     the list beyond L, then the 2nd, 4th, then every RAMP_CELL_MAX-th; its operators
+ *     are gathered (ramps_gather) and probed once at the midpoint, which also gives z(H).
+ *     The first cell whose z(H) reaches the target holds the answer (none: the window's
+ *     end is taken and flagged, as on the lists);
  *   - in it: probe at a point m inside (the secant point, or the midpoint when the
  *     bracket shrank by less than half); the segment of m then either holds the answer,
  *     solved exactly, or moves L up to its right end or H down to its left end. These
