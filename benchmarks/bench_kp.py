@@ -10,20 +10,40 @@ Rows (best CPU time of 5): forward model (predict) per sample; compensator per s
 while tracking (ramps between random levels at 0.25 V per sample, as
 bench_compensate.py) and in the worst case (a random
 reachable value every sample); also a random walk of 0.5 V steps, a reversal about
-every other sample. On the ramp model the compensator uses its saturated-ramp search
-(probes of (R1), docs/c-core.md) and, with AVX2, its own bit-exact ramp model step; on
-the reference model the generic event-list walk (collect and sort the breakpoints at
-every reversal) and the generic model step. Targets (issue item 2):
-compensator <= 200 ns per sample tracking and <= 2 us worst case at K ~ 130.
+every other sample. On the ramp model the compensator uses its saturated-ramp path
+(docs/c-core.md): operators sorted by ramp once, a search and a model step that visit
+only the operators with a ramp where the voltage moves; on the reference model the
+generic event-list walk (collect and sort the breakpoints at every reversal) and the
+generic model step. Targets (issue item 2): compensator <= 200 ns per sample tracking
+and <= 2 us worst case at K ~ 130.
+
+Second table: the C compensator's block run (the binding's _core.Compensator.run: the
+compensator alone, not what pihyst.compensate adds around it) against a classical K = 16
+one (as bench_compensate.py builds it) on the same trajectories in the same run, scaled
+to each model's input range:
+the synthetic model above and, when the measured data sets are present ($PIHYST_DATA or
+../shared/data), the models the default fit produces for them (`pihyst fit` with the
+record's columns only, the commands of csrc/m4f/models.sh; hysteresis part, creep lags
+left out). Targets (issue 20 item 5): within 4x the classical K = 16 compensator while
+tracking, 20x in the worst case.
 
 Run: python benchmarks/bench_kp.py
 """
 
 
+import json
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
 import numpy as np
 from timing import best_cpu_time
 
 import pihyst
+from pihyst import _core
+from pihyst.io import datasets
 
 U = 150.0
 N = 20_000
@@ -66,6 +86,85 @@ def ramps(n, rng, step=0.25):
     return np.concatenate(pieces)[:n]
 
 
+FITS = {  # the default fit's commands for the measured records (csrc/m4f/models.sh)
+    "P-885": ("dbo-pi-p885-micromanipulator/Model_Vi_Do.dat",
+              ["--voltage", "1", "--displacement", "5", "--lag", "1", "--rate", "200"]),
+    "SmartHysteresis": ("smarthysteresis-piezo-sine150V1Hz/hysteresis_v_150_1hz.csv",
+                        ["--time", "2", "--displacement", "3", "--voltage", "4",
+                         "--skip-until", "4.26"]),
+}
+
+
+def default_fit_models():
+    """{name: model} the default fit gives for the measured records (hysteresis part), or
+    {} without the data"""
+    root = datasets.data_root()
+    if root is None:
+        return {}
+    pihyst_cmd = pathlib.Path(sys.executable).with_name("pihyst")
+    models = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, (path, options) in FITS.items():
+            out = pathlib.Path(tmp) / "model.json"
+            subprocess.run([str(pihyst_cmd), "fit", str(pathlib.Path(root) / path), *options,
+                            "-o", str(out)], check=True, capture_output=True)
+            model = json.loads(out.read_text())
+            model.pop("creep", None)
+            models[name] = pihyst.load_model(model)
+    return models
+
+
+def classical_k16():
+    """the classical K = 16 model of bench_compensate.py, on [0, U]"""
+    rng = np.random.default_rng(0)
+    w = 0.1 * rng.uniform(size=16)
+    w[0] += 0.2
+    return pihyst.ClassicalPI(U * np.arange(16) / 16, w)
+
+
+def trajectories(rng, lo=0.0, hi=U):
+    """tracking (ramps), walk and noise voltages on [0, U], mapped onto [lo, hi]"""
+    walk = U - np.abs(np.cumsum(rng.normal(0, 0.5, N)) % (2 * U) - U)
+    scaled = {"tracking": ramps(N, rng), "walk": walk, "noise": rng.uniform(0, U, N)}
+    return {name: lo + (hi - lo) * u / U for name, u in scaled.items()}
+
+
+def core_run_time(model, u):
+    """best CPU time of 5 per sample of the C compensator's block run (the binding's
+    _core.Compensator.run, as bench_compensate.py's second table) on the model's outputs
+    for u, from the model's initial state at u[0]: the compensator alone, without what
+    pihyst.compensate adds around it (building the bank, a delay's preview)"""
+    yd = model.predict(u)
+    lo, hi = model.input_range
+    best = np.inf
+    for _ in range(5):
+        comp = _core.Compensator(model._new_bank(model.initial_state), lo, hi, np.inf,
+                                 float(u[0]))
+        t0 = time.process_time()
+        comp.run(yd)
+        best = min(best, time.process_time() - t0)
+    return best / len(u)
+
+
+def against_classical(fast):
+    reference = classical_k16()
+    models = {f"synthetic K = {fast.n_operators}": fast, **default_fit_models()}
+    print("\ncompensator against classical K = 16 on the same trajectories (ns per sample; "
+          "targets: tracking <= 4x, noise <= 20x)")
+    print(f"   {'model':<26} {'K':>4} {'trajectory':<9} {'KP':>7} {'K16':>7} {'ratio':>7}")
+    for name, model in models.items():
+        lo, hi = model.input_range
+        rng = np.random.default_rng(2)
+        for kind, u in trajectories(rng, lo, hi).items():
+            t_kp = core_run_time(model, u)
+            t_16 = core_run_time(reference, (u - lo) / (hi - lo) * U)
+            limit = 4.0 if kind == "tracking" else (20.0 if kind == "noise" else None)
+            verdict = "" if limit is None else (
+                f"  (<= {limit:.0f}x: {'met' if t_kp / t_16 <= limit else 'NOT met'})")
+            print(f"   {name:<26} {model.n_operators:>4} {kind:<9} {1e9 * t_kp:>7.0f} "
+                  f"{1e9 * t_16:>7.0f} {t_kp / t_16:>6.1f}x{verdict}")
+
+
 def main():
     fast, generic = kp_models()
     rng = np.random.default_rng(1)
@@ -93,6 +192,7 @@ def main():
         met = "met" if t_f <= limit else "NOT met"
         print(f"   {name:<22} {1e9 * t_f:>12.0f} {1e9 * t_g:>12.0f}   {t_g / t_f:.1f}x"
               f"   (max |y - y_d| {err:.1e}; target <= {1e9 * limit:.0f} ns: {met})")
+    against_classical(fast)
 
 
 if __name__ == "__main__":

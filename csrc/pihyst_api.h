@@ -214,7 +214,9 @@ pihyst_status PIHYST_NAME(pihyst_compensator_reset)(PIHYST_NAME(pihyst_compensat
 
 /** One sample: the voltage for the desired output y_desired (any value, NaN and
  *  infinities included), applied to the model. *flags (may be NULL) receives the
- *  PIHYST_COMP_* bits; c->y_last then holds the model's output for that voltage. */
+ *  PIHYST_COMP_* bits; c->y_last then holds the model's output for that voltage (for a
+ *  model of saturated ramps, KP, a running sum within tol / 2 of pihyst_model_step's; the
+ *  state is pihyst_model_step's bit for bit either way: docs/c-core.md). */
 PIHYST_REAL PIHYST_NAME(pihyst_compensator_step)(PIHYST_NAME(pihyst_compensator) *c,
                                                  PIHYST_REAL y_desired, pihyst_flags *flags);
 

@@ -49,8 +49,10 @@
  *   pwl:        the crossing by binary search on the polyline's values, then every
  *               interior breakpoint beyond it with its slope change, as two events
  *               (+ new slope, - old slope) that the walk sums exactly.
- *   saturated-ramp pwl (every polyline flat, rising, flat: KP kernels): no lists, a
- *               search by O(K) probes (section "saturated ramps" below).
+ *   saturated-ramp pwl (every polyline flat, rising, flat: KP kernels): no lists; the
+ *               operators sorted by ramp once, and a search and a model step that visit
+ *               only those with a ramp where the voltage moves (section "saturated
+ *               ramps" below).
  * Lists out of order (a state set by reset, an unusual multislope shape, pwl) are
  * sorted: insertion sort, O(K log K) at worst. For pwl the walk keeps its slope as a
  * compensated sum (hi + lo), so that a near-vertical segment joining and leaving
@@ -521,49 +523,131 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
 
 /* A pwl model whose polylines are all saturated ramps (flat at y1 up to x1, rising to y2
  * at x2, flat beyond: the KP kernels, detected by pihyst_model_init, coef[0] = 1) gets
- * its own search, without event lists or sorting. From u_p with state f, going up,
- * operator k follows R_k from its crossing c_k = x1 + (f_k - y1) dx/dy (R_k(c_k) = f_k)
- * to x2 with the slope s_k = w_k dy/dx, and stays put outside [c_k, x2]. So
+ * its own search and its own model step, both of which visit only the operators whose
+ * ramps lie where the voltage moves, not all K.
  *
- *     y(u) - y_p = z(u) = sum_k s_k (clamp(u, lo_k, hi_k) - clamp(u_p, lo_k, hi_k))  (R1)
+ * Sorted ramps. At init the operators are listed twice (ramps_init): by the start x1 of
+ * their rising ramp, and by the start -x2 of their falling ramp in the negated voltage
+ * p = -u; with each position the greatest ramp end (x2, resp. -x1) up to it, a
+ * non-decreasing sequence. The ramps that reach into an interval (a, b) (start < b and
+ * end > a) then lie between two binary searches, exactly and for any ramps (unequal
+ * widths, coincident or scattered starts): the positions from the first whose greatest
+ * end exceeds a to the last whose start is below b. On a grid of centres (what
+ * pihyst.identify builds) that is the operators of the one or two centres the interval
+ * touches; a ramp much wider than the others lengthens every range after it. The
+ * searches start where the list's last search ended (bound_from): tracking moves little.
  *
- * with lo_k = max(c_k, u_p), hi_k = x2 (an operator that cannot move, f_k >= y2 or
- * c_k >= x2 or s_k = 0, gets lo_k = hi_k: no term). Going down, F_k with its crossing
- * and x1 give the same form in the negated voltage p = -u (negation is exact), so both
- * directions solve z(p) = target for p >= q (q = +-u_p), z continuous, non-decreasing,
- * linear between the breakpoints {lo_k, hi_k}.
+ * Model step (ramps_step_sparse). f_k <- max(R_k(u), min(F_k(u), f_k)) changes nothing
+ * when R_k and F_k both have the same value at u as at the last voltage u_p (both on the
+ * same flat part: the ramp formula returns y0 or y2 there, the same bits): with a state
+ * the last step left, f = max(R(u_p), min(F(u_p), f')), the update is idempotent. For an
+ * operator whose ramps are monotone and ordered (R <= F at every float; ramps_init) it
+ * also changes nothing when only its ramp of the other direction moves. So only the
+ * operators whose ramp of the direction reaches into (min(u, u_p), max(u, u_p)) are
+ * updated, with the few others, by the model step's own expression: the state stays the
+ * model step's bit for bit. The output is kept as a running sum: y += w_k (f_new - f_old) for each change,
+ * accumulated exactly (TwoSum: hi + lo is the exact sum of the rounded changes), so it
+ * drifts from the model step's sum only by the rounding of each change, at most eps
+ * times |change|; once the changes since the last exact sum add up to the output scale
+ * (the compensator's, |offset| + sum_k w_k max |envelopes|), the sum is taken again over
+ * all operators in the model's order (pihyst_internal_weighted_sum, the model step's bits).
+ * Between those sums |y_last - model step's y| <= about 2 (K + 2) eps times the scale,
+ * below the compensator's equality band tol = 4 (K + 2) eps times the scale (the
+ * model step's own sum is within (K + 2) eps of the exact one, and so was the sum the
+ * running one started from). When more operators would be visited than K / 2, the full
+ * model step runs instead (and gives the exact sum).
  *
- * lo and hi are set at a reversal (ramps_reverse, one O(K) loop) and kept while the
- * direction holds, for the reason the event lists are kept: an operator not reached keeps
- * its f_k, one on its ramp stays on it. One probe (ramps_probe, one O(K) loop with no
- * data-dependent branch, vectorized) gives at a point m: z(m), the slopes just right and
- * left of m, and the nearest breakpoints above and below m. The search (solve_ramps):
+ * Search. From u_p with state f, going up, operator k follows R_k from its crossing
+ * c_k = x1 + (f_k - y1) dx/dy (R_k(c_k) = f_k) to x2 with the slope s_k = w_k dy/dx, and
+ * stays put outside [c_k, x2]. So
+ *
+ *     y(u) - y_p = z(u) = sum_k s_k (clamp(u, lo_k, hi_k) - lo_k)                   (R1)
+ *
+ * with lo_k = max(c_k, x1, u_p), hi_k = x2, over the operators that move (f_k < y2,
+ * c_k < x2, s_k > 0). Going down, F_k with its crossing and x1 give the same form in
+ * p = -u (negation is exact), so both directions solve z(p) = target for p >= q
+ * (q = +-u_p), z continuous, non-decreasing, linear between the breakpoints
+ * {lo_k, hi_k}. lo_k and hi_k are computed when an operator is visited, from the state
+ * of the moment: an operator not reached since the last reversal keeps its f_k (so its
+ * crossing stays where it was), one reached lies on its ramp at u_p (its crossing at
+ * u_p, to rounding). Every interval starts at or after its ramp's start and ends at its
+ * ramp's end, so the sorted list of the direction gives the operators that can add to z
+ * in any bracket. The search (solve_ramps):
  *   - tracking: the last answer's segment is kept (slope and right end); an answer
- *     inside it needs no probe. Else probe at q; if the segment right of q reaches the
- *     target, solve it, else probe at its end and try the next segment;
- *   - otherwise a bracket [L, H] with z(L) < target <= z(H), z(H) probed at the window's
- *     end (below the target: the end is taken and flagged, as on the lists). Probe at a
- *     point m inside (the secant point, or the midpoint when the bracket shrank by less
- *     than half); the segment of m then either holds the answer, solved exactly, or
- *     moves L up to its right end or H down to its left end. The bracket thus loses
- *     m's segment and at least half of itself every other probe, and stops when it holds
- *     no breakpoint. These probes (probe_active) visit only the operators with a
- *     breakpoint inside the bracket of the moment, kept in a compact set that shrinks
- *     with it.
+ *     inside it needs no visit at all; else the cell of the last search is probed
+ *     again from its kept operators (their intervals do not change while the direction
+ *     holds);
+ *   - else cells: from L = q, the bracket [L, H] ends at the start of the next ramp of
+ *     the list beyond L, then the 2nd, 4th, then every RAMP_CELL_MAX-th; its operators
+ *     are gathered (ramps_gather) and probed once at the midpoint, which also gives z(H).
+ *     The first cell whose z(H) reaches the target holds the answer (none: the window's
+ *     end is taken and flagged, as on the lists);
+ *   - in it: probe at a point m inside (the secant point, or the midpoint when the
+ *     bracket shrank by less than half); the segment of m then either holds the answer,
+ *     solved exactly, or moves L up to its right end or H down to its left end. These
+ *     probes (probe_active) visit only the operators with a breakpoint inside the
+ *     bracket of the moment, kept in a compact set that shrinks with it.
  * The answer is the least p with z(p) = target, as on the lists: a flat stretch with
- * z = target is passed over to its start (H moves down across it). Cost: O(K) per probe,
- * O(1 + segments passed) probes tracking, O(log K)-like probes for a jump (measured in
- * benchmarks/bench_kp.py), no sort. */
+ * z = target is passed over to its start (H moves down across it). Cost: the operators
+ * whose ramps lie between u_p and the answer (each visited in about two cells) plus
+ * O(log K) binary searches; no O(K) pass at a reversal, no sort (measured in
+ * benchmarks/bench_kp.py and make -C csrc bench-m4f). */
 
 enum { RAMP_X1, RAMP_X2, RAMP_Y0, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N };
-#define RAMP_LANES 8
+/* a sorted list: per position the ramp's start (in p), the greatest end (in p) up to
+ * that position, and the operator's index (as a real: exact up to 2^24 operators) */
+enum { LIST_KEY, LIST_END_MAX, LIST_INDEX, LIST_N };
+/* the running sum of the output: hi + lo, the changes summed since the last exact sum
+ * (|change| each) and the scale at which it is taken again; the number of operators not
+ * known to be monotone (ramps_init); then, per list, where its
+ * last two binary searches ended (the next one starts there: tracking moves little) */
+enum { SUM_HI, SUM_LO, SUM_MOVED, SUM_BUDGET, SUM_ODD, SUM_HINTS, SUM_N = SUM_HINTS + 4 };
+/* cells of a search end at the start of the 1st, 2nd, 4th, then every RAMP_CELL_MAX-th
+ * ramp of the list beyond their start: small enough
+ * that the last cell's bisection stays short (bench-m4f: a KP jump of K = 134 took 22,400
+ * instructions with 8, 24,800 with 16 or none) */
+#define RAMP_CELL_MAX 8
+/* up to this many operators not known to be monotone are updated at every step of the
+ * ramp path's own model step; more, and those with a ramp between the two voltages */
+#define RAMP_ODD_FEW 8
+/* the ramp path keeps operator indices in reals */
+#define RAMP_MAX_K ((size_t)1 << 24)
 
-/* Scratch of a ramp model: RAMP_N arrays of K constants for the rising ramps, the same
- * for the falling ones, then lo and hi (K each): 16 K values, inside the scratch of a
- * pwl model of K 4-point polylines (the event lists' place, unused by this path). */
+/* Scratch of a ramp model, in blocks of K values: RAMP_N arrays of constants for the
+ * rising ramps, the same for the falling ones (by operator), the two sorted lists (LIST_N
+ * arrays each), the active set of a search (3 K), the cell it was gathered for (3 K, kept
+ * for the next sample), the operators not known to be monotone (up to K indices), then
+ * the running sum (SUM_N values) */
+enum {
+    OFF_LISTS = 2 * RAMP_N,
+    OFF_ACTIVE = OFF_LISTS + 2 * LIST_N,
+    OFF_CELL = OFF_ACTIVE + 3,
+    OFF_ODD = OFF_CELL + 3,
+    OFF_SUM = OFF_ODD + 1
+};
+#define RAMP_SCRATCH(K) ((size_t)OFF_SUM * (K) + SUM_N)
+
 static real *ramp_array(const pihyst_compensator *c, int falling, int which)
 {
     return c->scratch + (size_t)(falling * RAMP_N + which) * c->work_model.n_ops;
+}
+
+static real *list_array(const pihyst_compensator *c, int down, int which)
+{
+    return c->scratch + (size_t)(OFF_LISTS + down * LIST_N + which) * c->work_model.n_ops;
+}
+
+static real *ramp_block(const pihyst_compensator *c, int offset)
+{
+    return c->scratch + (size_t)offset * c->work_model.n_ops;
+}
+
+static real *ramp_sum(const pihyst_compensator *c) { return ramp_block(c, OFF_SUM); }
+
+/* a model the ramp path takes: every polyline a saturated ramp (pihyst_model_init) */
+static int ramp_model(const pihyst_model *m)
+{
+    return m->family == PIHYST_PWL && m->coef[0] == RC(1.0) && m->n_ops <= RAMP_MAX_K;
 }
 
 #ifdef PIHYST_BUILD_F32
@@ -572,10 +656,35 @@ static real *ramp_array(const pihyst_compensator *c, int falling, int which)
 #define R_MAX DBL_MAX
 #endif
 
+/* 1 if the ramp's value (PIHYST_RAMP_VALUE) never decreases with u in floating point:
+ * each operation of y1 + (y2 - y1)(u - x1)/(x2 - x1) is monotone in u, the value at x1
+ * is y1 (= y0), so only the step to y2 at x2 can go down, from the value just below x2 */
+static int ramp_monotone(const pihyst_compensator *c, int side, size_t k)
+{
+    const real x1 = ramp_array(c, side, RAMP_X1)[k], x2 = ramp_array(c, side, RAMP_X2)[k];
+    const real y0 = ramp_array(c, side, RAMP_Y0)[k], y1 = ramp_array(c, side, RAMP_Y1)[k];
+    const real y2 = ramp_array(c, side, RAMP_Y2)[k], below = R_NEXTAFTER(x2, -R_INF);
+    return PIHYST_RAMP_VALUE(x1, x2, y0, y1, y2, below) <= y2;
+}
+
+/* 1 if R_k(u) <= F_k(u) at every u in floating point, for monotone ramps: the two are
+ * the same ramp, or R rises only after F has risen, from no higher and to no higher
+ * (x1 of R >= x2 of F, y0 and y2 of R <= those of F) */
+static int ramps_ordered(const pihyst_compensator *c, size_t k)
+{
+    int which, same = 1;
+    for (which = RAMP_X1; which <= RAMP_Y2; ++which)
+        same &= ramp_array(c, 0, which)[k] == ramp_array(c, 1, which)[k];
+    return same || (ramp_array(c, 0, RAMP_X1)[k] >= ramp_array(c, 1, RAMP_X2)[k] &&
+                    ramp_array(c, 0, RAMP_Y0)[k] <= ramp_array(c, 1, RAMP_Y0)[k] &&
+                    ramp_array(c, 0, RAMP_Y2)[k] <= ramp_array(c, 1, RAMP_Y2)[k]);
+}
+
 /* constants of every ramp, from points 1 and 2 of its polyline: x1, x2, y0 (the value
  * below x1: y1 but for the sign of a zero), y1, y2, dx/dy (0 for a flat ramp, at most
- * the largest finite value) and the slope w dy/dx */
-static void ramps_init(pihyst_compensator *c)
+ * the largest finite value) and the slope w dy/dx; then the two sorted lists, and the
+ * running sum's budget (the output scale) */
+static void ramps_init(pihyst_compensator *c, real scale)
 {
     const pihyst_model *m = &c->work_model;
     const size_t K = m->n_ops;
@@ -588,6 +697,8 @@ static void ramps_init(pihyst_compensator *c)
         real *y0 = ramp_array(c, side, RAMP_Y0), *y1 = ramp_array(c, side, RAMP_Y1);
         real *y2 = ramp_array(c, side, RAMP_Y2);
         real *inv = ramp_array(c, side, RAMP_INV), *s = ramp_array(c, side, RAMP_SLOPE);
+        real *key = list_array(c, side, LIST_KEY), *end_max = list_array(c, side, LIST_END_MAX);
+        real *index = list_array(c, side, LIST_INDEX), run = -R_INF;
         for (k = 0; k < K; ++k) {
             const real dx = x[4 * k + 2] - x[4 * k + 1], dy = y[4 * k + 2] - y[4 * k + 1];
             real i = dy > RC(0.0) ? dx / dy : RC(0.0);
@@ -599,65 +710,150 @@ static void ramps_init(pihyst_compensator *c)
             y2[k] = y[4 * k + 2];
             inv[k] = i;
             s[k] = m->weights[k] * (dy / dx);
+            /* rising ramps start at x1; falling ones, in p = -u, at -x2 */
+            key[k] = side ? -x2[k] : x1[k];
+            index[k] = (real)k;
+        }
+        heap_sort(key, index, K);
+        for (k = 0; k < K; ++k) {
+            const size_t j = (size_t)index[k];
+            const real end = side ? -x1[j] : x2[j];
+            run = end > run ? end : run;
+            end_max[k] = run;
         }
     }
+    ramp_sum(c)[SUM_BUDGET] = scale;
+    ramp_sum(c)[SUM_ODD] = RC(0.0);
+    for (k = 0; k < 4; ++k) ramp_sum(c)[SUM_HINTS + k] = RC(0.0);
+    for (k = 0; k < K; ++k) /* the operators not known to be monotone, listed */
+        if (!(ramp_monotone(c, 0, k) && ramp_monotone(c, 1, k) && ramps_ordered(c, k)))
+            ramp_block(c, OFF_ODD)[(size_t)ramp_sum(c)[SUM_ODD]++] = (real)k;
 }
 
-/* lo, hi of (R1) going up from u_p: crossing c = x1 + (f - y1) dx/dy of the rising ramp,
- * from x1 on (f <= y1: the ramp's start), joined at u_p if already passed */
-PIHYST_HOT
-static void ramps_reverse_up(size_t K, const real *PIHYST_RESTRICT x1, const real *PIHYST_RESTRICT x2,
-                             const real *PIHYST_RESTRICT y1, const real *PIHYST_RESTRICT y2,
-                             const real *PIHYST_RESTRICT inv, const real *PIHYST_RESTRICT s,
-                             const real *PIHYST_RESTRICT f, real u_p, real *PIHYST_RESTRICT lo,
-                             real *PIHYST_RESTRICT hi)
+/* The first i in [0, n] with v[i] >= x (strict: v[i] > x), v non-decreasing, found from
+ * the position *hint of the last search (galloping away from it, then bisecting):
+ * O(log |answer - hint|) comparisons. The answer becomes the next hint. */
+static size_t bound_from(const real *v, size_t n, real x, int strict, real *hint)
 {
-    size_t k;
-    for (k = 0; k < K; ++k) {
-        real cr = x1[k] + (f[k] - y1[k]) * inv[k];
-        int moves;
-        cr = cr > x1[k] ? cr : x1[k];
-        cr = cr > u_p ? cr : u_p;
-        moves = (f[k] < y2[k]) & (cr < x2[k]) & (s[k] > RC(0.0));
-        lo[k] = moves ? cr : u_p;
-        hi[k] = moves ? x2[k] : u_p;
+#define PIHYST_PAST(i) (strict ? v[i] > x : v[i] >= x)
+    size_t g = (size_t)*hint, lo, hi, step = 1;
+    if (g > n) g = n;
+    if (g == n || PIHYST_PAST(g)) { /* the answer is g or below */
+        hi = g;
+        while (hi >= step && PIHYST_PAST(hi - step)) {
+            hi -= step;
+            step *= 2;
+        }
+        lo = hi >= step ? hi - step + 1 : 0;
+    } else { /* above g */
+        lo = g + 1;
+        hi = n;
+        while (lo + step - 1 < n && !PIHYST_PAST(lo + step - 1)) {
+            lo += step;
+            step *= 2;
+        }
+        if (lo + step - 1 < n) hi = lo + step - 1;
     }
-}
-
-/* going down, in p = -u: the falling ramp's crossing (up to x2), down to x1 */
-PIHYST_HOT
-static void ramps_reverse_down(size_t K, const real *PIHYST_RESTRICT x1, const real *PIHYST_RESTRICT x2,
-                               const real *PIHYST_RESTRICT y1, const real *PIHYST_RESTRICT inv,
-                               const real *PIHYST_RESTRICT s, const real *PIHYST_RESTRICT f, real u_p,
-                               real *PIHYST_RESTRICT lo, real *PIHYST_RESTRICT hi)
-{
-    size_t k;
-    for (k = 0; k < K; ++k) {
-        real cr = x1[k] + (f[k] - y1[k]) * inv[k];
-        int moves;
-        cr = cr < x2[k] ? cr : x2[k];
-        cr = cr < u_p ? cr : u_p;
-        moves = (f[k] > y1[k]) & (cr > x1[k]) & (s[k] > RC(0.0));
-        lo[k] = moves ? -cr : -u_p;
-        hi[k] = moves ? -x1[k] : -u_p;
+    while (lo < hi) { /* v[hi] past x, or hi = n */
+        const size_t mid = lo + (hi - lo) / 2;
+        if (PIHYST_PAST(mid)) hi = mid; else lo = mid + 1;
     }
+#undef PIHYST_PAST
+    *hint = (real)lo;
+    return lo;
 }
 
-static void ramps_reverse(pihyst_compensator *c, int up, real u_p)
+/* positions [*i0, *i1) of list `down` whose ramps reach into (a, b) in its coordinate
+ * (start < b, end > a: a ramp that ends at a or starts at b has the same value at a and
+ * b, and adds nothing to z between them); the count */
+static size_t ramps_meeting(const pihyst_compensator *c, int down, real a, real b,
+                            size_t *i0, size_t *i1)
 {
-    const pihyst_model *m = &c->work_model;
+    const size_t K = c->work_model.n_ops;
+    real *hints = ramp_sum(c) + SUM_HINTS + 2 * down;
+    *i0 = bound_from(list_array(c, down, LIST_END_MAX), K, a, 1, hints);
+    *i1 = bound_from(list_array(c, down, LIST_KEY), K, b, 0, hints + 1);
+    if (*i1 < *i0) *i1 = *i0;
+    return *i1 - *i0;
+}
+
+/* The model step's update at u of the operators at positions [i0, i1) of a list, the
+ * changes added to hi + lo exactly (TwoSum) and their sizes to moved */
+static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real *index,
+                                              size_t i0, size_t i1, real u, real *hi_,
+                                              real *lo_, real *moved_)
+{
+    pihyst_model *m = &c->work_model;
+    const real *PIHYST_RESTRICT rx1 = ramp_array(c, 0, RAMP_X1), *PIHYST_RESTRICT rx2 = rx1 + m->n_ops;
+    const real *PIHYST_RESTRICT ry0 = ramp_array(c, 0, RAMP_Y0), *PIHYST_RESTRICT ry1 = ry0 + m->n_ops;
+    const real *PIHYST_RESTRICT ry2 = ry1 + m->n_ops;
+    const real *PIHYST_RESTRICT fx1 = ramp_array(c, 1, RAMP_X1), *PIHYST_RESTRICT fx2 = fx1 + m->n_ops;
+    const real *PIHYST_RESTRICT fy0 = ramp_array(c, 1, RAMP_Y0), *PIHYST_RESTRICT fy1 = fy0 + m->n_ops;
+    const real *PIHYST_RESTRICT fy2 = fy1 + m->n_ops;
+    const real *PIHYST_RESTRICT w = m->weights;
+    real *PIHYST_RESTRICT f = m->state;
+    real hi = *hi_, lo = *lo_, moved = *moved_;
+    size_t i;
+    for (i = i0; i < i1; ++i) {
+        const size_t k = (size_t)index[i];
+        const real old = f[k];
+        const real r = PIHYST_RAMP_VALUE(rx1[k], rx2[k], ry0[k], ry1[k], ry2[k], u);
+        const real h = PIHYST_RAMP_VALUE(fx1[k], fx2[k], fy0[k], fy1[k], fy2[k], u);
+        real v = h < old ? h : old; /* max2(r, min2(h, f)) as the model step */
+        v = r > v ? r : v;
+        f[k] = v;
+        if (v != old) { /* hi + lo += t exactly (Knuth's TwoSum) */
+            const real t = w[k] * (v - old), s = hi + t, bp = s - hi;
+            lo += (hi - (s - bp)) + (t - bp);
+            hi = s;
+            moved += R_FABS(t);
+        }
+    }
+    *hi_ = hi;
+    *lo_ = lo;
+    *moved_ = moved;
+}
+
+/* The model step from u_p = c->u_last to u, visiting only the operators with a ramp
+ * between them (section comment). Going up, an operator whose ramps are monotone and
+ * R <= F (ramps_init) changes only if its rising ramp lies between them: its state lies in
+ * [R(u_p), F(u_p)] and F(u) >= F(u_p); going down likewise with the falling ramp. The
+ * other operators (none, on the default fit's models in single precision; 2 of 134 in
+ * double, whose ramps touch to an ulp) are visited through their other ramp too: all of
+ * them if they are few (RAMP_ODD_FEW), else those of the other list between u_p and u.
+ * Returns 0, having done nothing, if that would be more than K / 2 visits (the full step
+ * is cheaper then). */
+static int ramps_step_sparse(pihyst_compensator *c, real u)
+{
+    pihyst_model *m = &c->work_model;
     const size_t K = m->n_ops;
-    real *lo = ramp_array(c, 2, 0), *hi = lo + K;
-    const int side = !up;
-    if (up)
-        ramps_reverse_up(K, ramp_array(c, side, RAMP_X1), ramp_array(c, side, RAMP_X2),
-                         ramp_array(c, side, RAMP_Y1), ramp_array(c, side, RAMP_Y2),
-                         ramp_array(c, side, RAMP_INV), ramp_array(c, side, RAMP_SLOPE),
-                         m->state, u_p, lo, hi);
+    const real u_p = c->u_last, a = u < u_p ? u : u_p, b = u < u_p ? u_p : u;
+    real *sum = ramp_sum(c);
+    const size_t n_odd = (size_t)sum[SUM_ODD];
+    const int down = u < u_p, few = n_odd <= RAMP_ODD_FEW;
+    real hi = sum[SUM_HI], lo = sum[SUM_LO], moved = sum[SUM_MOVED];
+    size_t i0, i1, j0 = 0, j1 = 0;
+    /* the ramps of the direction reaching into (a, b) (in p = -u going down) */
+    size_t n = down ? ramps_meeting(c, 1, -b, -a, &i0, &i1) : ramps_meeting(c, 0, a, b, &i0, &i1);
+    if (few)
+        n += n_odd;
     else
-        ramps_reverse_down(K, ramp_array(c, side, RAMP_X1), ramp_array(c, side, RAMP_X2),
-                           ramp_array(c, side, RAMP_Y1), ramp_array(c, side, RAMP_INV),
-                           ramp_array(c, side, RAMP_SLOPE), m->state, u_p, lo, hi);
+        n += down ? ramps_meeting(c, 0, a, b, &j0, &j1) : ramps_meeting(c, 1, -b, -a, &j0, &j1);
+    if (2 * n > K) return 0;
+    ramps_update_listed(c, list_array(c, down, LIST_INDEX), i0, i1, u, &hi, &lo, &moved);
+    if (few)
+        ramps_update_listed(c, ramp_block(c, OFF_ODD), 0, n_odd, u, &hi, &lo, &moved);
+    else
+        ramps_update_listed(c, list_array(c, !down, LIST_INDEX), j0, j1, u, &hi, &lo, &moved);
+    if (moved > sum[SUM_BUDGET]) { /* the exact sum again, in the model's order */
+        hi = pihyst_internal_weighted_sum(K, m->weights, m->state, m->offset);
+        lo = moved = RC(0.0);
+    }
+    sum[SUM_HI] = hi;
+    sum[SUM_LO] = lo;
+    sum[SUM_MOVED] = moved;
+    c->y_last = hi + lo;
+    return 1;
 }
 
 /* What a probe at m finds: z(m) of (R1), the slopes of z just right and left of m, and
@@ -666,103 +862,51 @@ typedef struct {
     real z, right, left, next, prev;
 } ramp_probe;
 
-/* One term of a probe from the left into lane j: z, the slope right of m and the
- * nearest breakpoint above m (lo if lo > m, else hi if hi > m; lo <= hi). A jump's
- * probes, which also need the left side, are probe_active's. */
-#define RAMP_PROBE_TERM(i, j)                                                     \
-    do {                                                                          \
-        const real l_ = lo[i], h_ = hi[i], w_ = s[i];                             \
-        real cm_ = m > l_ ? m : l_, cq_ = q > l_ ? q : l_, n_;                    \
-        cm_ = cm_ < h_ ? cm_ : h_;                                                \
-        cq_ = cq_ < h_ ? cq_ : h_;                                                \
-        z[j] += w_ * (cm_ - cq_);                                                 \
-        sr[j] += ((l_ <= m) & (m < h_)) ? w_ : RC(0.0);                           \
-        n_ = l_ > m ? l_ : (h_ > m ? h_ : R_INF);                                 \
-        nx[j] = n_ < nx[j] ? n_ : nx[j];                                          \
-    } while (0)
-
-/* The probe's loop over blocks of RAMP_LANES operators, on vectors of RAMP_LANES values
- * (compiler vector extensions; the portable loop below otherwise) holding the partial
- * results: the compiler does not vectorize the scalar loop's min/max reductions, while
- * it does vectorize the same lane-wise statements on vector variables (as the model's
- * small kernels, pihyst_model.c). */
-#if defined(__GNUC__) && !defined(PIHYST_NO_VECTOR_EXT)
-#define RAMP_VECTOR 1
-typedef real rvec __attribute__((vector_size(RAMP_LANES * sizeof(real))));
-#endif
-
-/* z(m) - z(q), the slope right of m and the next breakpoint, in RAMP_LANES partial
- * results (left = 0, prev = -inf) */
-static PIHYST_INLINE void probe(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
-                                const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
+/* The operators of direction `up` that move and whose interval (lo_k, hi_k) of (R1), in
+ * p, meets (L, H): written compactly, unclipped, to (a, b, w) (w the slope s_k); returns
+ * how many. Only the positions of the direction's list whose ramps meet [L, H] are
+ * visited; lo_k, hi_k as in the section comment, from the state of the moment. */
+static size_t ramps_gather(const pihyst_compensator *c, int up, real u_p, real L, real H,
+                           real *PIHYST_RESTRICT a, real *PIHYST_RESTRICT b,
+                           real *PIHYST_RESTRICT w)
 {
-#ifdef RAMP_VECTOR
-    rvec z, sr, nx;
-#else
-    real z[RAMP_LANES], sr[RAMP_LANES], nx[RAMP_LANES];
-#endif
-    size_t k = 0, j;
-    for (j = 0; j < RAMP_LANES; ++j) {
-        z[j] = sr[j] = RC(0.0);
-        nx[j] = R_INF;
-    }
-#ifdef RAMP_VECTOR
-    /* the last block padded with operators that cannot move (lo = hi = q, no slope), so
-     * that no scalar tail with branches follows */
-    while (k < K) {
-        rvec lv, hv, sv;
-        if (k + RAMP_LANES <= K) {
-            memcpy(&lv, lo + k, sizeof lv);
-            memcpy(&hv, hi + k, sizeof hv);
-            memcpy(&sv, s + k, sizeof sv);
-        } else {
-            for (j = 0; j < RAMP_LANES; ++j) {
-                lv[j] = k + j < K ? lo[k + j] : q;
-                hv[j] = k + j < K ? hi[k + j] : q;
-                sv[j] = k + j < K ? s[k + j] : RC(0.0);
-            }
+    const int side = !up;
+    const real *PIHYST_RESTRICT index = list_array(c, side, LIST_INDEX);
+    const real *PIHYST_RESTRICT x1 = ramp_array(c, side, RAMP_X1), *PIHYST_RESTRICT x2 = ramp_array(c, side, RAMP_X2);
+    const real *PIHYST_RESTRICT y1 = ramp_array(c, side, RAMP_Y1), *PIHYST_RESTRICT y2 = ramp_array(c, side, RAMP_Y2);
+    const real *PIHYST_RESTRICT inv = ramp_array(c, side, RAMP_INV), *PIHYST_RESTRICT s = ramp_array(c, side, RAMP_SLOPE);
+    const real *PIHYST_RESTRICT f = c->work_model.state;
+    size_t i, i1, n = 0;
+    ramps_meeting(c, side, L, H, &i, &i1);
+    if (up) {
+        for (; i < i1; ++i) {
+            const size_t k = (size_t)index[i];
+            real cr = x1[k] + (f[k] - y1[k]) * inv[k];
+            cr = cr > x1[k] ? cr : x1[k];
+            cr = cr > u_p ? cr : u_p;
+            /* moves: below the ramp's top, crossing before its end, a slope */
+            if (!(f[k] < y2[k] && cr < x2[k] && s[k] > RC(0.0))) continue;
+            if (!(cr < H && x2[k] > L)) continue;
+            a[n] = cr;
+            b[n] = x2[k];
+            w[n] = s[k];
+            ++n;
         }
-#define lo lv
-#define hi hv
-#define s sv
-        for (j = 0; j < RAMP_LANES; ++j) RAMP_PROBE_TERM(j, j);
-#undef lo
-#undef hi
-#undef s
-        k += RAMP_LANES;
-    }
-#else
-    /* one lane: on a scalar FPU the lanes' partial results do not fit in its registers
-     * (when this probe had five of them, bench-m4f measured a KP jump of K = 134 at
-     * 83,000 instructions in lanes, 71,000 so). An operator whose interval starts above
-     * m (q <= m) adds nothing but that start, found without the rest of the term. */
-    for (; k < K; ++k) {
-        if (lo[k] > m) {
-            nx[0] = lo[k] < nx[0] ? lo[k] : nx[0];
-            continue;
+    } else { /* in p = -u: from -crossing to -x1 */
+        for (; i < i1; ++i) {
+            const size_t k = (size_t)index[i];
+            real cr = x1[k] + (f[k] - y1[k]) * inv[k];
+            cr = cr < x2[k] ? cr : x2[k];
+            cr = cr < u_p ? cr : u_p;
+            if (!(f[k] > y1[k] && cr > x1[k] && s[k] > RC(0.0))) continue;
+            if (!(-cr < H && -x1[k] > L)) continue;
+            a[n] = -cr;
+            b[n] = -x1[k];
+            w[n] = s[k];
+            ++n;
         }
-        RAMP_PROBE_TERM(k, 0);
     }
-#endif
-    r->z = z[0];
-    r->right = sr[0];
-    r->left = RC(0.0);
-    r->next = nx[0];
-    r->prev = -R_INF;
-    for (j = 1; j < RAMP_LANES; ++j) {
-        r->z += z[j];
-        r->right += sr[j];
-        r->next = nx[j] < r->next ? nx[j] : r->next;
-    }
-}
-#undef RAMP_PROBE_TERM
-
-/* a probe from the left (tracking): z, right, next; left = 0, prev = -inf */
-PIHYST_HOT
-static void ramps_probe_right(size_t K, const real *PIHYST_RESTRICT lo, const real *PIHYST_RESTRICT hi,
-                              const real *PIHYST_RESTRICT s, real m, real q, ramp_probe *r)
-{
-    probe(K, lo, hi, s, m, q, r);
+    return n;
 }
 
 /* A jump's probes on the operators that still matter. Inside the bracket [L, H],
@@ -786,7 +930,7 @@ static PIHYST_INLINE void probe_active(size_t *n, const real *lo, const real *hi
     real z = RC(0.0), zh = RC(0.0), sr = RC(0.0), sl = RC(0.0), nx = H, pv = L, lin_ = *lin;
     for (i = 0; i < *n; ++i) {
         const real l = lo[i] > L ? lo[i] : L, h = hi[i] < H ? hi[i] : H, wi = s[i];
-        /* nothing inside (L, H); an operator without slope has lo = hi (ramps_reverse_*) */
+        /* nothing inside (L, H) */
         if (!(l < h)) continue;
         if (l <= L && h >= H) { /* covers the bracket: linear in it */
             lin_ += wi;
@@ -917,23 +1061,22 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
                        real *d)
 {
     const size_t K = c->work_model.n_ops;
-    const real *lo = ramp_array(c, 2, 0), *hi = lo + K, *s = ramp_array(c, !up, RAMP_SLOPE);
+    const real *key = list_array(c, !up, LIST_KEY);
     const real q = up ? u_p : -u_p, end = q + span;
-    real L = q, zL = RC(0.0), H = end, zH, p, width, lin = RC(0.0);
-    real *act = ramp_array(c, 2, 2); /* the jump's active set, 3 K (probe_active) */
-    size_t n_active = K;
+    real L = q, zL = RC(0.0), H = end, zH = RC(0.0), p = end, width, lin = RC(0.0);
+    real *act = ramp_block(c, OFF_ACTIVE), *cell_set = ramp_block(c, OFF_CELL);
+    size_t n_active, cell = 1;
     ramp_probe r;
-    int i, halve = 0;
-    if (c->dir != (up ? 1 : -1)) { /* a reversal */
+    int i, halve = 0, found = 0;
+    if (c->dir != (up ? 1 : -1)) { /* a reversal: nothing kept */
         c->dir = up ? 1 : -1;
-        c->next[0] = 0;
-        ramps_reverse(c, up, u_p);
+        c->next[0] = c->next[1] = 0;
     }
     /* The segment of the last answer, kept (next[0] = 1) with its slope (slope[0]) and
      * right end (ahead): z is linear from q up to there, so while the answer stays
      * inside it needs no probe (a tracking step mostly does). */
     if (c->next[0]) {
-        const real nb = c->ahead < H ? c->ahead : H, sigma = c->slope[0];
+        const real nb = c->ahead < end ? c->ahead : end, sigma = c->slope[0];
         if (nb > q && sigma * (nb - q) >= target) {
             p = q + target / sigma; /* sigma > 0: z rose by target within the segment */
             *d = (p < nb ? p : nb) - q;
@@ -941,39 +1084,53 @@ static int solve_ramps(pihyst_compensator *c, int up, real u_p, real span, real 
         }
         c->next[0] = 0;
     }
-    /* tracking: the segments right of q, one at a time */
-    for (i = 0; i < 2; ++i) {
-        real nb, zn;
-        ramps_probe_right(K, lo, hi, s, L, q, &r);
-        if (r.z >= target) { /* reached at L already (rounding) */
-            *d = L - q;
-            return 1;
+    /* The cell of the last search (next[1] = its operators + 1, base = its end): its
+     * operators' intervals stay as they were while the direction holds, so while q lies
+     * inside it a probe of its kept set replaces a gather. */
+    if (c->next[1] && q < c->base) {
+        H = c->base < end ? c->base : end;
+        n_active = c->next[1] - 1;
+        p = L + RC(0.5) * (H - L);
+        if (!(p > L && p < H)) p = H;
+        probe_active(&n_active, cell_set, cell_set + K, cell_set + 2 * K, act, act + K,
+                     act + 2 * K, L, H, zL, &lin, p, &zH, &r);
+        if (zH >= target) {
+            found = 1;
+        } else if (!(H < end)) { /* the window ends below the target */
+            *d = span;
+            return 0;
+        } else {
+            L = H;
+            zL = zH;
         }
-        nb = r.next < H ? r.next : H;
-        zn = r.z + r.right * (nb - L);
-        if (zn >= target) { /* right > 0: z rose below the target */
-            p = L + (target - r.z) / r.right;
-            *d = (p < nb ? p : nb) - q;
-            c->next[0] = 1; /* keep the segment [L, r.next] */
-            c->slope[0] = r.right;
-            c->ahead = r.next;
-            return 1;
-        }
-        if (!(nb < H)) { /* the window ends below the target */
+    }
+    /* cells [L, H], H at the start of the 1st, 2nd, 4th, then RAMP_CELL_MAX-th ramp of
+     * the list beyond L, up to the window's end: the first whose z(H) reaches the target holds the answer. Each is
+     * gathered (and kept) and probed once at its midpoint (H if L and H are adjacent
+     * numbers), which also gives z(H). */
+    while (!found) {
+        /* the first ramp starting beyond L */
+        const size_t j = bound_from(key, K, L, 1, ramp_sum(c) + SUM_HINTS + 2 * !up + 1);
+        size_t n_cell;
+        H = j < K && K - j >= cell ? key[j + cell - 1] : end;
+        if (!(H < end)) H = end;
+        cell = cell < RAMP_CELL_MAX ? 2 * cell : RAMP_CELL_MAX;
+        n_cell = ramps_gather(c, up, u_p, L, H, cell_set, cell_set + K, cell_set + 2 * K);
+        c->base = H;
+        c->next[1] = n_cell + 1;
+        n_active = n_cell;
+        lin = RC(0.0);
+        p = L + RC(0.5) * (H - L);
+        if (!(p > L && p < H)) p = H;
+        probe_active(&n_active, cell_set, cell_set + K, cell_set + 2 * K, act, act + K,
+                     act + 2 * K, L, H, zL, &lin, p, &zH, &r);
+        if (zH >= target) break;
+        if (!(H < end)) { /* the window ends below the target */
             *d = span;
             return 0;
         }
-        L = nb;
-        zL = zn;
-    }
-    /* a jump: bracket [L, H]. The first probe, at the midpoint (H if L and H are
-     * adjacent numbers), reads every operator and also gives z(H) */
-    p = L + RC(0.5) * (H - L);
-    if (!(p > L && p < H)) p = H;
-    probe_active(&n_active, lo, hi, s, act, act + K, act + 2 * K, L, H, zL, &lin, p, &zH, &r);
-    if (zH < target) {
-        *d = span;
-        return 0;
+        L = H;
+        zL = zH;
     }
     width = H - L;
     for (i = 0; i < 100; ++i) {
@@ -1109,10 +1266,13 @@ static size_t pwl_points(const pihyst_model *m)
 
 size_t pihyst_compensator_scratch_len(const pihyst_model *m)
 {
-    /* kinks 2K | crossing list 2 (K + 2 points + 1) | kink list 2 (K + 1) | working
-     * state K on a PIHYST_STATE_ALIGN boundary (+ the padding that takes) */
+    /* kinks 2K | crossing list 2 (K + 2 points + 1) | kink list 2 (K + 1), or for a ramp
+     * model what the ramp path keeps (RAMP_SCRATCH) if that is more | working state K on
+     * a PIHYST_STATE_ALIGN boundary (+ the padding that takes) */
     const size_t K = m->n_ops;
-    return 7 * K + 4 * pwl_points(m) + 4 + PIHYST_STATE_ALIGN / sizeof(real);
+    size_t n = 6 * K + 4 * pwl_points(m) + 4;
+    if (ramp_model(m) && RAMP_SCRATCH(K) > n) n = RAMP_SCRATCH(K);
+    return n + K + PIHYST_STATE_ALIGN / sizeof(real);
 }
 
 /* Forget the kept events (the state was set): the next sample collects afresh, and a
@@ -1153,18 +1313,33 @@ static void publish(pihyst_compensator *c)
         memcpy(c->model->state, c->work_model.state, c->model->n_ops * sizeof(real));
 }
 
-/* apply u to the working state */
-static void apply(pihyst_compensator *c, real u)
+/* apply u to the working state, every operator (any state: init, reset); a ramp
+ * model's running sum starts again from the model step's exact sum */
+static void apply_full(pihyst_compensator *c, real u)
 {
 #ifdef RAMP_AVX2
-    if (c->in_order & PIHYST_ORDER_RAMPS_AVX2) {
+    if (c->in_order & PIHYST_ORDER_RAMPS_AVX2)
         c->y_last = ramps_step_avx2(c, u);
+    else
+#endif
+        c->y_last = pihyst_model_step(&c->work_model, u);
+    c->u_last = u;
+    if (c->in_order & PIHYST_ORDER_RAMPS) {
+        real *sum = ramp_sum(c);
+        sum[SUM_HI] = c->y_last;
+        sum[SUM_LO] = sum[SUM_MOVED] = RC(0.0);
+    }
+}
+
+/* apply u to the working state after the last voltage: a ramp model visits only the
+ * operators with a ramp between the two (ramps_step_sparse) */
+static void apply(pihyst_compensator *c, real u)
+{
+    if ((c->in_order & PIHYST_ORDER_RAMPS) && ramps_step_sparse(c, u)) {
         c->u_last = u;
         return;
     }
-#endif
-    c->y_last = pihyst_model_step(&c->work_model, u);
-    c->u_last = u;
+    apply_full(c, u);
 }
 
 pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, real u_min,
@@ -1229,9 +1404,9 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, re
         if (scratch[k] < scratch[k - 1]) c->in_order &= ~PIHYST_ORDER_RISING_KINKS;
         if (scratch[K + k] > scratch[K + k - 1]) c->in_order &= ~PIHYST_ORDER_FALLING_KINKS;
     }
-    if (m->family == PIHYST_PWL && m->coef[0] == RC(1.0)) { /* saturated ramps */
+    if (ramp_model(m)) { /* saturated ramps */
         c->in_order |= PIHYST_ORDER_RAMPS;
-        ramps_init(c);
+        ramps_init(c, scale);
 #ifdef RAMP_AVX2
         if (__builtin_cpu_supports("avx2")) c->in_order |= PIHYST_ORDER_RAMPS_AVX2;
 #endif
@@ -1239,7 +1414,7 @@ pihyst_status pihyst_compensator_init(pihyst_compensator *c, pihyst_model *m, re
     c->work_model.state = working_state(m, scratch);
     if (c->work_model.state != m->state) memcpy(c->work_model.state, m->state, K * sizeof(real));
     forget_events(c);
-    apply(c, u_initial);
+    apply_full(c, u_initial);
     publish(c);
     return PIHYST_OK;
 }
@@ -1256,7 +1431,7 @@ pihyst_status pihyst_compensator_reset(pihyst_compensator *c, const real *state,
             if (!isfinite(state[k])) return PIHYST_ENONFINITE;
     pihyst_model_reset(&c->work_model, state);
     forget_events(c);
-    apply(c, u_last);
+    apply_full(c, u_last);
     publish(c);
     return PIHYST_OK;
 }

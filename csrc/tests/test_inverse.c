@@ -65,11 +65,15 @@ static real round_trip(pihyst_model *m, real *scratch, size_t scratch_len)
     }
     CHECK_NEAR(err, 0.0, TOL(1e-9, 4.0 * c.tol));
     /* the predicted displacement is the model's own output for those voltages, from the
-     * start state with the initial voltage applied */
+     * start state with the initial voltage applied: bit for bit, but for a ramp model
+     * (KP), whose compensator keeps the output as a running sum: within half the
+     * equality band of it (pihyst_inverse.c, "saturated ramps") */
     pihyst_model_reset(m, NULL);
     pihyst_model_step(m, m->u_min);
     pihyst_model_run(m, uc, u, N_WALK);
-    for (i = 0; i < N_WALK; ++i) CHECK(u[i] == yc[i]);
+    for (i = 0; i < N_WALK; ++i)
+        CHECK((c.in_order & PIHYST_ORDER_RAMPS) ? fabs(u[i] - yc[i]) <= 0.5 * c.tol
+                                                : u[i] == yc[i]);
     return du;
 }
 
