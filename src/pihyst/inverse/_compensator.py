@@ -610,9 +610,12 @@ class PreviewRun:
         self._seen = 0                   # targets fed
         self._desired = np.empty(0)      # targets of the samples not yet returned
         self._voltage = np.empty(0)      # voltages of those samples, as far as known
-        # the compensator's (displacement, flags) of desired[k - d], sample k on; None:
-        # before sample d (the displacement at the initial voltage)
-        self._reached: list[Any] = [None] * self.d
+        # the compensator's displacement and flags of desired[k - d], sample k on, after
+        # the first ``_before`` samples (sample k < d: the displacement at the initial
+        # voltage, no flags)
+        self._before = self.d
+        self._reached_y = np.empty(0)
+        self._reached_flags = np.empty(0, dtype=np.uint8)
         self._start: Any = None
         self._t_last = None
 
@@ -668,20 +671,24 @@ class PreviewRun:
         #: the compensator's run on this block's targets (``block[skip:]``)
         self.ahead, self.skip = ahead, skip
         self._voltage = np.concatenate([self._voltage, ahead.voltage])
-        self._reached += list(zip(ahead.displacement.tolist(), ahead.flags.tolist()))
+        self._reached_y = np.concatenate([self._reached_y, ahead.displacement])
+        self._reached_flags = np.concatenate([self._reached_flags,
+                                              np.asarray(ahead.flags, dtype=np.uint8)])
         n = self._desired.size if last else self._voltage.size
         held = n - self._voltage.size
         voltage = np.concatenate([self._voltage, np.full(held, self.comp.voltage)])
-        before = self._start[2]          # the displacement at the initial voltage
-        reached = [(before, 0) if r is None else r for r in self._reached[:n]]
+        first = min(n, self._before)     # samples before d: the initial displacement
+        rest = n - first
         out = run_result(
             self.comp, self._desired[:n], voltage[:n],
-            np.array([r[0] for r in reached], dtype=np.float64),
-            np.array([r[1] for r in reached], dtype=np.uint8), self._start[0],
-            self._start[1], initial_creep_state=self._start[3],
+            np.concatenate([np.full(first, self._start[2], dtype=np.float64),
+                            self._reached_y[:rest]]),
+            np.concatenate([np.zeros(first, dtype=np.uint8), self._reached_flags[:rest]]),
+            self._start[0], self._start[1], initial_creep_state=self._start[3],
             final_creep_state=getattr(self.comp, "creep_state", None))
         self._desired, self._voltage = self._desired[n:], voltage[n:]
-        self._reached = self._reached[n:]
+        self._before -= first
+        self._reached_y, self._reached_flags = self._reached_y[rest:], self._reached_flags[rest:]
         return out
 
 
