@@ -131,12 +131,15 @@ def test_a_model_without_creep_exports_as_before():
     assert flat_text(model).startswith("pihyst-flat 1\n") and "creep" not in flat_text(model)
 
 
-def test_single_precision_header_of_a_creep_model_is_refused_in_one_line():
+def test_single_precision_header_of_a_bouc_wen_creep_model_is_refused_in_one_line():
+    # PI models with creep have a float header (test_export_creep_float.py); the
+    # Bouc-Wen compensator with creep is double only
     with pytest.raises(InvalidModelError, match="double only") as err:
-        c_header(MODELS["multislope"], "ax", precision="float")
+        c_header(BW_CREEP, "ax", precision="float")
     assert "\n" not in str(err.value)
-    assert "pihyst_model_init_f32" in c_header(MODELS["multislope"].replace(creep=None), "ax",
-                                               precision="float")
+    assert "pihyst_creep_init_f32" in c_header(MODELS["multislope"], "ax", precision="float")
+    assert "pihyst_bw_init_f32" in c_header(BW_CREEP.replace(creep=None), "ax",
+                                            precision="float")
 
 
 # ---------------------------------------------------------------- a Bouc-Wen model
@@ -382,6 +385,7 @@ def test_export_command_writes_a_creep_models_header_and_flat_file(tmp_path, cap
     assert main(["export", str(model_path), "--flat", "-o", str(tmp_path / "m.pihyst")]) == 0
     assert (tmp_path / "m.pihyst").read_text() == flat_text(model)
     assert "4 operators, 3 creep lags at 0.01 s" in capsys.readouterr().out
+    BW_CREEP.save(model_path)
     out = tmp_path / "f.h"
     assert main(["export", str(model_path), "--c", "--float", "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip()
