@@ -1,6 +1,7 @@
-"""``--float`` export of a PI model with creep (docs/export.md): the single-precision
+"""``--float`` export of a model with creep (docs/export.md): the single-precision
 header's lags (``pihyst_creep_f32``, the deviation form (C2')-(C5') of pihyst_creep.h)
-compile with the core's ``_f32`` files under the firmware flags, and a firmware loop on
+compile with the core's ``_f32`` files under the firmware flags (PI models, and Bouc-Wen
+models through ``pihyst_bw_creep_compensator_step_f32``), and a firmware loop on
 floats follows ``predict`` and ``compensate`` of the double model on many signals, within
 a bound derived from the float arithmetic (:func:`lag_rounding_bound`) and checked sample
 by sample; lags floats cannot hold are refused in one line.
@@ -16,9 +17,10 @@ The bound. The float loop's output with creep differs from the double model's by
       expm1f: at most 4 eps alpha_i relative), which adds 4 eps alpha_i |x|; the gains
       as floats and the sum (C3') add (n + 1) eps sum g_i |e_i| + eps |y|.
 The compensator: the float compensator meets its hysteresis target H* to 4 tol_f32
-(docs/c-core.md (C)), and (C5') and (C3') round by at most 8 eps (|y_d| + |H| +
-sum g_i |e_i|); the double model with creep run on the float loop's voltages then meets
-y_d to that plus (a) and (b) at those voltages.
+(docs/c-core.md (C); Bouc-Wen: tol = 4 eps (|H*| + scale), docs/c-core.md), and (C5')
+and (C3') round by at most 8 eps (|y_d| + |H| + sum g_i |e_i|); the double model with
+creep run on the float loop's voltages then meets y_d to that plus (a) and (b) at those
+voltages.
 """
 
 import re
@@ -32,7 +34,7 @@ import pihyst
 from pihyst.cli import main
 from pihyst.exceptions import InvalidModelError
 from pihyst.io._export import c_header
-from pihyst.model import Creep
+from pihyst.model import BoucWenModel, Creep
 
 EPS = float(np.finfo(np.float32).eps)
 
@@ -56,6 +58,13 @@ MODELS = {
     "slow-lags-offset": pihyst.ClassicalPI(
         [0, 15, 40, 80, 120], [0.5, 0.2, 0.1, 0.05, 0.05], offset=-120.0,
         creep=Creep([0.1, 10.0, 1000.0], [0.03, 0.04, 0.05], dt=0.005)),
+    "bouc-wen": BoucWenModel(beta=4.0, gamma=-2.0, n=1.5, hysteretic=5.0, linear=10.0,
+                             quadratic=3.0, input_range=(-20.0, 120.0),
+                             creep=Creep([0.3, 3.0, 30.0], [0.02, 0.035, 0.015], dt=0.01)),
+    "bouc-wen-n1": BoucWenModel(beta=5.0, gamma=1.0, n=1.0, hysteretic=-8.0, linear=40.0,
+                                offset=0.3, input_range=(0.0, 150.0),
+                                creep=Creep([0.1, 10.0, 1000.0], [0.03, 0.04, 0.05],
+                                            dt=0.005)),
 }
 
 DRIVER = r"""
@@ -64,14 +73,14 @@ DRIVER = r"""
 #include "{header}"
 /* stdin: n, n voltages, n desired outputs. stdout: per voltage the hysteresis output and
  * the output with creep (the model loop of the header's comment); the compensator's
- * tolerance and its output at u_initial; per desired output the voltage, the hysteresis
- * output reached, the output with creep and the flags (the compensator loop). All in
- * single precision. */
+ * tolerance (Bouc-Wen: its output scale) and its output at u_initial; per desired
+ * output the voltage, the hysteresis output reached, the output with creep and the
+ * flags (the compensator loop). All in single precision. */
 int main(void)
 {{
     static float u[8192], yd[8192];
-    pihyst_model_f32 m;
-    pihyst_compensator_f32 c;
+    pihyst_{kind}model_f32 m;
+    pihyst_{kind}compensator_f32 c;
     pihyst_creep_f32 cr;
     int n, t;
     if (scanf("%d", &n) != 1 || n > 8192) return 3;
@@ -80,18 +89,18 @@ int main(void)
     if ({name}_init(&m) != PIHYST_OK) return 4;
     if ({name}_creep_init(&cr, {NAME}_INITIAL_OUTPUT) != PIHYST_CREEP_OK) return 6;
     for (t = 0; t < n; ++t) {{
-        const float h = pihyst_model_step_f32(&m, u[t]);
+        const float h = pihyst_{step}_f32(&m, u[t]);
         printf("%.9g %.9g\n", (double)h, (double)pihyst_creep_step_f32(&cr, h));
     }}
     if ({name}_init(&m) != PIHYST_OK) return 4;
     if ({name}_compensator_init(&c, &m, NAN, NAN, INFINITY, m.u_min) != PIHYST_OK) return 5;
     if ({name}_creep_init(&cr, c.y_last) != PIHYST_CREEP_OK) return 6;
-    printf("%.9g %.9g\n", (double)c.tol, (double)c.y_last);
+    printf("%.9g %.9g\n", (double)c.{tol}, (double)c.y_last);
     for (t = 0; t < n; ++t) {{
         pihyst_flags flags = 0;
         float y;
-        const float volts = pihyst_creep_compensator_step_f32(&cr, &c, -1.0f, yd[t], &y,
-                                                              &flags);
+        const float volts = pihyst_{kind}creep_compensator_step_f32(&cr, &c, -1.0f, yd[t], &y,
+                                                                     &flags);
         printf("%.9g %.9g %.9g %d\n", (double)volts, (double)c.y_last, (double)y, (int)flags);
     }}
     return 0;
@@ -132,7 +141,8 @@ def _as_float(values):
 def core_objects(tmp_path_factory):
     """The single-precision core with its lags, compiled once with the firmware flags."""
     return compile_core(tmp_path_factory, ("pihyst_model_f32.c", "pihyst_inverse_f32.c",
-                                           "pihyst_creep_f32.c"))
+                                           "pihyst_creep_f32.c", "pihyst_boucwen_f32.c",
+                                           "pihyst_bw_creep_f32.c"))
 
 
 def _signals(model):
@@ -162,12 +172,16 @@ def test_float_header_follows_predict_and_compensate_with_creep(tmp_path, family
                                                                 core_objects):
     model = MODELS[family]
     name = "exported_" + family.replace("-", "_")
+    bw = model.family == "bouc-wen"
     exe = compile_driver(tmp_path, "exported.h", c_header(model, name, precision="float"),
-                         DRIVER.format(header="exported.h", name=name, NAME=name.upper()),
+                         DRIVER.format(header="exported.h", name=name, NAME=name.upper(),
+                                       kind="bw_" if bw else "", tol="scale" if bw else "tol",
+                                       step="bw_step" if bw else "model_step"),
                          core_objects)
     hysteresis = model.replace(creep=None)
     lo, hi = model.input_range
-    h0 = model.hysteresis_output(model.initial_state)
+    h0 = (model.output(*model.initial_state) if bw
+          else model.hysteresis_output(model.initial_state))
     worst = {"forward": 0.0, "compensator": 0.0}
     for u, yd in _signals(model):
         u, yd = _as_float(u), _as_float(yd)
@@ -194,6 +208,8 @@ def test_float_header_follows_predict_and_compensate_with_creep(tmp_path, family
         assert d_c[-1] <= 1e-5 * span
         bound_c, _ = lag_rounding_bound(model.creep, h_true, h_lo)
         y_true = model.predict(volts, creep_state=np.full(model.creep.n_lags, h_lo))
+        if bw:      # the Bouc-Wen compensator's tolerance from its scale
+            tol = 4 * EPS * (np.abs(h_c) + tol)
         met = 4 * tol + 8 * EPS * (np.abs(yd) + np.abs(h_c) + np.abs(y_c - h_c))
         assert np.all(np.abs(y_c - y_true) <= d_c + bound_c)
         ok = flags == 0

@@ -111,7 +111,7 @@ def c_header(model, name, *, precision="double", source=""):
     """
     if precision not in ("double", "float"):
         raise InvalidModelError(f"precision must be 'double' or 'float', got {precision!r}")
-    check_creep_precision(model, precision, bouc_wen=model.family == "bouc-wen")
+    check_creep_precision(model, precision)
     if model.family == "bouc-wen":
         name = checked_c_prefix(name)
         return boucwen_header(model, name, lambda v: _literal(v, precision), precision,

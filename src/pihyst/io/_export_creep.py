@@ -17,8 +17,8 @@ A single-precision header (``--float``) holds the lags for the C core's ``_f32``
 pihyst_creep.h): float time constants, gains, ``<NAME>_CREEP_DT`` and storage.
 :func:`check_creep_precision` refuses, in one line, lags that floats cannot hold as the
 model means them (a time constant that rounds to 0, gains whose float sum reaches 1,
-which ``pihyst_creep_init_f32`` would refuse), and a Bouc-Wen model with creep, whose
-compensator with creep is double only.
+which ``pihyst_creep_init_f32`` would refuse). A Bouc-Wen model's float header with creep
+runs ``pihyst_bw_creep_compensator_step_f32`` (csrc/pihyst_bw_creep_f32.c).
 """
 
 import numpy as np
@@ -42,18 +42,14 @@ def flat_magic(model):
     return FLAT_MAGIC if creep_of(model) is None else FLAT_MAGIC_CREEP
 
 
-def check_creep_precision(model, precision, *, bouc_wen=False):
+def check_creep_precision(model, precision):
     """InvalidModelError (one line) when the lags of ``model`` have no header of
     ``precision``: in single precision, a time constant that is 0 or not finite as a
     float, or gains whose sum in float arithmetic (pihyst_creep_init_f32's check) is not
-    below 1; a Bouc-Wen model with creep in single precision."""
+    below 1."""
     creep = creep_of(model)
     if precision != "float" or creep is None:
         return
-    if bouc_wen:
-        raise InvalidModelError("a Bouc-Wen model with creep has no single-precision C "
-                                "header: its compensator with creep (pihyst_bw_creep.h) is "
-                                "double only; export it without --float")
     with np.errstate(over="ignore", under="ignore"):
         tau = np.asarray(creep.tau, dtype=np.float32)
         gain = np.asarray(creep.gain, dtype=np.float32)
