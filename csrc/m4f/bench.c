@@ -240,24 +240,30 @@ static void bench_kp(void)
     bench_pi(name, &m, kp_smart_scratch, sizeof kp_smart_scratch / sizeof *kp_smart_scratch);
 }
 
-/* the Bouc-Wen model of examples/firmware/boucwen_loop.c, single precision */
-static void bench_boucwen(void)
+/* the Bouc-Wen model of examples/firmware/boucwen_loop.c (n = 1), single precision; and
+ * one with n = 1.5 (every slope evaluation a powf) */
+static const pihyst_bw_params_f32 bw_loop_params = {
+    .beta = 5.0f, .gamma = 1.0f, .n = 1.0f, .hysteretic = -8.0f, .linear = 40.0f,
+    .offset = 0.3f, .u_min = 0.0f, .u_max = 150.0f};
+static const pihyst_bw_params_f32 bw_n15_params = {
+    .beta = 4.0f, .gamma = -2.0f, .n = 1.5f, .hysteretic = 5.0f, .linear = 10.0f,
+    .quadratic = 3.0f, .offset = 0.5f, .u_min = 0.0f, .u_max = 150.0f};
+
+static void bench_boucwen(const char *name, const pihyst_bw_params_f32 *params)
 {
-    static const pihyst_bw_params_f32 params = {
-        .beta = 5.0f, .gamma = 1.0f, .n = 1.0f, .hysteretic = -8.0f, .linear = 40.0f,
-        .offset = 0.3f, .u_min = 0.0f, .u_max = 150.0f};
+    char slewed[48];
     pihyst_bw_model_f32 m;
     pihyst_bw_compensator_f32 c;
     pihyst_flags fl;
     float y_lo = INFINITY, y_hi = -INFINITY;
     double r;
     size_t t;
-    if (pihyst_bw_init_f32(&m, &params) != PIHYST_OK) return;
+    if (pihyst_bw_init_f32(&m, params) != PIHYST_OK) return;
     make_voltages(0.0f, 150.0f);
     TRACK(r, N_TRACK, sink = pihyst_bw_step_f32(&m, u_track[t_]));
-    report("bouc-wen", "model-tracking", r);
+    report(name, "model-tracking", r);
     WORST(r, N_WORST, sink = pihyst_bw_step_f32(&m, u_jump[t_]));
-    report("bouc-wen", "model-worst", r);
+    report(name, "model-worst", r);
     pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
     for (t = 0; t < N_TRACK; ++t) {
         y_track[t] = pihyst_bw_step_f32(&m, u_track[t]);
@@ -268,25 +274,23 @@ static void bench_boucwen(void)
     pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
     if (pihyst_bw_compensator_init_f32(&c, &m, NAN, NAN, INFINITY, 0.0f) != PIHYST_OK) return;
     TRACK(r, N_TRACK, sink = pihyst_bw_compensator_step_f32(&c, y_track[t_], &fl));
-    report("bouc-wen", "compensator-tracking", r);
+    report(name, "compensator-tracking", r);
     WORST(r, N_WORST, sink = pihyst_bw_compensator_step_f32(&c, y_jump[t_], &fl));
-    report("bouc-wen", "compensator-worst", r);
+    report(name, "compensator-worst", r);
     /* with a slew limit of 0.5 V per sample: a sample moves at most 0.5 V, one substep */
+    snprintf(slewed, sizeof slewed, "%s-slew-0.5V", name);
     pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
     if (pihyst_bw_compensator_init_f32(&c, &m, NAN, NAN, 0.5f, 0.0f) != PIHYST_OK) return;
     TRACK(r, N_TRACK, sink = pihyst_bw_compensator_step_f32(&c, y_track[t_], &fl));
-    report("bouc-wen-slew-0.5V", "compensator-tracking", r);
+    report(slewed, "compensator-tracking", r);
     WORST(r, N_WORST, sink = pihyst_bw_compensator_step_f32(&c, y_jump[t_], &fl));
-    report("bouc-wen-slew-0.5V", "compensator-worst", r);
+    report(slewed, "compensator-worst", r);
 }
 
 /* the same Bouc-Wen model with three creep lags (0.3, 3, 30 s at 1 kHz), single
  * precision: the _f32 lags and pihyst_bw_creep_compensator_step_f32 (pihyst_bw_creep_f32.c) */
 static void bench_bw_creep(void)
 {
-    static const pihyst_bw_params_f32 params = {
-        .beta = 5.0f, .gamma = 1.0f, .n = 1.0f, .hysteretic = -8.0f, .linear = 40.0f,
-        .offset = 0.3f, .u_min = 0.0f, .u_max = 150.0f};
     static const float tau[3] = {0.3f, 3.0f, 30.0f}, gain[3] = {0.02f, 0.035f, 0.015f};
     float alpha[3], state[3], h0;
     pihyst_bw_model_f32 m;
@@ -296,7 +300,7 @@ static void bench_bw_creep(void)
     float y_lo = INFINITY, y_hi = -INFINITY;
     double r;
     size_t t;
-    if (pihyst_bw_init_f32(&m, &params) != PIHYST_OK ||
+    if (pihyst_bw_init_f32(&m, &bw_loop_params) != PIHYST_OK ||
         pihyst_creep_init_f32(&cr, 3, tau, gain, 0.001f, alpha, state, NULL) != PIHYST_CREEP_OK) {
         printf("m4f: bouc-wen-creep: init failed\n");
         return;
@@ -395,7 +399,8 @@ int main(void)
     bench_multislope();
     bench_pwl();
     bench_kp();
-    bench_boucwen();
+    bench_boucwen("bouc-wen", &bw_loop_params);
+    bench_boucwen("bouc-wen-n1.5", &bw_n15_params);
     bench_bw_creep();
 #if KP_P885_HAS_CREEP
     bench_creep();
