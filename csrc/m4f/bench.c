@@ -285,6 +285,12 @@ static void bench_boucwen(const char *name, const pihyst_bw_params_f32 *params)
     report(slewed, "compensator-tracking", r);
     WORST(r, N_WORST, sink = pihyst_bw_compensator_step_f32(&c, y_jump[t_], &fl));
     report(slewed, "compensator-worst", r);
+    /* steps between 10 % and 90 % of the output range every 500 samples, slewed: most
+     * samples ramp towards a target beyond the slew window */
+    for (t = 0; t < N_TRACK; ++t)
+        y_track[t] = y_lo + (y_hi - y_lo) * ((t / 500) % 2 ? 0.9f : 0.1f);
+    TRACK(r, N_TRACK, sink = pihyst_bw_compensator_step_f32(&c, y_track[t_], &fl));
+    report(slewed, "compensator-steps", r);
 }
 
 /* the same Bouc-Wen model with three creep lags (0.3, 3, 30 s at 1 kHz), single
