@@ -258,6 +258,35 @@ static real newton(const pihyst_bw_model *m, real u, real z, real err, real s)
 
 static real larger(real a, real b) { return a > b ? a : b; }
 
+/* Is y_d out of reach at the voltage limit? Asked when the slew window ends short of it
+ * at `end`, where the model gives y_end with z_end, y_d lying beyond y_end in the
+ * direction s. On the sweep from there to the limit z moves from z_end towards s z_max
+ * (g_s > 0 below z_max), so Y(limit) = p(x) + a z(limit), p(x) = offset + c_1 x + c_2 x^2,
+ * lies between p(x) + a z_end and p(x) + a s z_max; and Y moves by at least min_slope per
+ * unit of x in direction s (a monotone model). A y_d clearly short of those bounds
+ * (reachable) or past them (out of reach) is decided without the model's evaluation at
+ * the limit, which takes up to 1/H substeps. "Clearly" is by 10^-3 of the output scale,
+ * beyond the integration error of the model (below 1e-8 of |a| z_max,
+ * docs/theory/bouc-wen.md) and its rounding in either precision; a y_d nearer a bound
+ * evaluates Y(limit). */
+static int beyond_limit(const pihyst_bw_compensator *c, real end, real y_end, real z_end,
+                        real limit, real yd, real s)
+{
+    const pihyst_bw_model *m = c->model;
+    const real margin = RC(1e-3) * c->scale;
+    const real x_limit = normalized(m, limit);
+    const real p = m->offset + m->linear * x_limit + m->quadratic * x_limit * x_limit;
+    const real y_from = p + m->hysteretic * z_end, y_to = p + m->hysteretic * (s * m->z_max);
+    const real reach = y_end + s * min_slope(m) * R_FABS(x_limit - normalized(m, end));
+    real nearest = (y_from - y_to) * s < RC(0.0) ? y_from : y_to;
+    const real farthest = (y_from - y_to) * s < RC(0.0) ? y_to : y_from;
+    real z_limit;
+    if ((reach - nearest) * s > RC(0.0)) nearest = reach;
+    if ((yd - nearest) * s < -margin) return 0;
+    if ((yd - farthest) * s > margin) return 1;
+    return (output_after(m, limit, &z_limit) - yd) * s < RC(0.0);
+}
+
 #define BW_MAX_ITERATIONS 200
 #define BW_NEWTON_FIRST 8 /* Newton steps from u_p before the reachable end must be evaluated */
 
@@ -288,11 +317,10 @@ static real solve(const pihyst_bw_compensator *c, real a, real end, real yd, rea
                         const real limit = s > RC(0.0) ? c->u_max : c->u_min;
                         const pihyst_flags sat =
                             s > RC(0.0) ? PIHYST_COMP_SAT_HIGH : PIHYST_COMP_SAT_LOW;
-                        real z_limit;
                         /* cut short by the slew limit, and out of reach too if the voltage
                          * limit itself misses yd (out of reach does not depend on the slew) */
                         *flags = end == limit ? sat
-                                 : (output_after(m, limit, &z_limit) - yd) * s < RC(0.0)
+                                 : beyond_limit(c, end, y_end, z_end, limit, yd, s)
                                      ? (pihyst_flags)(sat | PIHYST_COMP_SLEW)
                                      : PIHYST_COMP_SLEW;
                     }

@@ -1,7 +1,8 @@
 /* pihyst_bw_creep.h - the exact compensator of a Bouc-Wen model with creep: the creep
  * lags of pihyst_creep.h driven by the output of the Bouc-Wen model of pihyst_boucwen.h.
- * C99, no malloc, no globals, no I/O, reentrant; double precision (the lags have no
- * single-precision API).
+ * C99, no malloc, no globals, no I/O, reentrant; double precision, and single precision
+ * (_f32: the _f32 lags of pihyst_creep.h, in their deviation form (C2')-(C5'), and the
+ * _f32 Bouc-Wen compensator; pihyst_bw_creep_f32.c).
  *
  * Model (docs/theory/creep.md). The Bouc-Wen output (B1) is the settled displacement
  * H[t]; the lags give y[t] = H[t] - sum_i g_i (H[t] - z_i[t]) ((C1)-(C3) of
@@ -43,6 +44,17 @@ size_t pihyst_bw_creep_compensator_run(pihyst_creep *cr, pihyst_bw_compensator *
  *  intervals dt[t], NULL: the fixed one). u and y may not overlap. */
 void pihyst_bw_creep_run(pihyst_creep *cr, pihyst_bw_model *m, const double *u,
                          const double *dt, double *y, size_t n);
+
+/* ---- single precision (_f32): the same functions on floats ---------------------------- */
+float pihyst_bw_creep_compensator_step_f32(pihyst_creep_f32 *cr, pihyst_bw_compensator_f32 *c,
+                                           float dt, float y_desired, float *y,
+                                           pihyst_flags *flags);
+size_t pihyst_bw_creep_compensator_run_f32(pihyst_creep_f32 *cr, pihyst_bw_compensator_f32 *c,
+                                           const float *y_desired, const float *dt,
+                                           float *u, float *y, pihyst_flags *flags,
+                                           size_t n);
+void pihyst_bw_creep_run_f32(pihyst_creep_f32 *cr, pihyst_bw_model_f32 *m, const float *u,
+                             const float *dt, float *y, size_t n);
 
 #ifdef __cplusplus
 }

@@ -17,6 +17,7 @@
  * Each line: "m4f: NAME PATH N instructions/sample". */
 #include "pihyst.h"
 #include "pihyst_boucwen.h"
+#include "pihyst_bw_creep.h"
 #include "pihyst_creep.h"
 
 #include <math.h>
@@ -239,24 +240,30 @@ static void bench_kp(void)
     bench_pi(name, &m, kp_smart_scratch, sizeof kp_smart_scratch / sizeof *kp_smart_scratch);
 }
 
-/* the Bouc-Wen model of examples/firmware/boucwen_loop.c, single precision */
-static void bench_boucwen(void)
+/* the Bouc-Wen model of examples/firmware/boucwen_loop.c (n = 1), single precision; and
+ * one with n = 1.5 (every slope evaluation a powf) */
+static const pihyst_bw_params_f32 bw_loop_params = {
+    .beta = 5.0f, .gamma = 1.0f, .n = 1.0f, .hysteretic = -8.0f, .linear = 40.0f,
+    .offset = 0.3f, .u_min = 0.0f, .u_max = 150.0f};
+static const pihyst_bw_params_f32 bw_n15_params = {
+    .beta = 4.0f, .gamma = -2.0f, .n = 1.5f, .hysteretic = 5.0f, .linear = 10.0f,
+    .quadratic = 3.0f, .offset = 0.5f, .u_min = 0.0f, .u_max = 150.0f};
+
+static void bench_boucwen(const char *name, const pihyst_bw_params_f32 *params)
 {
-    static const pihyst_bw_params_f32 params = {
-        .beta = 5.0f, .gamma = 1.0f, .n = 1.0f, .hysteretic = -8.0f, .linear = 40.0f,
-        .offset = 0.3f, .u_min = 0.0f, .u_max = 150.0f};
+    char slewed[48];
     pihyst_bw_model_f32 m;
     pihyst_bw_compensator_f32 c;
     pihyst_flags fl;
     float y_lo = INFINITY, y_hi = -INFINITY;
     double r;
     size_t t;
-    if (pihyst_bw_init_f32(&m, &params) != PIHYST_OK) return;
+    if (pihyst_bw_init_f32(&m, params) != PIHYST_OK) return;
     make_voltages(0.0f, 150.0f);
     TRACK(r, N_TRACK, sink = pihyst_bw_step_f32(&m, u_track[t_]));
-    report("bouc-wen", "model-tracking", r);
+    report(name, "model-tracking", r);
     WORST(r, N_WORST, sink = pihyst_bw_step_f32(&m, u_jump[t_]));
-    report("bouc-wen", "model-worst", r);
+    report(name, "model-worst", r);
     pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
     for (t = 0; t < N_TRACK; ++t) {
         y_track[t] = pihyst_bw_step_f32(&m, u_track[t]);
@@ -267,36 +274,86 @@ static void bench_boucwen(void)
     pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
     if (pihyst_bw_compensator_init_f32(&c, &m, NAN, NAN, INFINITY, 0.0f) != PIHYST_OK) return;
     TRACK(r, N_TRACK, sink = pihyst_bw_compensator_step_f32(&c, y_track[t_], &fl));
-    report("bouc-wen", "compensator-tracking", r);
+    report(name, "compensator-tracking", r);
     WORST(r, N_WORST, sink = pihyst_bw_compensator_step_f32(&c, y_jump[t_], &fl));
-    report("bouc-wen", "compensator-worst", r);
+    report(name, "compensator-worst", r);
+    /* with a slew limit of 0.5 V per sample: a sample moves at most 0.5 V, one substep */
+    snprintf(slewed, sizeof slewed, "%s-slew-0.5V", name);
+    pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
+    if (pihyst_bw_compensator_init_f32(&c, &m, NAN, NAN, 0.5f, 0.0f) != PIHYST_OK) return;
+    TRACK(r, N_TRACK, sink = pihyst_bw_compensator_step_f32(&c, y_track[t_], &fl));
+    report(slewed, "compensator-tracking", r);
+    WORST(r, N_WORST, sink = pihyst_bw_compensator_step_f32(&c, y_jump[t_], &fl));
+    report(slewed, "compensator-worst", r);
+    /* steps between 10 % and 90 % of the output range every 500 samples, slewed: most
+     * samples ramp towards a target beyond the slew window */
+    for (t = 0; t < N_TRACK; ++t)
+        y_track[t] = y_lo + (y_hi - y_lo) * ((t / 500) % 2 ? 0.9f : 0.1f);
+    TRACK(r, N_TRACK, sink = pihyst_bw_compensator_step_f32(&c, y_track[t_], &fl));
+    report(slewed, "compensator-steps", r);
+}
+
+/* the same Bouc-Wen model with three creep lags (0.3, 3, 30 s at 1 kHz), single
+ * precision: the _f32 lags and pihyst_bw_creep_compensator_step_f32 (pihyst_bw_creep_f32.c) */
+static void bench_bw_creep(void)
+{
+    static const float tau[3] = {0.3f, 3.0f, 30.0f}, gain[3] = {0.02f, 0.035f, 0.015f};
+    float alpha[3], state[3], h0;
+    pihyst_bw_model_f32 m;
+    pihyst_bw_compensator_f32 c;
+    pihyst_creep_f32 cr;
+    pihyst_flags fl;
+    float y_lo = INFINITY, y_hi = -INFINITY;
+    double r;
+    size_t t;
+    if (pihyst_bw_init_f32(&m, &bw_loop_params) != PIHYST_OK ||
+        pihyst_creep_init_f32(&cr, 3, tau, gain, 0.001f, alpha, state, NULL) != PIHYST_CREEP_OK) {
+        printf("m4f: bouc-wen-creep: init failed\n");
+        return;
+    }
+    make_voltages(0.0f, 150.0f);
+    h0 = pihyst_bw_output_f32(&m, m.u, m.z);
+    pihyst_creep_settle_f32(&cr, h0);
+    TRACK(r, N_TRACK, sink = pihyst_creep_step_f32(&cr, pihyst_bw_step_f32(&m, u_track[t_])));
+    report("bouc-wen-creep", "model-tracking", r);
+    WORST(r, N_WORST, sink = pihyst_creep_step_f32(&cr, pihyst_bw_step_f32(&m, u_jump[t_])));
+    report("bouc-wen-creep", "model-worst", r);
+    pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
+    pihyst_creep_settle_f32(&cr, h0);
+    for (t = 0; t < N_TRACK; ++t) {
+        y_track[t] = pihyst_creep_step_f32(&cr, pihyst_bw_step_f32(&m, u_track[t]));
+        y_lo = y_track[t] < y_lo ? y_track[t] : y_lo;
+        y_hi = y_track[t] > y_hi ? y_track[t] : y_hi;
+    }
+    for (t = 0; t < N_WORST; ++t) y_jump[t] = y_lo + (y_hi - y_lo) * uniform();
+    pihyst_bw_reset_f32(&m, 0.0f, 0.0f);
+    if (pihyst_bw_compensator_init_f32(&c, &m, NAN, NAN, INFINITY, 0.0f) != PIHYST_OK) return;
+    pihyst_creep_settle_f32(&cr, c.y_last);
+    TRACK(r, N_TRACK,
+          sink = pihyst_bw_creep_compensator_step_f32(&cr, &c, -1.0f, y_track[t_], NULL, &fl));
+    report("bouc-wen-creep", "compensator-tracking", r);
+    WORST(r, N_WORST,
+          sink = pihyst_bw_creep_compensator_step_f32(&cr, &c, -1.0f, y_jump[t_], NULL, &fl));
+    report("bouc-wen-creep", "compensator-worst", r);
 }
 
 #if KP_P885_HAS_CREEP
 /* the P-885 model with its creep lags, as the default fit gives it, in single precision:
- * the hysteresis model of kp_p885.h and the lags of kp_p885_creep.h (exported in double:
- * their time constants and gains are converted to floats once, here) on the _f32 lags
- * (pihyst_creep_f32.c) */
+ * the hysteresis model of kp_p885.h and the lags of kp_p885_creep.h (the same model
+ * exported with --float: its kp_p885_creep_creep_init wires up the _f32 lags,
+ * pihyst_creep_f32.c) */
 static void bench_creep(void)
 {
     static pihyst_model_f32 m;
     static pihyst_compensator_f32 c;
-    static float tau[KP_P885_CREEP_CREEP_LAGS], gain[KP_P885_CREEP_CREEP_LAGS];
-    static float alpha[KP_P885_CREEP_CREEP_LAGS], state[KP_P885_CREEP_CREEP_LAGS];
     pihyst_creep_f32 cr;
     char name[48], lags[48];
     pihyst_flags fl;
     float y_lo = INFINITY, y_hi = -INFINITY, h0;
     double r;
-    size_t t, i;
-    for (i = 0; i < KP_P885_CREEP_CREEP_LAGS; ++i) {
-        tau[i] = (float)kp_p885_creep_creep_tau[i];
-        gain[i] = (float)kp_p885_creep_creep_gain[i];
-    }
+    size_t t;
     if (kp_p885_init(&m) != PIHYST_OK ||
-        pihyst_creep_init_f32(&cr, KP_P885_CREEP_CREEP_LAGS, tau, gain,
-                              (float)KP_P885_CREEP_CREEP_DT, alpha, state,
-                              NULL) != PIHYST_CREEP_OK) {
+        kp_p885_creep_creep_init(&cr, 0.0f) != PIHYST_CREEP_OK) {
         printf("m4f: creep: init failed\n");
         return;
     }
@@ -348,7 +405,9 @@ int main(void)
     bench_multislope();
     bench_pwl();
     bench_kp();
-    bench_boucwen();
+    bench_boucwen("bouc-wen", &bw_loop_params);
+    bench_boucwen("bouc-wen-n1.5", &bw_n15_params);
+    bench_bw_creep();
 #if KP_P885_HAS_CREEP
     bench_creep();
 #endif

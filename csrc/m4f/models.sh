@@ -2,10 +2,9 @@
 # models.sh OUT_DIR - the models the default fit (`pihyst fit`, no options but the
 # record's columns, as docs/records.md gives them) produces for the two measured records,
 # exported as C headers for bench-m4f (bench.c):
-#   kp_p885.h        P-885.91 stack, single precision, without its creep lags (the
-#                    exporter writes creep lags in double only: no --float header)
-#   kp_p885_creep.h  the same model with its creep lags, double precision (as exported;
-#                    bench.c takes its lags' constants, as floats, for the _f32 lags)
+#   kp_p885.h        P-885.91 stack, single precision, without its creep lags
+#   kp_p885_creep.h  the same model with its creep lags, single precision (bench.c
+#                    takes its _f32 lags, kp_p885_creep_creep_init)
 #   kp_smart.h       SmartHysteresis 150 V 1 Hz sine, single precision
 # plus models.txt (family, operators, creep lags of each). Run on every bench-m4f, so the
 # bench measures whatever the current default fit gives. PIHYST: the pihyst command
@@ -45,7 +44,7 @@ PY
 "$PIHYST" export "$out/p885_hysteresis.json" --c --float -o "$out/kp_p885.h" --name kp_p885
 "$PIHYST" export "$out/smart_hysteresis.json" --c --float -o "$out/kp_smart.h" --name kp_smart
 if grep -q '"creep"' "$out/p885.json"; then
-    "$PIHYST" export "$out/p885.json" --c -o "$out/kp_p885_creep.h" --name kp_p885_creep
+    "$PIHYST" export "$out/p885.json" --c --float -o "$out/kp_p885_creep.h" --name kp_p885_creep
     echo "#define KP_P885_HAS_CREEP 1" > "$out/kp_p885_creep_flag.h"
 else
     echo "#define KP_P885_HAS_CREEP 0" > "$out/kp_p885_creep_flag.h"

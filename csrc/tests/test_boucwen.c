@@ -191,6 +191,55 @@ static void test_compensator(void)
     check_compensator(2.0, 0.5, 3.0, 4.0, 30.0, -10.0); /* concave reversible part */
 }
 
+/* slew-limited samples: SAT is set exactly when the model at the voltage limit, from the
+ * state before the sample, misses y_d (the compensator decides most of them by bounds,
+ * beyond_limit); targets anywhere around the output range and near its ends */
+static void check_slew_flags(double beta, double gamma, double n, double a, double c1,
+                             double c2)
+{
+    const bw_params p = params_of(beta, gamma, n, a, c1, c2);
+    bw_model m, before;
+    bw_comp c;
+    double y_lo, y_hi;
+    int t, wrong = 0, slewed = 0, saturated = 0;
+    CHECK(BW(pihyst_bw_init)(&m, &p) == PIHYST_OK);
+    y_lo = (double)BW(pihyst_bw_output)(&m, (real)0.0, -m.z_max);
+    y_hi = (double)BW(pihyst_bw_output)(&m, (real)150.0, m.z_max);
+    CHECK(BW(pihyst_bw_compensator_init)(&c, &m, (real)10.0, (real)140.0, (real)2.5,
+                                         (real)75.0) == PIHYST_OK);
+    for (t = 0; t < N_BW / 4; ++t) {
+        const double r = bw_uniform();
+        /* a quarter of the targets within 1 % of the output range of an end */
+        const double yd = t % 4 == 0 ? (r < 0.5 ? y_lo : y_hi) + 0.02 * (r - 0.25) * (y_hi - y_lo)
+                                     : y_lo + (1.2 * r - 0.1) * (y_hi - y_lo);
+        pihyst_flags fl;
+        before = m;
+        BW(pihyst_bw_compensator_step)(&c, (real)yd, &fl);
+        if (fl & PIHYST_COMP_SLEW) {
+            const real s = (real)yd > BW(pihyst_bw_output)(&before, before.u, before.z)
+                               ? (real)1.0 : (real)-1.0;
+            const real limit = s > (real)0.0 ? c.u_max : c.u_min;
+            const real z = BW(pihyst_bw_advance)(&before, before.z,
+                                                 (limit - before.u) / before.span);
+            const int out = (BW(pihyst_bw_output)(&before, limit, z) - (real)yd) * s <
+                            (real)0.0;
+            const int sat = (fl & (PIHYST_COMP_SAT_HIGH | PIHYST_COMP_SAT_LOW)) != 0;
+            wrong += out != sat;
+            ++slewed;
+            saturated += sat;
+        }
+    }
+    CHECK(wrong == 0);
+    CHECK(slewed > 100 && saturated > 10 && saturated < slewed);
+}
+
+static void test_slew_flags(void)
+{
+    check_slew_flags(5.0, 1.0, 1.0, -8.0, 40.0, 0.0);  /* remanent (a < 0) */
+    check_slew_flags(4.0, -2.0, 1.5, 5.0, 10.0, 3.0);
+    check_slew_flags(30.0, -10.0, 2.5, 2.0, 1.0, 0.0); /* min_slope = 1 */
+}
+
 static void test_compensator_refuses(void)
 {
     bw_params p = params_of(5.0, 1.0, 1.0, -8.0, 10.0, 0.0);  /* 10 - 8 * 10/6 < 0 */
@@ -257,6 +306,7 @@ void run_boucwen_tests(void)
     test_step_run_and_state();
     test_validation();
     test_compensator();
+    test_slew_flags();
     test_compensator_refuses();
 #ifdef PIHYST_TEST_F32
     test_twin_precisions();

@@ -47,9 +47,9 @@ int main(void)
     run_kernel_tests();
     run_boucwen_tests();
 #ifndef PIHYST_TEST_F32
-    run_creep_tests(); /* the creep lags are double precision only */
-    run_bw_creep_tests();
+    run_creep_tests(); /* the _f32 lags have their own tests (test_creep_f32.c) */
 #endif
+    run_bw_creep_tests();
 #ifdef PIHYST_TEST_F32
     run_twin_tests();
     run_creep_f32_tests();

@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 
 import pihyst
 from pihyst.cli import main
-from pihyst.exceptions import InvalidModelError
 from pihyst.io._export import c_header, flat_text
 from pihyst.model import BoucWenModel, Creep
 
@@ -131,12 +130,13 @@ def test_a_model_without_creep_exports_as_before():
     assert flat_text(model).startswith("pihyst-flat 1\n") and "creep" not in flat_text(model)
 
 
-def test_single_precision_header_of_a_creep_model_is_refused_in_one_line():
-    with pytest.raises(InvalidModelError, match="double only") as err:
-        c_header(MODELS["multislope"], "ax", precision="float")
-    assert "\n" not in str(err.value)
-    assert "pihyst_model_init_f32" in c_header(MODELS["multislope"].replace(creep=None), "ax",
-                                               precision="float")
+def test_single_precision_headers_of_creep_models_use_the_f32_lags():
+    # their loops are tested in test_export_creep_float.py
+    text = c_header(MODELS["multislope"], "ax", precision="float")
+    assert "pihyst_creep_init_f32" in text and "double" not in text
+    text = c_header(BW_CREEP, "ax", precision="float")
+    assert "pihyst_bw_creep_compensator_step_f32" in text and "pihyst_bw_creep.h" in text
+    assert "csrc/pihyst_creep_f32.c and csrc/pihyst_bw_creep_f32.c" in text
 
 
 # ---------------------------------------------------------------- a Bouc-Wen model
@@ -382,11 +382,6 @@ def test_export_command_writes_a_creep_models_header_and_flat_file(tmp_path, cap
     assert main(["export", str(model_path), "--flat", "-o", str(tmp_path / "m.pihyst")]) == 0
     assert (tmp_path / "m.pihyst").read_text() == flat_text(model)
     assert "4 operators, 3 creep lags at 0.01 s" in capsys.readouterr().out
-    out = tmp_path / "f.h"
-    assert main(["export", str(model_path), "--c", "--float", "-o", str(out)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "creep" in err and "--float" in err and len(err.splitlines()) == 1
-    assert "Traceback" not in err and not out.exists()
 
 
 @pytest.mark.parametrize("family", [*sorted(MODELS), "bouc-wen"])

@@ -244,6 +244,27 @@ class BoucWenCompensatorTwin:
             self._u = voltage
         self._flags = 0
 
+    def _beyond_limit(self, end, y_end, z_end, limit, yd, s):
+        """Whether yd is out of reach at the voltage limit, beyond the slew window's end
+        (Y(end) = y_end with z_end, yd past it in direction s): decided by the bounds of
+        Y(limit) (z moves from z_end towards s z_max, and Y by at least min_slope per
+        unit of x) where yd is clearly on one side (by 1e-3 of the output scale), else by
+        evaluating Y(limit), as beyond_limit of csrc/pihyst_boucwen.c."""
+        m = self.model
+        margin = 1e-3 * self._scale
+        x_limit = m._x(limit)
+        p = m.offset + m.linear * x_limit + m.quadratic * x_limit * x_limit
+        y_from, y_to = p + m.hysteretic * z_end, p + m.hysteretic * (s * m.z_max)
+        reach = y_end + s * m.min_slope * abs(x_limit - m._x(end))
+        nearest, farthest = (y_from, y_to) if (y_from - y_to) * s < 0 else (y_to, y_from)
+        if (reach - nearest) * s > 0:
+            nearest = reach
+        if (yd - nearest) * s < -margin:
+            return False
+        if (yd - farthest) * s > margin:
+            return True
+        return (self._y(limit)[0] - yd) * s < 0
+
     def _y(self, u):
         m = self.model
         z = advance(self._z, m._x(u) - m._x(self._u), m.beta, m.gamma, m.n)
@@ -337,8 +358,8 @@ class BoucWenCompensatorTwin:
                     else:
                         # cut short by the slew limit; out of reach too if the voltage
                         # limit itself misses yd (out of reach does not depend on the slew)
-                        flags = FLAG_SLEW | (saturated if (self._y(limit)[0] - yd) * s < 0
-                                             else 0)
+                        flags = FLAG_SLEW | (saturated if self._beyond_limit(
+                            end, y_end, z_end, limit, yd, s) else 0)
                     return end, z_end, flags
                 b, z_b = end, z_end
             if b is not None and not min(a, b) < u < max(a, b):

@@ -137,7 +137,7 @@ def c_header(model, name, *, precision="double", source=""):
            f" *     {real} volts = pihyst_compensator_step{sfx}(&c, y_desired, &flags);\n",
            " * One model per header: the state and scratch below are this model's.\n",
            *_delay_comment(model, name),
-           *creep_comment(model, name),
+           *creep_comment(model, name, precision=precision),
            " */\n",
            f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst.h\"\n",
            creep_include(model), "\n",
@@ -197,7 +197,7 @@ def c_header(model, name, *, precision="double", source=""):
             f"    return pihyst_compensator_init{sfx}(c, m, u_min, u_max, max_step, u_initial,\n"
             f"        {name}_scratch, sizeof {name}_scratch / sizeof {name}_scratch[0]);\n}}\n\n",
             *creep_body(model, name, lambda ctype, label, values:
-                        _array(ctype, label, values, precision)),
+                        _array(ctype, label, values, precision), precision),
             f"#endif /* {guard} */\n"]
     return "".join(out)
 

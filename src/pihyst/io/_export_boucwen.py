@@ -46,7 +46,7 @@ def boucwen_header(model, name, literal, precision, source="", delay_comment=(),
            f" *     {real} volts = pihyst_bw_compensator_step{sfx}(&c, y_desired, &flags);\n",
            " * The model struct holds its state (u, z); it needs no other storage.\n",
            *delay_comment,
-           *creep_comment(model, name, bouc_wen=True),
+           *creep_comment(model, name, bouc_wen=True, precision=precision),
            " */\n",
            f"#ifndef {guard}\n#define {guard}\n\n#include \"pihyst_boucwen.h\"\n",
            creep_include(model, bouc_wen=True), "\n",
@@ -68,7 +68,7 @@ def boucwen_header(model, name, literal, precision, source="", delay_comment=(),
            f"        {real} u_initial)\n{{\n",
            f"    return pihyst_bw_compensator_init{sfx}(c, m, u_min, u_max, max_step, "
            f"u_initial);\n}}\n\n",
-           *creep_body(model, name, array),
+           *creep_body(model, name, array, precision),
            f"#endif /* {guard} */\n"]
     return "".join(out)
 
