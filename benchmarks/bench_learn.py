@@ -132,7 +132,7 @@ ID_SPAN_V = (10.0, 140.0)
 ID_HARMONICS = 15
 
 
-def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False):
+def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True):
     """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
     triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
     stage settled on each; one period each)."""
@@ -143,7 +143,8 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False):
         stage.settle_on(u)
         return u, stage.run_periodic(u)
     return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
-                        numerator_on_static=numerator_on_static, keep_creep=keep_creep)
+                        numerator_on_static=numerator_on_static, keep_creep=keep_creep,
+                        fade=fade)
 
 
 def scan(make, rate_hz, fmode):
@@ -184,7 +185,7 @@ def inverse_error(make, model, ham, desired):
     trial 0) played periodically on a fresh stage settled on it, and the number of its
     voltages outside the limits."""
     h_d = desired if ham is None else periodic_inverse_dynamics(ham.a[0], ham.b[0][0],
-                                                                  desired)
+                                                                  desired, ham.trusted_from)
     u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
     stage = make(CLOCK_HZ)
     stage.settle_on(u)
@@ -192,9 +193,10 @@ def inverse_error(make, model, ham, desired):
     return rms(player(u) - desired), player.outside
 
 
-def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False):
+def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False,
+              fade=True):
     model = fitted_model(make)
-    ham = hammerstein_model(make, model, numerator_on_static)
+    ham = hammerstein_model(make, model, numerator_on_static, fade=fade)
     learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True)
                   if from_ham else model)
     rows = []
@@ -231,7 +233,7 @@ def main():
     scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
-                         "--learn-from-hammerstein")]
+                         "--learn-from-hammerstein", "--no-fade")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -253,10 +255,13 @@ def main():
         tag = "tuned on" if tuned else "held out"
         print(f"\n{label} (seed {seed}, {tag})")
         rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
-                              "--learn-from-hammerstein" in sys.argv[1:])
+                              "--learn-from-hammerstein" in sys.argv[1:],
+                              "--no-fade" not in sys.argv[1:])
         print(f"  Hammerstein: na {ham.a[0].size - 1}, nb {ham.b[0].shape[1]}; poles "
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
-                          for p in np.roots(ham.a[0]) if p.imag >= 0))
+                          for p in np.roots(ham.a[0]) if p.imag >= 0)
+              + f"; correction faded in from {ham.trusted_from * CLOCK_HZ:g} Hz to "
+                f"{2 * ham.trusted_from * CLOCK_HZ:g} Hz")
         if not learn:
             print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}")
             for rate, n, static_rms, ham_rms, outside in rows:
