@@ -19,8 +19,11 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
   to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
   the hysteresis does not enter; unit static gain, so the static model keeps the gain at
-  rest), the dynamics inverted exactly per harmonic of the scan, then the same periodic
-  hysteresis inverse (with creep) as the static inverse's;
+  rest), the dynamics inverted exactly per harmonic of the scan, their correction faded
+  out below the band they were measured in (``HammersteinModel.trusted_from``, the 20 Hz
+  record's fundamental: none up to 20 Hz, all from 40 Hz; ``--no-fade``: the whole
+  inverse everywhere, as before), then the same periodic hysteresis inverse (with
+  creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -39,7 +42,7 @@ damping; their hysteresis scaled to the issue's stages' 45 um range unless --uns
 are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
-     [--no-learning] [--ratio-only] [--learn-from-hammerstein]
+     [--no-learning] [--ratio-only] [--no-fade] [--learn-from-hammerstein]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
      static and Hammerstein inverses only; --ratio-only: the Hammerstein model's
