@@ -19,8 +19,11 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
   to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
   the hysteresis does not enter; unit static gain, so the static model keeps the gain at
-  rest), the dynamics inverted exactly per harmonic of the scan, then the same periodic
-  hysteresis inverse (with creep) as the static inverse's;
+  rest), the dynamics inverted exactly per harmonic of the scan, their correction faded
+  out below the band they were measured in (``HammersteinModel.trusted_from``, the 20 Hz
+  record's fundamental: none up to 20 Hz, all from 40 Hz; ``--no-fade``: the whole
+  inverse everywhere, as before), then the same periodic hysteresis inverse (with
+  creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -39,13 +42,15 @@ damping; their hysteresis scaled to the issue's stages' 45 um range unless --uns
 are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
-     [--no-learning] [--ratio-only] [--learn-from-hammerstein]
+     [--no-learning [--true-dynamics]] [--ratio-only] [--no-fade]
+     [--learn-from-hammerstein]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
-     static and Hammerstein inverses only; --ratio-only: the Hammerstein model's
-     dynamics from the ratio of rates alone, without the numerator's refit on the static
-     model; --learn-from-hammerstein: learn from the Hammerstein model, its hysteresis
-     with the static model's creep, instead of the static model)
+     static and Hammerstein inverses only; --true-dynamics: beside them, the static model
+     behind the stage's true modes and delay inverted per harmonic; --ratio-only: the
+     Hammerstein model's dynamics from the ratio of rates alone, without the numerator's
+     refit on the static model; --learn-from-hammerstein: learn from the Hammerstein
+     model, its hysteresis with the static model's creep, instead of the static model)
 """
 
 import sys
@@ -132,7 +137,7 @@ ID_SPAN_V = (10.0, 140.0)
 ID_HARMONICS = 15
 
 
-def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False):
+def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True):
     """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
     triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
     stage settled on each; one period each)."""
@@ -143,7 +148,8 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False):
         stage.settle_on(u)
         return u, stage.run_periodic(u)
     return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
-                        numerator_on_static=numerator_on_static, keep_creep=keep_creep)
+                        numerator_on_static=numerator_on_static, keep_creep=keep_creep,
+                        fade=fade)
 
 
 def scan(make, rate_hz, fmode):
@@ -184,7 +190,7 @@ def inverse_error(make, model, ham, desired):
     trial 0) played periodically on a fresh stage settled on it, and the number of its
     voltages outside the limits."""
     h_d = desired if ham is None else periodic_inverse_dynamics(ham.a[0], ham.b[0][0],
-                                                                  desired)
+                                                                  desired, ham.trusted_from)
     u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
     stage = make(CLOCK_HZ)
     stage.settle_on(u)
@@ -192,9 +198,28 @@ def inverse_error(make, model, ham, desired):
     return rms(player(u) - desired), player.outside
 
 
-def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False):
+def true_dynamics_error(make, model, modes, desired):
+    """RMS error of the static model behind the stage's *true* dynamics, inverted per
+    harmonic: its modes' continuous-time response sum_i g_i w_i^2 / (s^2 + 2 zeta_i w_i s
+    + w_i^2) (shares normalised) times one tick of converter delay."""
+    f = np.fft.rfftfreq(desired.size, 1 / CLOCK_HZ)
+    s = 2j * np.pi * f
+    shares = np.array([m[2] if len(m) > 2 else 1.0 for m in modes])
+    G = sum(g / shares.sum() * (2 * np.pi * m[0]) ** 2
+            / (s ** 2 + 4 * np.pi * m[1] * m[0] * s + (2 * np.pi * m[0]) ** 2)
+            for g, m in zip(shares, modes)) * np.exp(-s / CLOCK_HZ)
+    h_d = np.fft.irfft(np.fft.rfft(desired) / G, desired.size)
+    u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
+    stage = make(CLOCK_HZ)
+    stage.settle_on(u)
+    player = CheckedStage(stage)
+    return rms(player(u) - desired), player.outside
+
+
+def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False,
+              fade=True, true_modes=None):
     model = fitted_model(make)
-    ham = hammerstein_model(make, model, numerator_on_static)
+    ham = hammerstein_model(make, model, numerator_on_static, fade=fade)
     learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True)
                   if from_ham else model)
     rows = []
@@ -203,7 +228,10 @@ def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham
         ham_rms, ham_out = inverse_error(make, model, ham, desired)
         static_rms, static_out = inverse_error(make, model, None, desired)
         if not learn:
-            rows.append((rate, desired.size, static_rms, ham_rms, static_out + ham_out))
+            true_rms, true_out = (true_dynamics_error(make, model, true_modes, desired)
+                                  if true_modes else (np.nan, 0))
+            rows.append((rate, desired.size, static_rms, ham_rms,
+                         static_out + ham_out + true_out, true_rms))
             continue
         stage = make(CLOCK_HZ)
         player = CheckedStage(stage)
@@ -231,7 +259,7 @@ def main():
     scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
-                         "--learn-from-hammerstein")]
+                         "--learn-from-hammerstein", "--no-fade", "--true-dynamics")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -253,15 +281,22 @@ def main():
         tag = "tuned on" if tuned else "held out"
         print(f"\n{label} (seed {seed}, {tag})")
         rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
-                              "--learn-from-hammerstein" in sys.argv[1:])
+                              "--learn-from-hammerstein" in sys.argv[1:],
+                              "--no-fade" not in sys.argv[1:],
+                              modes if "--true-dynamics" in sys.argv[1:] else None)
         print(f"  Hammerstein: na {ham.a[0].size - 1}, nb {ham.b[0].shape[1]}; poles "
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
-                          for p in np.roots(ham.a[0]) if p.imag >= 0))
+                          for p in np.roots(ham.a[0]) if p.imag >= 0)
+              + f"; correction faded in from {ham.trusted_from * CLOCK_HZ:g} Hz to "
+                f"{2 * ham.trusted_from * CLOCK_HZ:g} Hz")
         if not learn:
-            print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}")
-            for rate, n, static_rms, ham_rms, outside in rows:
+            print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}"
+                  + (f" {'true G':>7} {'ratio':>6}" if "--true-dynamics" in sys.argv else ""))
+            for rate, n, static_rms, ham_rms, outside, true_rms in rows:
                 print(f"{rate:8.4g} {n:6d} {static_rms:7.4f} {ham_rms:7.4f} "
-                      f"{ham_rms / static_rms:6.3f}")
+                      f"{ham_rms / static_rms:6.3f}"
+                      + (f" {true_rms:7.4f} {true_rms / static_rms:6.3f}"
+                         if "--true-dynamics" in sys.argv else ""))
                 checks.append((tuned, rate, None, None, outside, static_rms, ham_rms, fmode))
             continue
         print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'t0':>7} "

@@ -15,6 +15,7 @@ from pihyst.dynamics import (
     fit_dynamics,
     load_hammerstein,
     periodic_inverse_dynamics,
+    trust_weight,
 )
 from pihyst.dynamics._linear import response
 from pihyst.exceptions import InvalidArgumentError, InvalidModelError
@@ -157,12 +158,16 @@ def test_fit_dynamics_refuses_records_it_cannot_compare():
 
 def test_hammerstein_files_round_trip(tmp_path):
     H, a = static_model(), mode()
-    model = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.9, 0.5]]),))
+    model = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.9, 0.5]]),),
+                             trusted_from=0.002)
     path = tmp_path / "ham.json"
     model.save(path)
     back = load_hammerstein(path)
     u = np.linspace(0, 150, 300)
     assert np.array_equal(back.predict(u), model.predict(u))
+    assert back.trusted_from == 0.002
+    plain = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.9, 0.5]]),))
+    assert "trusted_from" not in plain.to_dict()     # files of models without it unchanged
     assert json.loads(path.read_text())["family"] == "hammerstein"
 
 
@@ -174,6 +179,8 @@ def test_hammerstein_files_round_trip(tmp_path):
     (lambda d: d.update(b=[[["x"]]]), "b[0] must be a list of lists of numbers"),
     (lambda d: d.update(b=[[[0.1], [0.2]]]), "b[0] needs one row per input (1)"),
     (lambda d: d["hysteresis"][0].update(thresholds=[0, 30, 15, 45]), "hysteresis[0]"),
+    (lambda d: d.update(trusted_from=0.5), "key 'trusted_from' must be a number"),
+    (lambda d: d.update(trusted_from="low"), "key 'trusted_from' must be a number"),
 ])
 def test_broken_hammerstein_files_are_one_line_errors(tmp_path, change, message):
     d = HammersteinModel(hysteresis=(static_model(),), a=(mode(),),
@@ -195,10 +202,61 @@ def test_invalid_json_reports_line_and_column(tmp_path):
 
 @settings(max_examples=20, deadline=None)
 @given(desired=st.lists(st.floats(-1e3, 1e3), min_size=8, max_size=120),
-       lo=st.floats(0, 60), width=st.floats(1, 90))
-def test_periodic_compensation_stays_within_the_limits(desired, lo, width):
+       lo=st.floats(0, 60), width=st.floats(1, 90), periodic=st.booleans(),
+       trusted_from=st.sampled_from([0.0, 0.01, 0.2]))
+def test_compensation_stays_within_the_limits(desired, lo, width, periodic, trusted_from):
     a = mode()
     model = HammersteinModel(hysteresis=(static_model(),), a=(a,),
-                             b=(np.array([[0.0, 0.5, 0.9]]) * a.sum() / 1.4,))
-    u = compensate_hammerstein(model, desired, u_min=lo, u_max=lo + width, periodic=True)[0]
+                             b=(np.array([[0.0, 0.5, 0.9]]) * a.sum() / 1.4,),
+                             trusted_from=trusted_from)
+    u = compensate_hammerstein(model, desired, u_min=lo, u_max=lo + width,
+                               periodic=periodic)[0]
     assert u.size == len(desired) and np.all((u >= lo) & (u <= lo + width))
+
+
+def test_fit_dynamics_records_the_band_it_measured():
+    H, a = static_model(), mode()
+    slow, fast = rate_records(H, a, np.array([0.0, 0.9, 0.5]))
+    model = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None)
+    assert model.trusted_from == 1 / 500            # the slowest fast record's fundamental
+    whole = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None, fade=False)
+    assert whole.trusted_from == 0.0 and np.array_equal(whole.b[0], model.b[0])
+
+
+@settings(max_examples=30, deadline=None)
+@given(f_t=st.floats(1e-4, 0.2), f=st.lists(st.floats(0, 0.5), min_size=1, max_size=20))
+def test_the_weight_fades_in_over_the_octave_above_the_measured_band(f_t, f):
+    W = trust_weight(f, f_t)
+    f = np.asarray(f)
+    assert np.all((W >= 0) & (W <= 1))
+    assert np.all(W[f <= f_t] == 0) and np.all(W[f >= 2 * f_t] == 1)
+    order = np.argsort(f)
+    assert np.all(np.diff(W[order]) >= 0)
+    assert np.all(trust_weight(f, 0.0) == 1)
+
+
+def test_below_the_measured_band_the_inverse_is_the_static_one():
+    """A period with one line below f_t and one above 2 f_t: the dynamics are inverted
+    exactly on the fast line and left alone on the slow one (periodic and ZPETC paths)."""
+    a, b = mode(), np.array([0.0, 0.9, 0.5])
+    b = b * a.sum() / b.sum()
+    n, f_t = 2000, 0.01                      # f_t: line 20 of the period
+    t = np.arange(n)
+    slow, fast = 3 * np.sin(2 * np.pi * 5 * t / n), np.sin(2 * np.pi * 100 * t / n)
+    r = 20 + slow + fast
+    h = periodic_inverse_dynamics(a, b, r, trusted_from=f_t)
+    G = response(a, b[None, :], n)[:, 0]
+    y = periodic_output(a, b, h)
+    assert np.allclose(y, 20 + np.fft.irfft(G * np.fft.rfft(slow), n) + fast, atol=1e-9)
+    assert np.allclose(np.fft.rfft(h)[5], np.fft.rfft(r)[5])
+    # ZPETC: the same trajectory, at rest (20) for a period before and after
+    model = HammersteinModel(hysteresis=(ClassicalPI([0.0], [1.0]),), a=(a,), b=(b[None, :],),
+                             trusted_from=f_t)
+    window = np.r_[np.full(n, 20.0), r, np.full(n, 20.0)]
+    _, h_z, _ = compensate_hammerstein(model, window)
+    full = compensate_hammerstein(HammersteinModel(model.hysteresis, (a,), (b[None, :],)),
+                                  window)[1]
+    H_z, H_full = (np.fft.rfft(v[n:2 * n] - 20) for v in (h_z, full))
+    assert abs(H_z[5] - np.fft.rfft(slow)[5]) < 0.02 * abs(np.fft.rfft(slow)[5])
+    assert abs(H_z[100] - H_full[100]) < 0.02 * abs(H_full[100])
+    assert abs(H_full[100] - np.fft.rfft(fast)[100]) > 0.1 * abs(H_full[100])

@@ -15,7 +15,8 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   input itself;
 - :func:`compensate_hammerstein`: zero-phase error tracking inverse of the dynamics (for
   a periodic trajectory, the exact inverse per harmonic), then the exact hysteresis
-  inverse with voltage and slew limits (SISO);
+  inverse with voltage and slew limits (SISO); below the band the dynamics were
+  measured in, :func:`trust_weight` fades their correction out;
 - :func:`compensate_mimo`: the same for a square MIMO StateSpaceHammerstein and a
   periodic trajectory (the dynamics inverted per harmonic);
 - :func:`load_hammerstein`: a HammersteinModel from its JSON file
@@ -27,6 +28,7 @@ from pihyst.dynamics._compensate import (
     compensate_hammerstein,
     compensate_mimo,
     periodic_inverse_dynamics,
+    trust_weight,
     zpetc,
 )
 from pihyst.dynamics._fit_state_space import OrderSelection, fit_state_space
@@ -47,4 +49,4 @@ __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "StateSpac
            "default_thresholds",
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
            "fit_state_space", "fsid", "load_hammerstein", "periodic_inverse_dynamics",
-           "predict_linear", "zpetc"]
+           "predict_linear", "trust_weight", "zpetc"]

@@ -23,6 +23,24 @@ the non-causal inverse of the unstable zeros being as periodic as the rest (the 
 period is the preview). Lines where |G| is below ``1e-9`` of its largest value (a zero
 on the unit circle) are left out.
 
+**Below the measured band.** A model from :func:`pihyst.dynamics.fit_dynamics` has unit
+static gain, and its dynamics were measured from its slowest fast record's fundamental
+f_t up (``HammersteinModel.trusted_from``, cycles per sample); below f_t only the slow
+record and G(1) = 1 pin it. There the static model, fitted on slow records, is what is
+known: its loop has absorbed part of the stage's lag (the converter delay, the mode's
+phase) as a rate-independent width, so the static inverse already leads by part of what
+G^-1 would add, and adding the whole G^-1 there makes the error larger (7 % at 10 Hz on
+the paper-beam stage, docs/theory/learning.md). The correction G^-1 - 1 is therefore
+faded in over the octave above f_t,
+
+    H_d(k) = R(k) (1 + W(f_k) (1 / G(z_k) - 1)),
+    W(f) = clip(log2(f / f_t), 0, 1):   0 up to f_t, 1 from 2 f_t,
+
+(f_k = k / N): at low rates the Hammerstein inverse is the static inverse, within the
+measured band the full one. With f_t = 0 (the default) W = 1. The ZPETC path applies the
+same W to h_d - r, by FFT over the trajectory with ``len(r)`` samples of rest on each
+side (the correction is zero at rest: unit static gain).
+
 A square MIMO :class:`StateSpaceHammerstein` (as many inputs as outputs) is compensated
 the same way for a periodic trajectory of all outputs, R(k) a vector per line:
 
@@ -91,9 +109,50 @@ def zpetc(a: ArrayLike, b: ArrayLike, r: ArrayLike,
     return h[pre + lead:pre + lead + r.size]
 
 
-def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike) -> NDArray[np.float64]:
+def trust_weight(f: ArrayLike, trusted_from: float) -> NDArray[np.float64]:
+    """W(f) of the module notes: the share of the dynamics' correction applied at the
+    frequencies ``f`` (cycles per sample) of a model measured from ``trusted_from`` up.
+
+    Parameters
+    ----------
+    f : array_like
+        Frequencies, cycles per sample (>= 0).
+    trusted_from : float
+        f_t, cycles per sample; 0: W = 1 everywhere.
+
+    Returns
+    -------
+    ndarray
+        W, between 0 and 1.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import trust_weight
+    >>> trust_weight([0.0, 0.01, 0.015, 0.02, 0.3], 0.01).round(3).tolist()
+    [0.0, 0.0, 0.585, 1.0, 1.0]
+    """
+    f = np.asarray(f, dtype=float)
+    if not trusted_from > 0:
+        return np.ones_like(f)
+    with np.errstate(divide="ignore"):
+        return np.clip(np.log2(f / trusted_from), 0.0, 1.0)
+
+
+def _faded(r, h_d, trusted_from):
+    """r + W (h_d - r) for a trajectory that is at rest before and after (ZPETC path)."""
+    if not trusted_from > 0:
+        return h_d
+    r = np.asarray(r, dtype=float)
+    n = r.size
+    d = np.r_[np.zeros(n), h_d - r, np.zeros(n)]
+    W = trust_weight(np.fft.rfftfreq(d.size), trusted_from)
+    return r + np.fft.irfft(W * np.fft.rfft(d), d.size)[n:2 * n]
+
+
+def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike,
+                              trusted_from: float = 0.0) -> NDArray[np.float64]:
     """The exact inverse of the dynamics for one period ``r`` of a periodic reference
-    (SISO; module notes: H_d(k) = R(k) / G(z_k)).
+    (SISO; module notes: H_d(k) = R(k) / G(z_k), faded out below ``trusted_from``).
 
     Parameters
     ----------
@@ -103,6 +162,9 @@ def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike) -> NDArr
         B(q^-1), 1-D or one row.
     r : array_like
         One period of the reference.
+    trusted_from : float
+        f_t of the module notes (cycles per sample; needs unit static gain); 0: the
+        whole inverse at every frequency.
 
     Returns
     -------
@@ -126,7 +188,8 @@ def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike) -> NDArr
     R = np.fft.rfft(r)
     usable = np.abs(G) > 1e-9 * np.abs(G).max()
     H = np.where(usable, R / np.where(usable, G, 1.0), 0.0)
-    return np.fft.irfft(H, r.size)
+    W = trust_weight(np.arange(R.size) / r.size, trusted_from)
+    return np.fft.irfft(R + W * (H - R), r.size)
 
 
 def periodic_inverse_mimo(model, r):
@@ -229,7 +292,8 @@ def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | Non
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64], Any]:
     """Voltages that make a SISO :class:`HammersteinModel` follow ``desired``: the
     ZPETC prefilter, then the hysteresis inverse from the hysteresis model's initial
-    state (module notes).
+    state (module notes; the dynamics' correction faded out below the model's
+    ``trusted_from``).
 
     Parameters
     ----------
@@ -280,12 +344,14 @@ def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | Non
                                    f"{model.n_outputs} output(s)")
     H = model.hysteresis[0]
     if not periodic:
-        h_d = zpetc(model.a[0], model.b[0][0], desired)
+        h_d = _faded(desired, zpetc(model.a[0], model.b[0][0], desired),
+                     getattr(model, "trusted_from", 0.0))
         res = compensate(H, h_d, u_min=u_min, u_max=u_max, slew_rate=slew_rate,
                          sample_period=sample_period)
         return res.voltage, h_d, res
     desired = np.asarray(desired, dtype=float)
-    h_d = periodic_inverse_dynamics(model.a[0], model.b[0][0], desired)
+    h_d = periodic_inverse_dynamics(model.a[0], model.b[0][0], desired,
+                                    getattr(model, "trusted_from", 0.0))
     res = compensate(H, np.tile(h_d, 2), u_min=u_min, u_max=u_max, slew_rate=slew_rate,
                      sample_period=sample_period)
     return res.voltage[h_d.size:], h_d, res

@@ -59,6 +59,11 @@ class HammersteinModel:
         Per output j, A_j(q^-1) = [1, a_1, ...].
     b : tuple of array_like
         Per output j, B_ji(q^-1) as one row per input (m, nb).
+    trusted_from : float
+        The lowest frequency (cycles per sample) at which the dynamics were measured
+        (:func:`fit_dynamics`: the slowest fast record's fundamental); 0: trusted at
+        every frequency. Below it the compensators fade the dynamics' correction out
+        over an octave (:func:`trust_weight`); it needs unit static gain.
 
     Examples
     --------
@@ -73,6 +78,7 @@ class HammersteinModel:
     hysteresis: tuple[Any, ...]
     a: tuple[Any, ...]
     b: tuple[Any, ...]
+    trusted_from: float = 0.0
 
     family = FAMILY
 
@@ -162,7 +168,8 @@ class HammersteinModel:
         Returns
         -------
         dict
-            ``family``, ``hysteresis`` (each model's dict), ``a`` and ``b``.
+            ``family``, ``hysteresis`` (each model's dict), ``a`` and ``b``; and
+            ``trusted_from`` when it is not 0.
 
         Examples
         --------
@@ -174,10 +181,13 @@ class HammersteinModel:
         >>> d["a"], d["b"]
         ([[1.0, -0.5]], [[[0.5]]])
         """
-        return {"family": FAMILY,
-                "hysteresis": [H.to_dict() for H in self.hysteresis],
-                "a": [np.asarray(a).tolist() for a in self.a],
-                "b": [np.atleast_2d(b).tolist() for b in self.b]}
+        d = {"family": FAMILY,
+             "hysteresis": [H.to_dict() for H in self.hysteresis],
+             "a": [np.asarray(a).tolist() for a in self.a],
+             "b": [np.atleast_2d(b).tolist() for b in self.b]}
+        if self.trusted_from:
+            d["trusted_from"] = float(self.trusted_from)
+        return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any], source: str = "model") -> "HammersteinModel":
@@ -186,7 +196,8 @@ class HammersteinModel:
         Parameters
         ----------
         d : dict
-            ``family`` ("hammerstein"), ``hysteresis``, ``a`` and ``b``.
+            ``family`` ("hammerstein"), ``hysteresis``, ``a`` and ``b``; optionally
+            ``trusted_from`` (cycles per sample, 0 <= it < 0.5).
         source : str
             What the dict came from, for the messages.
 
@@ -241,7 +252,12 @@ class HammersteinModel:
                                         f"got {bj.shape[0]}")
             a.append(aj)
             b.append(bj)
-        return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b))
+        trusted = d.get("trusted_from", 0.0)
+        if (isinstance(trusted, bool) or not isinstance(trusted, (int, float))
+                or not 0.0 <= trusted < 0.5):
+            raise InvalidModelError(f"{source}: key 'trusted_from' must be a number of "
+                                    f"cycles per sample in [0, 0.5), got {trusted!r:.40}")
+        return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b), trusted_from=float(trusted))
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the model as JSON to ``path`` (the file appears only once complete).

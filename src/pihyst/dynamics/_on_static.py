@@ -40,6 +40,14 @@ while the poles, measured without the static model, cannot move to fit it. Then
 
 The static model holds the gain at rest; the dynamics add only what changes with rate. As
 the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d -> r).
+
+Below the slowest fast record's fundamental f_t = 1 / n (n its samples per period) the
+dynamics are not measured: only the slow record's harmonics (where G ~ 1 to within the
+static model's own error) and G(1) = 1 pin them. The model records f_t
+(``HammersteinModel.trusted_from``, ``fade=True``) and the compensators fade the
+dynamics' correction out below it (:func:`pihyst.dynamics.trust_weight`): the static
+model, fitted on slow records, has absorbed part of the stage's lag there as loop width,
+which the full G^-1 would add a second time.
 """
 
 import math
@@ -139,7 +147,8 @@ def _numerator_on_static(H, a, nb, records):
 def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, Any]], *,
                  orders: Sequence[Sequence[int]] = DEFAULT_ORDERS,
                  validation: int | None = -1, tolerance: float = 0.01,
-                 numerator_on_static: bool = True, keep_creep: bool = False) -> HammersteinModel:
+                 numerator_on_static: bool = True, keep_creep: bool = False,
+                 fade: bool = True) -> HammersteinModel:
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
     unit-static-gain dynamics measured by the ratio of rates (module notes).
 
@@ -168,6 +177,10 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
         :func:`pihyst.learn.learn_periodic`, which runs it on the period's time base;
         :meth:`HammersteinModel.predict` and :func:`compensate_hammerstein` do not time
         it: leave it off for them). The dynamics are fitted without it either way.
+    fade : bool
+        Record the slowest fast record's fundamental (cycles per sample) as the
+        model's ``trusted_from``, below which the compensators fade the dynamics'
+        correction out (module notes); False: 0, the whole inverse everywhere.
 
     Returns
     -------
@@ -237,4 +250,5 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
         raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0)")
     if keep_creep and getattr(static, "creep", None) is not None:
         H = static.replace(delay=0) if getattr(static, "delay", 0) else static
-    return HammersteinModel(hysteresis=(H,), a=(a,), b=(b / gain,))
+    trusted_from = 1.0 / max(u.size for u, _ in fast) if fade else 0.0
+    return HammersteinModel(hysteresis=(H,), a=(a,), b=(b / gain,), trusted_from=trusted_from)
