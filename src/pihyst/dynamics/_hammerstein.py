@@ -181,10 +181,10 @@ class HammersteinModel:
         >>> d["a"], d["b"]
         ([[1.0, -0.5]], [[[0.5]]])
         """
-        d = {"family": FAMILY,
-             "hysteresis": [H.to_dict() for H in self.hysteresis],
-             "a": [np.asarray(a).tolist() for a in self.a],
-             "b": [np.atleast_2d(b).tolist() for b in self.b]}
+        d: dict[str, Any] = {"family": FAMILY,
+                             "hysteresis": [H.to_dict() for H in self.hysteresis],
+                             "a": [np.asarray(a).tolist() for a in self.a],
+                             "b": [np.atleast_2d(b).tolist() for b in self.b]}
         if self.trusted_from:
             d["trusted_from"] = float(self.trusted_from)
         return d
