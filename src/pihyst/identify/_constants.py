@@ -100,3 +100,9 @@ MIN_INPUT_LEVELS = 4
 MIN_EXPLAINED = 0.5
 WEAK_EXPLAINED = 0.9
 MIN_LOOP_WIDTH = 0.002
+
+# --------------------------------------------------------------------------- kernels
+# Fewer kernels for the same KP model (identify/_kernel_pruning.py): kernels are taken
+# away while the model's output moves by at most this share of its judged RMS, on the
+# record's fitted samples and on reversal curves covering the Preisach plane.
+PRUNE_TOLERANCE = 0.2
