@@ -16,9 +16,20 @@ the reference model the generic event-list walk (collect and sort the breakpoint
 every reversal) and the generic model step. Targets (issue item 2):
 compensator <= 200 ns per sample tracking and <= 2 us worst case at K ~ 130.
 
-Run: python benchmarks/bench_kp.py
+Part 2 (the identification issue, item 5): the KP models the default fit produces for
+the measured records (P-885 and SmartHysteresis; ../shared/data or $PIHYST_DATA, skipped
+if absent), with their kernels reduced (identify/_kernel_pruning.py) and, for the gain,
+the same fit without the reduction (PRUNE_TOLERANCE = 0), against a classical K = 16
+compensator on the same input range and the same voltage trajectories: compensator time
+per sample, tracking (ramps between random levels, 1/600 of the range per sample) and
+worst case (a random reachable value every sample), best CPU time of 5. Targets: <= 4x
+the classical K = 16 while tracking, <= 20x in the worst case.
+
+Run: python benchmarks/bench_kp.py [--fitted]   (--fitted: part 2 only)
 """
 
+import sys
+import warnings
 
 import numpy as np
 from timing import best_cpu_time
@@ -95,5 +106,58 @@ def main():
               f"   (max |y - y_d| {err:.1e}; target <= {1e9 * limit:.0f} ns: {met})")
 
 
+def fitted_models():
+    from pihyst.exceptions import PihystWarning
+    from pihyst.identify import _constants
+    from pihyst.io import datasets
+
+    root = datasets.data_root()
+    if root is None:
+        print("\nfitted models: measured data not found (../shared/data or $PIHYST_DATA): "
+              "skipped")
+        return
+    print("\nKP models of the default fit, compensator ns per sample (best CPU time of 5), "
+          f"{N} samples; ratio to a classical K = 16 on the same range and voltages")
+    print(f"   {'record':<16} {'model':<22} {'kernels':>7} {'tracking':>9} {'ratio':>6} "
+          f"{'worst':>8} {'ratio':>6}")
+    for name, load in (("P-885", datasets.p885), ("SmartHysteresis", datasets.smarthysteresis)):
+        u, y = load(root)
+        models = {}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            models["default fit"] = pihyst.fit(u, y).model
+            reduction, _constants.PRUNE_TOLERANCE = _constants.PRUNE_TOLERANCE, 0.0
+            try:
+                models["without reduction"] = pihyst.fit(u, y).model
+            finally:
+                _constants.PRUNE_TOLERANCE = reduction
+        lo, hi = models["default fit"].input_range
+        rng = np.random.default_rng(2)
+        classical = pihyst.ClassicalPI(np.arange(16) * (hi - lo) / 32,
+                                       0.1 * rng.uniform(size=16) + 0.02, input_range=(lo, hi))
+        tracking = lo + ramps(N, rng, step=U / 600) * (hi - lo) / U
+        worst = rng.uniform(lo, hi, N)
+
+        def per_sample(model, volts):
+            yd = model.replace(delay=0).predict(volts)
+            plain = model.replace(delay=0)
+            return best_cpu_time(lambda: pihyst.compensate(plain, yd), 5) / N
+
+        ref = [per_sample(classical, v) for v in (tracking, worst)]
+        print(f"   {name:<16} {'classical K = 16':<22} {16:>7} {1e9 * ref[0]:>9.0f} "
+              f"{'1.0':>6} {1e9 * ref[1]:>8.0f} {'1.0':>6}")
+        for label, model in models.items():
+            if model.metadata["fit"]["family"] != "kp":
+                print(f"   {name:<16} {label:<22} not kp: {model.metadata['fit']['family']}")
+                continue
+            t = [per_sample(model, v) for v in (tracking, worst)]
+            met = t[0] <= 4 * ref[0] and t[1] <= 20 * ref[1]
+            print(f"   {name:<16} {label:<22} {model.n_operators:>7} {1e9 * t[0]:>9.0f} "
+                  f"{t[0] / ref[0]:>6.1f} {1e9 * t[1]:>8.0f} {t[1] / ref[1]:>6.1f}"
+                  f"   (<= 4x / 20x: {'met' if met else 'NOT met'})")
+
+
 if __name__ == "__main__":
-    main()
+    if "--fitted" not in sys.argv[1:]:
+        main()
+    fitted_models()

@@ -537,7 +537,8 @@ class FamilyFitter:
         probes = kernel_probes(self.responses, template, fam.grid, rec.S, rec.fit_offset)
         x = solve(shape, lam, prob.fit, product, warn=True)
         reference = prob.judge.rms(cols, x)
-        x, pruning = prune_kernels(x, n_ops, prob.fit, probes, prob, reference)
+        x, pruning = prune_kernels(x, n_ops, prob.fit, prob.judge, probes, prob,
+                                   reference)
         reg = {"lambda": lam, "scale": scales[shape], "rule": rule, "tried": tried,
                "kernels": len(pairs), "pruning": pruning,
                "penalty": fam.PENALTIES[shape], "penalty_shape": shape,
@@ -552,7 +553,7 @@ class FamilyFitter:
         def refit():
             both = _both(prob)
             x_all = prune_kernels(solve(shape, lam, both, product_of(both), warn=True),
-                                  n_ops, both, probes, prob, reference)[0]
+                                  n_ops, both, both, probes, prob, reference)[0]
             return self._model(fam, pairs, chosen, x_all, state0)[0]
 
         model, ops, w, c = self._model(fam, pairs, chosen, x, state0)
