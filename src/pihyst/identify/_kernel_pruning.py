@@ -47,6 +47,7 @@ from pihyst.exceptions import InfeasibleConstraintsError
 from pihyst.identify import _constants
 from pihyst.identify._gram import accumulate
 from pihyst.identify._qp import solve_qp
+from pihyst.identify._responses import digest
 
 # probe samples per kernel width along the reversal curves
 PROBE_STEPS = 4
@@ -75,8 +76,8 @@ def reversal_curves(grid, S):
 
 
 def probe_gram(template, state0, grid, S, fit_offset):
-    """Normal equations of ``template``'s operators (and the constant column when
-    ``fit_offset``) over :func:`reversal_curves`, from ``state0`` (the cycled state)."""
+    """G / n of ``template``'s operators (and the constant column when ``fit_offset``)
+    over :func:`reversal_curves`, from ``state0`` (the cycled state)."""
     v = reversal_curves(grid, S)
     parts, _ = accumulate(template, v, np.zeros_like(v), [(0, v.size, "fit")], state0,
                           offset=True)
@@ -88,14 +89,14 @@ def probe_gram(template, state0, grid, S, fit_offset):
 def kernel_probes(responses, template, grid, S, fit_offset):
     """:func:`probe_gram` of ``template`` (kernels of v on [0, S]), computed once per
     fit (``responses``: the fit's output-independent results)."""
-    from pihyst.identify._family_fit import cycled_state
-    from pihyst.identify._responses import digest
-
     corners = np.array([[x[1] for x, _ in template.rising], [x[1] for x, _ in
                                                                template.falling]])
     key = ("kernel probes", digest(corners, np.array([grid, S, fit_offset], float)))
-    return responses.get(key, lambda: probe_gram(template, cycled_state(template, S), grid,
-                                                 S, fit_offset))
+    def compute():
+        # from rest at the bottom after a full cycle (_family_fit.cycled_state)
+        cycled = template.simulate(np.array([0.0, S, 0.0])).final_state
+        return probe_gram(template, cycled, grid, S, fit_offset)
+    return responses.get(key, compute)
 
 
 def prune_kernels(x, n_kernels, record, judge, probes, problem, reference_rms):
