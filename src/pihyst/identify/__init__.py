@@ -33,6 +33,7 @@ table of decisions):
 - ``_gram``: normal equations; ``_qp``: constrained least squares;
 - ``_subsets``: the threshold subset search; ``_shape``: the multislope shape search;
 - ``_kernel_product``: the product-form kernel density (kp, records without minor loops);
+- ``_kernel_pruning``: a kp model's final weights on fewer kernels, the same model;
 - ``_boucwen``: the Bouc-Wen family; ``_boucwen_creep``: its shape fitted with creep;
 - ``_assess``: errors per kind of held-back data, what the data cannot determine;
 - ``_latency``: compensator cost, estimated from the model's structure;

@@ -31,6 +31,7 @@ from pihyst.identify._cycles import (
 from pihyst.identify._family_result import FamilyFit
 from pihyst.identify._gram import Gram, accumulate
 from pihyst.identify._kernel_product import product_density_fit
+from pihyst.identify._kernel_pruning import kernel_probes, prune_kernels
 from pihyst.identify._qp import solve_qp
 from pihyst.identify._responses import Responses
 from pihyst.identify._subsets import (
@@ -533,9 +534,13 @@ class FamilyFitter:
             lam = KP_DEFAULT_LAMBDA
             rule = "default (nothing held back to choose it on)"
             self.note("nothing held back: regularization strength not chosen from data")
+        probes = kernel_probes(self.responses, template, fam.grid, rec.S, rec.fit_offset)
         x = solve(shape, lam, prob.fit, product, warn=True)
+        reference = prob.judge.rms(cols, x)
+        x, pruning = prune_kernels(x, n_ops, prob.fit, prob.judge, probes, prob,
+                                   reference)
         reg = {"lambda": lam, "scale": scales[shape], "rule": rule, "tried": tried,
-               "kernels": len(pairs),
+               "kernels": len(pairs), "pruning": pruning,
                "penalty": fam.PENALTIES[shape], "penalty_shape": shape,
                "product_density": None if not open_loops else {
                    "held_back_rms": None if product is None else prob.judge.rms(cols,
@@ -547,9 +552,9 @@ class FamilyFitter:
 
         def refit():
             both = _both(prob)
-            return self._model(fam, pairs, chosen,
-                               solve(shape, lam, both, product_of(both), warn=True),
-                               state0)[0]
+            x_all = prune_kernels(solve(shape, lam, both, product_of(both), warn=True),
+                                  n_ops, both, both, probes, prob, reference)[0]
+            return self._model(fam, pairs, chosen, x_all, state0)[0]
 
         model, ops, w, c = self._model(fam, pairs, chosen, x, state0)
         return self._fit_result(fam, model, ops, w, c, refit, regularization=reg)

@@ -509,6 +509,12 @@ class FitReport:
             product = reg.get("product_density")
             if product:
                 lines.append(product["rule"])
+            cut = reg.get("pruning")
+            if cut and cut["kernels"] < cut["kernels_before"]:
+                lines.append(f"{cut['kernels_before']} -> {cut['kernels']} kernels: the same "
+                             f"model to {cut['tolerance']:.3g} {uout} RMS on the fitted cycles "
+                             f"({cut['record_rms']:.3g}) and on reversal curves over the "
+                             f"Preisach plane ({cut['probe_rms']:.3g})")
         ch = best.get("threshold_choice")
         if ch:
             where = "held-back" if ch["judged_on"] == "held_back" else "fitted"
