@@ -82,6 +82,10 @@ REGULARIZATION = {
     "tried": [{"penalty": STR, "lambda": NUM, "rms": NUM_OR_NONE}], "kernels": int,
     "penalty": STR, "penalty_shape": STR,
     "product_density": Either(type(None), {"held_back_rms": NUM_OR_NONE, "rule": STR}),
+    # step 13 of the decision table (identify/_kernel_pruning.py)
+    "pruning": Opt(Either(type(None), {"kernels_before": int, "kernels": int,
+                                       "tolerance": NUM, "record_rms": NUM,
+                                       "probe_rms": NUM})),
 }
 
 LATENCY = Either(type(None), {"typical_us": NUM, "worst_us": NUM,
