@@ -40,15 +40,13 @@ the classical K = 16 while tracking, <= 20x in the worst case.
 Run: python benchmarks/bench_kp.py [--fitted]   (--fitted: part 2 only)
 """
 
-import sys
-import warnings
-
 import json
 import pathlib
 import subprocess
 import sys
 import tempfile
 import time
+import warnings
 
 import numpy as np
 from timing import best_cpu_time
