@@ -52,10 +52,13 @@ def test_ctrl_c_ends_both_quietly_with_the_commands_status():
     import os
     import signal
     import time
+    # as a terminal starts it: Ctrl-C not ignored (a job started in the background by a
+    # shell without job control, as some CI runners start theirs, inherits SIGINT ignored)
     proc = subprocess.Popen([sys.executable, str(HEARTBEAT), "--", sys.executable, "-c",
                              "import time; print('up', flush=True); time.sleep(30)"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert proc.stdout.readline() == "up\n"
     time.sleep(0.3)
     os.killpg(proc.pid, signal.SIGINT)          # as the terminal sends it, to the group
