@@ -285,8 +285,14 @@ def test_library_reproduces_any_model_with_creep_from_its_flat_file(lib, tmp_pat
     y_ref = model.predict(u)
     scale = max(np.ptp(y_ref), np.max(np.abs(y_ref)), 1.0)
     np.testing.assert_allclose(y, y_ref, rtol=0, atol=1e-12 * scale)
-    np.testing.assert_allclose(volts, pihyst.compensate(model, yd).voltage, rtol=0,
-                               atol=1e-12 * np.ptp(model.input_range))
+    # the same displacement from the library's voltages as from pihyst.compensate's: a
+    # KP-shaped model's compensator keeps its output within half the equality band of the
+    # model step (docs/c-core.md), so where the model is nearly flat (a weight of 2e-7)
+    # the voltages that give that displacement may differ by far more than the output
+    reached = model.predict(volts)
+    np.testing.assert_allclose(reached, model.predict(pihyst.compensate(model, yd).voltage),
+                               rtol=0, atol=1e-10 * scale)
+    assert np.all((volts >= model.input_range[0]) & (volts <= model.input_range[1]))
 
 
 def test_library_creep_state_can_be_set_and_removed(lib, tmp_path):
