@@ -213,12 +213,12 @@ def test_a_long_records_creep_rows_have_the_whole_records_operator_outputs(monke
     assert 0 < np.count_nonzero(fitted) <= 20_000 < u.size - 150
     basis = model.weights[:, None]
     for free in (True, False):
-        (long, sel, a, b), = _creep._operator_rows(model, u, fitted, basis, free)
+        long = _creep._operator_matrix(model, u, fitted, basis, free)
         monkeypatch.setattr(_creep, "FIT_SAMPLES", 10 ** 9)
-        chunked = np.vstack([p for p, *_ in _creep._operator_rows(model, u, fitted, basis,
-                                                                 free)])
+        chunked = _creep._operator_matrix(model, u, fitted, basis, free)
         monkeypatch.setattr(_creep, "FIT_SAMPLES", 20_000)
-        assert (a, b) == (0, u.size) and sel is fitted
+        assert long.shape == (np.count_nonzero(fitted), basis.shape[1] if not free
+                              else model.n_operators)
         np.testing.assert_array_equal(long, chunked) if free else \
             np.testing.assert_allclose(long, chunked, rtol=1e-13, atol=1e-13)
 
@@ -319,3 +319,52 @@ def test_a_real_creep_estimate_refits_the_structure(monkeypatch):
         warnings.simplefilter("ignore", PihystWarning)
         pihyst.fit(u, y, t=t, family=["classical", "modified-pi"])
     assert len(calls) == 2
+
+
+def test_the_tied_lag_deficits_at_some_rows_are_the_full_deficits_there():
+    """tied_deficits keeps only the rows a fit sums over, block by block: the same
+    numbers as every deficit of every sample, selected and tied afterwards."""
+    from pihyst.identify import _boucwen_creep
+    from pihyst.identify._creep import log_t_basis
+
+    rng = np.random.default_rng(8)
+    n = 3 * _boucwen_creep.CHUNK + 17            # several blocks, the last one short
+    s = np.cumsum(rng.normal(size=n))
+    dt = rng.uniform(1e-4, 1e-2, n)
+    tau = np.array([1e-3, 1e-2, 0.1, 1.0, 10.0])
+    tie = log_t_basis(tau.size, 4)
+    rows = rng.random(n) < 0.3
+    rows[:_boucwen_creep.CHUNK] = False          # a block with no row at all
+    full = _boucwen_creep.lag_deficits(s, s[0] - 2.0, dt, tau)[rows] @ tie
+    np.testing.assert_allclose(_boucwen_creep.tied_deficits(s, s[0] - 2.0, dt, tau, tie,
+                                                            rows), full, rtol=1e-12,
+                               atol=1e-12)
+
+
+@pytest.mark.parametrize("state_mode", ["cycled", "zero"])
+def test_dropping_constant_kernels_restricts_the_grids_normal_equations_bit_for_bit(
+        state_mode):
+    """The kernels the input never moves are dropped from the grid's normal equations
+    (identify/_family_fit.py): the rows and columns kept are the numbers a second pass
+    over the kept kernels alone gives, bit for bit, for every role and state."""
+    from pihyst.identify._families import KrasnoselskiiPokrovskii
+    from pihyst.identify._family_fit import FramedRecord, _kept_columns
+
+    u = np.r_[ramps([0.0, 150.0, 0.0, 90.0, 20.0, 150.0, 0.0]), 0.0]
+    y = ClassicalPI([0, 30, 60], [0.3, 0.2, 0.1]).predict(u)
+    rec = FramedRecord(u, y, input_range=None, initial_state=state_mode,
+                       holdout="alternate", offset=True, through=[5])
+    fitter = FamilyFitter(rec)
+    fam = KrasnoselskiiPokrovskii(grid=5)
+    pairs = fam.pairs()
+    state0, parts, rows = fitter.grams(fam, fam.template(pairs, fitter.rec.S))
+    kept = [k for k in range(len(pairs)) if k % 3]
+    got = _kept_columns(kept, len(pairs), state0, parts, rows)
+    want = fitter.grams(fam, fam.template([pairs[k] for k in kept], fitter.rec.S))
+    np.testing.assert_array_equal(got[0], want[0])
+    for role in ("fit", "held_back"):
+        assert (got[1][role].dd, got[1][role].n) == (want[1][role].dd, want[1][role].n)
+        np.testing.assert_array_equal(got[1][role].G, want[1][role].G)
+        np.testing.assert_array_equal(got[1][role].b, want[1][role].b)
+    assert got[2].keys() == want[2].keys() == {5}
+    np.testing.assert_array_equal(got[2][5], want[2][5])

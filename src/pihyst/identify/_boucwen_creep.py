@@ -59,6 +59,24 @@ def lag_deficits(s, s0, dt, tau):
     return out
 
 
+def tied_deficits(s, s0, dt, tau, tie, rows):
+    """L(s)[rows] @ tie: the deficits of :func:`lag_deficits` at the rows ``rows`` (a
+    boolean mask) only, times the gains' basis ``tie`` (n x p), block by block (the
+    lags run over every sample; only the rows a fit sums over are kept, not N x n)."""
+    lags = _core.Creep(tau, np.zeros(tau.size), 1.0, np.full(tau.size, float(s0)))
+    out = np.empty((int(np.count_nonzero(rows)), tie.shape[1]))
+    done = 0
+    for a in range(0, s.size, CHUNK):
+        b = min(a + CHUNK, s.size)
+        sel = rows[a:b]
+        states = lags.lag_states(s[a:b], dt[a:b])
+        count = int(np.count_nonzero(sel))
+        if count:
+            out[done:done + count] = (s[a:b][sel, None] - states[sel]) @ tie
+            done += count
+    return out
+
+
 class _Record:
     """The record and the shape-independent parts of (D), on the fitted rows."""
 
@@ -71,8 +89,8 @@ class _Record:
         x = self.x
         self.xf = x[fitted]
         # deficits of x and x^2 from rest at the initial state's input, times the tie
-        self.lx = lag_deficits(x, self.x0, dt, tau)[fitted] @ tie
-        self.lx2 = lag_deficits(x * x, self.x0 * self.x0, dt, tau)[fitted] @ tie
+        self.lx = tied_deficits(x, self.x0, dt, tau, tie, fitted)
+        self.lx2 = tied_deficits(x * x, self.x0 * self.x0, dt, tau, tie, fitted)
         n = tau.size
         p = tie.shape[1]
         self.lower = np.r_[np.zeros(3), -np.inf, np.zeros(p)]
@@ -85,7 +103,7 @@ def joint_linear_fit(model, rec):
     on the fitted rows of ``rec``."""
     hyst = model.replace(creep=None)
     z = hyst._core(hyst.initial_state).trajectory(rec.u)[1]
-    lz = lag_deficits(z, hyst.initial_state[1], rec.dt, rec.tau)[rec.fitted] @ rec.tie
+    lz = tied_deficits(z, hyst.initial_state[1], rec.dt, rec.tau, rec.tie, rec.fitted)
     zf = z[rec.fitted]
     spread = 2.0 * hyst.beta / (hyst.beta + hyst.gamma)          # D
     c1, c2, a = hyst.linear, hyst.quadratic, hyst.hysteretic

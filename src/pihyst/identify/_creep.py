@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pihyst.exceptions import FitError, PihystWarning
-from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits
+from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits, tied_deficits
 from pihyst.identify._constants import BOUCWEN_CREEP_REACH, CREEP_REACH, NO_CREEP, TOLERANCE
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._qp import solve_qp
@@ -48,6 +48,10 @@ from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 __all__ = ["fit_with_creep"]
 
 CHUNK = 1 << 15
+# rows of operator outputs made at a time: 4,096 x 135 kernels is 4.4 MB, which the
+# allocator reuses block after block; above 32 MB every block is fresh memory from the
+# system, and first touching it cost 6.6 ms per MB on the development machine
+OPERATOR_BLOCK = 1 << 12
 MAX_PASSES = 6
 
 
@@ -111,36 +115,49 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
     fixed_offset = 0.0 if offset is False else (None if fit_offset else float(offset))
     tie = log_t_basis(n, int(np.count_nonzero(tau <= duration)))
     p = tie.shape[1]
-    cols = k + fit_offset + p
     lower = np.r_[np.zeros(k) if nonnegative else np.full(k, -np.inf),
                   np.full(int(fit_offset), -np.inf), np.zeros(p)]
     # g_i = p_0 + p_1 s_i <= p_0 + p_1: bounding both by G / (2n) keeps sum_i g_i <= G
     upper = np.r_[np.full(k + fit_offset, np.inf), np.full(p, MAX_TOTAL_GAIN / (2 * n))]
     names = ([f"w[{i}]" for i in range(k)] if free_weights else ["weight scale"]) + \
         ["offset"] * fit_offset + ["creep per lag", "creep rise toward slow lags"]
+    # the operators' outputs do not depend on the weights: their columns (and their
+    # part of the normal equations) are built once, only the lags' change per pass
+    fixed = _operator_matrix(hyst, u, fitted, basis, free_weights, ones=fit_offset)
+    target = y[fitted] - (fixed_offset or 0.0)
+    fixed_gram, fixed_rhs = fixed.T @ fixed, fixed.T @ target
     span = max(float(np.ptp(y[fitted])), 1e-300)
     gains, passes = np.zeros(n), 0
+    previous = _current(hyst, basis, free_weights, fit_offset, fixed_offset)
     while passes < MAX_PASSES:
         passes += 1
-        psi = _lag_deficits(hyst, h, dt, tau, hyst.initial_state)
-        gram, rhs = np.zeros((cols, cols)), np.zeros(cols)
-        for phi, sel, a, b in _operator_rows(hyst, u, fitted, basis, free_weights):
-            x = np.hstack([phi, np.ones((int(sel.sum()), int(fit_offset))),
-                           -psi[a:b][sel] @ tie])
-            d = y[a:b][sel] - (fixed_offset or 0.0)
-            gram += x.T @ x
-            rhs += x.T @ d
+        q = -tied_deficits(h, hyst.hysteresis_output(hyst.initial_state), dt, tau, tie,
+                           fitted)
+        cross = fixed.T @ q
+        gram = np.block([[fixed_gram, cross], [cross.T, q.T @ q]])
+        rhs = np.r_[fixed_rhs, q.T @ target]
         sol = solve_qp(gram, rhs, lower=lower, upper=upper, warn=False, names=names).x
         w = basis @ sol[:k]
         c = sol[k] if fit_offset else fixed_offset
         gains = np.clip(tie @ sol[k + fit_offset:], 0.0, None)
+        # H changes by the operator columns times the change of their coefficients (and
+        # a fixed offset's change): on the fitted rows that is exact, without running
+        # the model over the record
+        change = float(np.max(np.abs(fixed @ (sol[:k + fit_offset] - previous)),
+                              initial=0.0)) + (0.0 if fit_offset else abs(c - hyst.offset))
+        previous = sol[:k + fit_offset]
         hyst = hyst.replace(weights=w, offset=c)
-        h_new = hyst.predict(u)
-        change = float(np.max(np.abs(h_new - h)))
-        h = h_new
         if change <= 1e-6 * span:
             break
+        h = hyst.predict(u)
     return hyst, gains, passes
+
+
+def _current(hyst, basis, free_weights, fit_offset, fixed_offset):
+    """The coefficients of ``hyst``'s operator columns (its weights, or its scale 1 of
+    the basis) and of the offset column, as the joint QP's solution orders them."""
+    weights = hyst.weights if free_weights else np.ones(basis.shape[1])
+    return np.r_[weights, [hyst.offset] if fit_offset else []]
 
 
 def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, rows=None,
@@ -160,28 +177,34 @@ def _joint_qp_boucwen(model, u, y, dt, tau, *, start, offset, duration=np.inf, r
     return hyst, gains, passes
 
 
-def _operator_rows(hyst, u, fitted, basis, free_weights):
-    """(operator outputs times ``basis`` at the fitted rows of a block, its mask, start,
-    stop) for each block of the record: in chunks of every sample, or for a record
-    longer than ``FIT_SAMPLES`` (whose fitted rows are thinned) in one block, the
-    operators run on the fitted rows and every input extremum only (their outputs
-    there are exactly the whole record's: identify/_record_fit.py)."""
+def _operator_matrix(hyst, u, fitted, basis, free_weights, ones=False):
+    """The operators' outputs (times ``basis`` unless ``free_weights``) at the fitted
+    rows, then a column of ones with ``ones`` (the offset's), written block by block
+    into one array (a 60,000 x 135 matrix is 65 MB: made once, not copied). The
+    operators run on every sample, or for a record longer than ``FIT_SAMPLES`` (whose
+    fitted rows are thinned) on the fitted rows and every input extremum only (their
+    outputs there are exactly the whole record's: identify/_record_fit.py)."""
+    rows = np.flatnonzero(fitted)
     if u.size > FIT_SAMPLES:
-        rows = np.flatnonzero(fitted)
         dv = np.diff(u)
         turns = np.flatnonzero(dv[1:] * dv[:-1] <= 0) + 1
-        keep = np.unique(np.r_[0, rows, turns, u.size - 1])
-        phi = hyst.operators(u[keep], initial_state=hyst.initial_state)[np.isin(keep, rows)]
-        yield (phi if free_weights else phi @ basis), fitted, 0, u.size
-        return
-    state = hyst.initial_state
-    for a in range(0, u.size, CHUNK):
-        b = min(a + CHUNK, u.size)
-        phi = hyst.operators(u[a:b], initial_state=state)
+        run = np.unique(np.r_[0, rows, turns, u.size - 1])
+    else:
+        run = np.arange(u.size)
+    wanted = fitted[run]
+    k = hyst.n_operators if free_weights else basis.shape[1]
+    out = np.empty((rows.size, k + bool(ones)))
+    if ones:
+        out[:, k] = 1.0
+    state, done = hyst.initial_state, 0
+    for a in range(0, run.size, OPERATOR_BLOCK):
+        b = min(a + OPERATOR_BLOCK, run.size)
+        phi = hyst.operators(u[run[a:b]], initial_state=state)
         state = phi[-1]
-        sel = fitted[a:b]
-        if sel.any():
-            yield (phi[sel] if free_weights else (phi @ basis)[sel]), sel, a, b
+        block = phi[wanted[a:b]]
+        out[done:done + block.shape[0], :k] = block if free_weights else block @ basis
+        done += block.shape[0]
+    return out
 
 
 def _fitted_rows(n, start, rows):

@@ -483,10 +483,12 @@ class FamilyFitter:
         state0, parts, rows = on.grams(fam, template)
         const = self._constant_columns(parts, len(pairs))
         if const.size:
-            # e.g. the widest kernel: after a full cycle it stays at 1/2 for good
-            pairs = [p for k, p in enumerate(pairs) if k not in set(const)]
+            # e.g. the widest kernel: after a full cycle it stays at 1/2 for good; the
+            # kept kernels' normal equations are those rows and columns of the grid's
+            kept = [k for k in range(len(pairs)) if k not in set(const)]
+            state0, parts, rows = _kept_columns(kept, len(pairs), state0, parts, rows)
+            pairs = [pairs[k] for k in kept]
             template = fam.template(pairs, rec.S)
-            state0, parts, rows = on.grams(fam, template)
             self.note(f"{const.size} kernel{'s' if const.size > 1 else ''} dropped: "
                               f"the input never moves {'them' if const.size > 1 else 'it'}")
         names = [f"kernel {p}" for p in pairs]
@@ -618,6 +620,19 @@ def _both(prob):
 
 def _restrict(gram, keep):
     return Gram(gram.G[np.ix_(keep, keep)], gram.b[keep], gram.dd, gram.n)
+
+
+def _kept_columns(kept, n_candidates, state0, parts, rows):
+    """(state, normal equations, through rows) of the candidates ``kept`` of
+    ``n_candidates``, from those of all of them (columns [candidates..., fixed
+    operators..., offset], as :meth:`FamilyFitter.grams` gives them): every entry of G
+    and b sums over its own two columns only, so these are the numbers a pass over the
+    kept candidates alone would give, bit for bit."""
+    m = parts["fit"].G.shape[0]
+    columns = list(kept) + list(range(n_candidates, m))
+    operators = list(kept) + list(range(n_candidates, state0.size))
+    return (state0[operators], {role: _restrict(g, columns) for role, g in parts.items()},
+            {i: r[columns] for i, r in rows.items()})
 
 
 def _fmt_list(values):
