@@ -30,7 +30,7 @@ joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_cre
 
 import functools
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -99,16 +99,17 @@ def _lag_deficits(model, h, dt, tau, start_state):
 
 
 def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=True,
-              duration=np.inf, rows=None):
+              duration=np.inf, rows=None, output=None):
     """Weights, offset and creep gains of ``model``'s operators by repeated joint QPs on
-    the samples ``rows`` (indices; default every sample from ``start``).
+    the samples ``rows`` (indices; default every sample from ``start``); ``output``, the
+    model's settled output over ``u`` where it is known already.
 
     ``free_weights=False`` (a regularized kernel basis): the weights keep their shape,
     w = q w_0 with one scale q >= 0, so the joint QP cannot undo the regularization.
     """
     fitted = _fitted_rows(u.size, start, rows)
     hyst = model.replace(creep=None)
-    h = hyst.predict(u)
+    h = hyst.predict(u) if output is None else output
     basis = np.eye(model.n_operators) if free_weights else model.weights[:, None].copy()
     k, n = basis.shape[1], tau.size
     fit_offset = offset is True
@@ -275,7 +276,9 @@ class CreepEstimate:
 @dataclass(frozen=True)
 class _Aligned:
     """The record with its output ``d`` samples later (u[k] -> y[k + d]), its sample
-    intervals and times at the output, the creep time constants and the QP options."""
+    intervals and times at the output, the creep time constants and the QP options;
+    ``outputs`` keeps the settled output of each structure the QPs start from (the
+    judgement's and the final fit's are the same structure's)."""
 
     u: np.ndarray
     y: np.ndarray
@@ -284,6 +287,19 @@ class _Aligned:
     tau: np.ndarray
     qp: dict
     fixed_n: object
+    outputs: dict = field(default_factory=dict, compare=False)
+
+    def settled_output(self, structure):
+        """H of ``structure`` (a RecordFit)'s PI model, no delay and no creep, over
+        ``u``: computed once per structure (None for Bouc-Wen, whose joint fit
+        searches its shape and computes its own)."""
+        if isinstance(structure.result.model, BoucWenModel):
+            return None
+        key = id(structure)
+        if key not in self.outputs:
+            model = structure.result.model.replace(delay=0, creep=None)
+            self.outputs[key] = (structure, model.predict(self.u))
+        return self.outputs[key][1]
 
 
 def fit_with_creep(u, y, t, options, steps):
@@ -485,7 +501,8 @@ def _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, judged):
     chosen = second.result.model
     hyst, gains, passes = _joint_qp_of(chosen, rec.fixed_n)(
         chosen.replace(delay=0), rec.u, rec.y, rec.dt, rec.tau, start=start,
-        free_weights=second.result.report.chosen != "kp", **rec.qp)
+        free_weights=second.result.report.chosen != "kp",
+        output=rec.settled_output(second), **rec.qp)
     aligned = hyst.replace(creep=Creep(rec.tau, gains, dt_fixed))
     model = aligned.replace(delay=d, sample_period=dt_fixed if d else None)
     residual = rec.y[start:] - aligned.predict(rec.u, t=t[d:])[start:]
@@ -586,7 +603,8 @@ def _judge(first, second, rec, fit_rows, held_rows, fitted=None):
         hyst, gains, _ = _joint_qp_of(chosen, rec.fixed_n)(
             chosen.replace(delay=0), rec.u, rec.y, rec.dt, rec.tau,
             start=second.settled_sample, rows=fit_rows,
-            free_weights=second.result.report.chosen != "kp", **rec.qp)
+            free_weights=second.result.report.chosen != "kp",
+            output=rec.settled_output(second), **rec.qp)
     else:
         hyst, gains = fitted.model, fitted.gains
     with_creep = hyst.replace(creep=Creep(rec.tau, gains, float(np.median(rec.dt))))
