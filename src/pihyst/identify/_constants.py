@@ -97,6 +97,16 @@ BOUCWEN_CREEP_REACH = 2.3
 # creep is 0.3-3 % of the range per decade of time (pihyst.sim.random_plant), 10^6 times
 # more than this over any record's first decade.
 NO_CREEP = 1e-9
+# The joint QP of weights and creep gains is repeated until the settled output moves by
+# at most this share of the output span on the fitted rows (about 1e-8 of the span
+# after the gains, a few percent)...
+CREEP_CONVERGED = 1e-6
+# ... and, for the estimate the structure is chosen with (it is fitted again), at most
+# this share: on the 10^6-row beam record and random actuators 3, 7, 12 and 21
+# (pihyst.sim.random_plant, a 2-cycle record with a minor loop) the held-back RMS with
+# creep moved by at most 3e-6 of itself, the family and the number of kernels stayed,
+# and the estimate took one or two passes fewer (the 10^6-row fit 0.8 s less).
+CREEP_ESTIMATE_CONVERGED = 1e-4
 # Whether the record's creep started at rest (identify/_record_start.py): the share of
 # the model's residual that decays from the record's start explain was at most 8 % on
 # the 30 random actuators recorded from rest and 29-82 % after a hold, so above 20 % the

@@ -36,7 +36,14 @@ import numpy as np
 
 from pihyst.exceptions import FitError, PihystWarning
 from pihyst.identify._boucwen_creep import fit_shape_and_creep, lag_deficits, tied_deficits
-from pihyst.identify._constants import BOUCWEN_CREEP_REACH, CREEP_REACH, NO_CREEP, TOLERANCE
+from pihyst.identify._constants import (
+    BOUCWEN_CREEP_REACH,
+    CREEP_CONVERGED,
+    CREEP_ESTIMATE_CONVERGED,
+    CREEP_REACH,
+    NO_CREEP,
+    TOLERANCE,
+)
 from pihyst.identify._families import CREEP_FAMILIES
 from pihyst.identify._qp import solve_qp
 from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
@@ -99,7 +106,7 @@ def _lag_deficits(model, h, dt, tau, start_state):
 
 
 def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=True,
-              duration=np.inf, rows=None, output=None):
+              duration=np.inf, rows=None, output=None, converged=CREEP_CONVERGED):
     """Weights, offset and creep gains of ``model``'s operators by repeated joint QPs on
     the samples ``rows`` (indices; default every sample from ``start``); ``output``, the
     model's settled output over ``u`` where it is known already.
@@ -148,7 +155,7 @@ def _joint_qp(model, u, y, dt, tau, *, start, offset, nonnegative, free_weights=
                               initial=0.0)) + (0.0 if fit_offset else abs(c - hyst.offset))
         previous = sol[:k + fit_offset]
         hyst = hyst.replace(weights=w, offset=c)
-        if change <= 1e-6 * span:
+        if change <= converged * span:
             break
         h = hyst.predict(u)
     return hyst, gains, passes
@@ -380,12 +387,13 @@ class _Trial:
         """:class:`CreepEstimate` of the creep ``start``'s joint QP finds on the fitted
         rows (``rows``; every sample from the settling sweep without a judgement). Every
         weight is free in that QP (a kp basis may overfit there; only the creep estimate
-        is kept, the structure and weights are fitted again)."""
+        is kept, the structure and weights are fitted again, so it converges to
+        ``CREEP_ESTIMATE_CONVERGED``)."""
         rec = self.rec
         model = start.model.replace(creep=None, delay=0)
         hyst, gains, _ = _joint_qp_of(model, rec.fixed_n)(
             model, rec.u, rec.y, rec.dt, rec.tau, start=start.settled_sample,
-            rows=self.rows, **rec.qp)
+            rows=self.rows, converged=CREEP_ESTIMATE_CONVERGED, **rec.qp)
         return CreepEstimate(hyst, gains, start.family)
 
     def structure(self, start, families=None, estimate=None):
