@@ -37,7 +37,7 @@ lint: install
 typecheck: install
 	$(BIN)/mypy
 	$(BIN)/python -m mypy.stubtest --allowlist tests/stubtest_allowlist.txt \
-		pihyst._core pihyst._boucwen_core pihyst.io._fastcsv
+		pihyst._core pihyst._boucwen_core pihyst.io._fastcsv pihyst.identify._turning
 
 pytest: install
 	$(HEARTBEAT) $(BIN)/python -m pytest

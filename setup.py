@@ -50,9 +50,11 @@ boucwen = Extension(
 )
 # the default install's fast reader and writer of numeric text (no pyarrow needed)
 fastcsv = Extension("pihyst.io._fastcsv", sources=["src/pihyst/io/_fastcsv.pyx"])
+# the identification's one-pass turning-point search (its plain twin: pihyst._reference)
+turning = Extension("pihyst.identify._turning", sources=["src/pihyst/identify/_turning.pyx"])
 
 if __name__ == "__main__":  # setuptools runs it so; tests/test_setup.py only reads it
     from Cython.Build import cythonize  # a build requirement (pyproject.toml), not a runtime one
 
-    setup(ext_modules=cythonize([core, boucwen, fastcsv], language_level=3),
+    setup(ext_modules=cythonize([core, boucwen, fastcsv, turning], language_level=3),
           cmdclass={"build_ext": BuildExt})

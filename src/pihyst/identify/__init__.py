@@ -27,7 +27,8 @@ table of decisions):
 - ``_family_fit``: the record in the fitting frame (``FramedRecord``) and one family's fit
   (``FamilyFitter``); ``_family_result``: its :class:`FamilyFit`;
 - ``_start_state``: the operator state before the first sample (``initial_state="auto"``);
-- ``_cycles``: cutting a record into settle, fitted and held-back cycles;
+- ``_cycles``: cutting a record into settle, fitted and held-back cycles (its turning
+  points found in one pass in C by ``_turning``, a Cython extension);
 - ``_delay``: the input-output delay;
 - ``_families``: the fitting families (candidate operators, frames, how each is fitted);
 - ``_gram``: normal equations; ``_qp``: constrained least squares;

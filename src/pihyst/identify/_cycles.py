@@ -23,6 +23,7 @@ import numpy as np
 
 from pihyst.exceptions import FitError
 from pihyst.identify._constants import MAJOR_TOLERANCE, REST_TOLERANCE, REVERSAL_TOLERANCE
+from pihyst.identify._turning import turning_points as _one_pass
 
 MIN_SAMPLES = 20
 
@@ -66,56 +67,10 @@ def turning_points(v, tolerance):
     reaching it) is a turning point, and a falling phase starts at t (and the other way
     round). Before the first reversal both running extremes are watched from sample 0
     (a maximum first if both trip at once); a turning point at sample 0 is not reported.
-    One Python step per reversal, the samples in vectorized chunks (the per-sample loop
-    this replaces is the reference in tests/identify/test_identify_records.py).
+    One pass over the samples in C (identify/_turning.pyx; its plain twin, the same
+    loop in Python, is ``pihyst._reference.turning_points_loop``).
     """
-    v = np.asarray(v, dtype=float)
-    points = []
-    if v.size < 2:
-        return points
-    t_hi = _phase_end(v, 0, +1, tolerance)
-    t_lo = _phase_end(v, 0, -1, tolerance)
-    if t_hi is None and t_lo is None:
-        return points
-    kind = +1 if t_lo is None or (t_hi is not None and t_hi <= t_lo) else -1
-    start, t = 0, (t_hi if kind > 0 else t_lo)
-    chunk = FIRST_CHUNK
-    while True:
-        seg = v[start:t + 1]
-        i = start + int(np.argmax(seg) if kind > 0 else np.argmin(seg))
-        if i > 0:
-            points.append((i, kind))
-        start, kind = t, -kind
-        end = _phase_end(v, start, kind, tolerance, chunk)
-        if end is None:
-            return points
-        chunk = max(FIRST_CHUNK, 2 * (end - start))   # the next phase is likely as long
-        t = end
-
-
-FIRST_CHUNK = 256
-
-
-def _phase_end(v, start, kind, tolerance, chunk=FIRST_CHUNK):
-    """First t >= start where a phase from ``start`` reverses: for kind +1 (rising)
-    max v[start..t] - v[t] > tolerance, for -1 (falling) v[t] - min v[start..t] >
-    tolerance; None if it never does."""
-    extreme = v[start]
-    a, n = start, v.size
-    while a < n:
-        z = min(n, a + chunk)
-        seg = v[a:z]
-        if kind > 0:
-            run = np.maximum(np.maximum.accumulate(seg), extreme)
-            hit = np.flatnonzero(run - seg > tolerance)
-        else:
-            run = np.minimum(np.minimum.accumulate(seg), extreme)
-            hit = np.flatnonzero(seg - run > tolerance)
-        if hit.size:
-            return a + int(hit[0])
-        extreme = run[-1]
-        a, chunk = z, 2 * chunk
-    return None
+    return _one_pass(np.ascontiguousarray(v, dtype=np.float64), float(tolerance))
 
 
 @dataclass
