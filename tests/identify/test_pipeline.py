@@ -368,3 +368,26 @@ def test_dropping_constant_kernels_restricts_the_grids_normal_equations_bit_for_
         np.testing.assert_array_equal(got[1][role].b, want[1][role].b)
     assert got[2].keys() == want[2].keys() == {5}
     np.testing.assert_array_equal(got[2][5], want[2][5])
+
+
+@pytest.mark.parametrize("long_record", [False, True])
+def test_the_joint_qps_change_of_the_settled_output_is_exact_on_the_fitted_rows(
+        monkeypatch, long_record):
+    """Creep's joint QP stops when the operator columns times the change of their
+    coefficients (and the offset's) is small: that is the change of the model's
+    settled output at the fitted rows, without running the model over the record."""
+    from pihyst.identify import _creep
+
+    rng = np.random.default_rng(5)
+    levels = np.r_[0.0, 150.0, 0.0, rng.uniform(0, 150, 120)]
+    u = np.concatenate([np.linspace(a, b, 60, endpoint=False)
+                        for a, b in zip(levels[:-1], levels[1:])])
+    old = ClassicalPI(np.linspace(0, 70, 8), rng.uniform(0.05, 0.3, 8), offset=1.0)
+    new = old.replace(weights=old.weights * rng.uniform(0.8, 1.2, 8), offset=1.3)
+    if long_record:
+        monkeypatch.setattr(_creep, "FIT_SAMPLES", 2_000)
+    fitted = _creep._fitted_rows(u.size, 100, None)
+    columns = _creep._operator_matrix(old, u, fitted, None, True, ones=True)
+    change = columns @ (np.r_[new.weights, new.offset] - np.r_[old.weights, old.offset])
+    np.testing.assert_allclose(change, (new.predict(u) - old.predict(u))[fitted],
+                               rtol=1e-10, atol=1e-10)
