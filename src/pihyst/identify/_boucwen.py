@@ -383,6 +383,7 @@ class _ShapeSearch:
         self.xk, self.yk = x[keep], y[keep]
         self.grid = [(b, r * b, e) for b in GRID_BETA for r in GRID_RATIO for e in self.ns]
         self.skipped_refinement = []     # the grid's best fitted RMS, where not refined
+        self.skipped_free_start = None   # the held-back RMS from rest, where not searched
 
     def start(self, beta, gamma, nn):
         """(x, z) before the first sample: the cycled rest state, or z = 0 at x[0] (then
@@ -486,11 +487,16 @@ class _ShapeSearch:
         later = fit_i[fit_i >= first_turn]
         if not self.settle and self.shape is None and (held_i.size or later.size):
             judge = held_i if held_i.size else later
+            from_rest = self.rms_from_rest(lin[0], lin[2][0], judge)
+            if self.refine_below is not None and from_rest > self.refine_below:
+                # as the refinement: a start searched free lowered the held-back RMS
+                # by at most 3.65 times on the population (REFINE_REACH)
+                self.skipped_free_start = from_rest
+                return shape, lin
             self.free_start = True
             shape2 = self.search()
             lin2 = self.linear_fit(*shape2, fit_i)
-            if self.rms_from_rest(lin2[0], lin2[2][0], judge) < \
-                    self.rms_from_rest(lin[0], lin[2][0], judge):
+            if self.rms_from_rest(lin2[0], lin2[2][0], judge) < from_rest:
                 shape, lin = shape2, lin2
                 self.start_free = True
             self.free_start = False
@@ -518,6 +524,10 @@ class _ShapeSearch:
         if self.start_free:
             out += ("; shape found with the start of z unknown (the record does not start "
                     "at rest: predicted from rest, it holds back better)")
+        if self.skipped_free_start is not None:
+            out += (f"; the start of z not searched free: from rest it holds back "
+                    f"{self.skipped_free_start:.4g}, more than {REFINE_REACH:g} times the "
+                    f"best other family's judged RMS")
         return out
 
 
