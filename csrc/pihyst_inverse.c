@@ -593,15 +593,27 @@ static void collect_pwl(const pihyst_model *m, int up, real u_p, real span, even
  * a binary search; no O(K) pass at a reversal, no sort (measured in
  * benchmarks/bench_kp.py and make -C csrc bench-m4f). */
 
-enum { RAMP_X1, RAMP_X2, RAMP_Y0, RAMP_Y1, RAMP_Y2, RAMP_INV, RAMP_SLOPE, RAMP_N };
+enum { RAMP_X1, RAMP_X2, RAMP_Y0, RAMP_Y1, RAMP_Y2, RAMP_N };
 /* a sorted list: per position the ramp's start (in p), the greatest end (in p) up to
  * that position, and the operator's index (as a real: exact up to 2^24 operators) */
 enum { LIST_KEY, LIST_END_MAX, LIST_INDEX, LIST_N };
 /* per position of a sorted list, what the sweep reads (one record of REC_N values, in
  * list order: one pointer walks it): the ramp's start and end in p, the state's limit
  * beyond which the operator cannot move (y2 going up, y1 going down; -+inf for a slope
- * s = 0), y1, dx/dy, the slope s = w dy/dx */
-enum { REC_KEY, REC_END, REC_LIMIT, REC_Y1, REC_INV, REC_SLOPE, REC_N };
+ * s = 0), y1, dx/dy, the slope s = w dy/dx, the operator's index (a uint32_t in the
+ * value's first bytes: no conversion) and the first position whose start is greater
+ * (as a real, exact up to 2^24); then for the model step, the ramp's x1, x2, y0, y2 */
+enum {
+    REC_KEY, REC_END, REC_LIMIT, REC_Y1, REC_INV, REC_SLOPE, REC_INDEX, REC_NEXT,
+    REC_X1, REC_X2, REC_Y0, REC_Y2, REC_N
+};
+
+static size_t rec_index(const real *rec)
+{
+    uint32_t k;
+    memcpy(&k, rec + REC_INDEX, sizeof k);
+    return k;
+}
 /* the running sum of the output: hi + lo, the changes summed since the last exact sum
  * (|change| each) and the scale at which it is taken again; the number of operators not
  * known to be monotone (ramps_init); then, per list, where its
@@ -683,9 +695,9 @@ static int ramps_ordered(const pihyst_compensator *c, size_t k)
 }
 
 /* constants of every ramp, from points 1 and 2 of its polyline: x1, x2, y0 (the value
- * below x1: y1 but for the sign of a zero), y1, y2, dx/dy (0 for a flat ramp, at most
- * the largest finite value) and the slope w dy/dx; then the two sorted lists, and the
- * running sum's budget (the output scale) */
+ * below x1: y1 but for the sign of a zero), y1, y2; then the two sorted lists with their
+ * records (dx/dy: 0 for a flat ramp, at most the largest finite value; the slope
+ * w dy/dx), and the running sum's budget (the output scale) */
 static void ramps_init(pihyst_compensator *c, real scale)
 {
     const pihyst_model *m = &c->work_model;
@@ -698,20 +710,14 @@ static void ramps_init(pihyst_compensator *c, real scale)
         real *x1 = ramp_array(c, side, RAMP_X1), *x2 = ramp_array(c, side, RAMP_X2);
         real *y0 = ramp_array(c, side, RAMP_Y0), *y1 = ramp_array(c, side, RAMP_Y1);
         real *y2 = ramp_array(c, side, RAMP_Y2);
-        real *inv = ramp_array(c, side, RAMP_INV), *s = ramp_array(c, side, RAMP_SLOPE);
         real *key = list_array(c, side, LIST_KEY), *end_max = list_array(c, side, LIST_END_MAX);
         real *index = list_array(c, side, LIST_INDEX), run = -R_INF;
         for (k = 0; k < K; ++k) {
-            const real dx = x[4 * k + 2] - x[4 * k + 1], dy = y[4 * k + 2] - y[4 * k + 1];
-            real i = dy > RC(0.0) ? dx / dy : RC(0.0);
-            if (!(i <= R_MAX)) i = R_MAX;
             x1[k] = x[4 * k + 1];
             x2[k] = x[4 * k + 2];
             y0[k] = y[4 * k];
             y1[k] = y[4 * k + 1];
             y2[k] = y[4 * k + 2];
-            inv[k] = i;
-            s[k] = m->weights[k] * (dy / dx);
             /* rising ramps start at x1; falling ones, in p = -u, at -x2 */
             key[k] = side ? -x2[k] : x1[k];
             index[k] = (real)k;
@@ -720,15 +726,32 @@ static void ramps_init(pihyst_compensator *c, real scale)
         for (k = 0; k < K; ++k) {
             const size_t j = (size_t)index[k];
             const real end = side ? -x1[j] : x2[j];
-            real *rec = ramp_block(c, OFF_REC + side * REC_N) + REC_N * k;
+            const real dx = x2[j] - x1[j], dy = y2[j] - y1[j], s = m->weights[j] * (dy / dx);
+            real *rec = ramp_block(c, OFF_REC + side * REC_N) + REC_N * k, inv;
+            inv = dy > RC(0.0) ? dx / dy : RC(0.0);
+            if (!(inv <= R_MAX)) inv = R_MAX;
             run = end > run ? end : run;
             end_max[k] = run;
             rec[REC_KEY] = key[k];
             rec[REC_END] = end;
-            rec[REC_LIMIT] = s[j] > RC(0.0) ? (side ? y1[j] : y2[j]) : (side ? R_INF : -R_INF);
+            rec[REC_LIMIT] = s > RC(0.0) ? (side ? y1[j] : y2[j]) : (side ? R_INF : -R_INF);
             rec[REC_Y1] = y1[j];
-            rec[REC_INV] = inv[j];
-            rec[REC_SLOPE] = s[j];
+            rec[REC_INV] = inv;
+            rec[REC_SLOPE] = s;
+            rec[REC_X1] = x1[j];
+            rec[REC_X2] = x2[j];
+            rec[REC_Y0] = y0[j];
+            rec[REC_Y2] = y2[j];
+            {
+                const uint32_t k32 = (uint32_t)j;
+                memcpy(rec + REC_INDEX, &k32, sizeof k32);
+            }
+        }
+        for (k = K; k-- > 0;) { /* the first position with a greater start */
+            real *rec = ramp_block(c, OFF_REC + side * REC_N) + REC_N * k;
+            rec[REC_NEXT] = k + 1 == K               ? (real)K
+                            : key[k + 1] > key[k] ? (real)(k + 1)
+                                                  : rec[REC_N + REC_NEXT];
         }
     }
     ramp_sum(c)[SUM_BUDGET] = scale;
@@ -834,39 +857,57 @@ static PIHYST_INLINE void ramps_update_listed(pihyst_compensator *c, const real 
  * max returns min(F_k(u), f_k). An operator already at its ramp's top (bottom going
  * down) keeps its state without evaluating the ramp (the ramp never exceeds its top).
  * The other ramp is never evaluated: half the model step's work, no division on the
- * operators the voltage passed over entirely. With `resum` the changes are not summed
- * (the caller takes the exact sum afterwards). */
-static PIHYST_INLINE void ramps_commit_listed(pihyst_compensator *c, int down,
-                                              const real *index, size_t i0, size_t i1,
-                                              real u, int resum, real *hi_, real *lo_,
-                                              real *moved_)
+ * operators the voltage passed over entirely: the positions before the first whose
+ * greatest end (LIST_END_MAX) reaches u hold only ramps that end before u (start
+ * beyond u, going down), whose value at u is y2 (y0 going down) with no comparison of
+ * u. With `resum` the changes are not summed (the caller takes the exact sum
+ * afterwards). */
+static PIHYST_INLINE void ramps_commit_listed(pihyst_compensator *c, int down, size_t i0,
+                                              size_t i1, real u, int resum, real *hi_,
+                                              real *lo_, real *moved_)
 {
     pihyst_model *m = &c->work_model;
-    const size_t K = m->n_ops;
-    const real *PIHYST_RESTRICT x1 = ramp_array(c, down, RAMP_X1), *PIHYST_RESTRICT x2 = x1 + K;
-    const real *PIHYST_RESTRICT y0 = ramp_array(c, down, RAMP_Y0), *PIHYST_RESTRICT y1 = y0 + K;
-    const real *PIHYST_RESTRICT y2 = y1 + K;
+    const real *PIHYST_RESTRICT r = ramp_block(c, OFF_REC + down * REC_N) + REC_N * i0;
     const real *PIHYST_RESTRICT w = m->weights;
     real *PIHYST_RESTRICT f = m->state;
-    real hi = *hi_, lo = *lo_, moved = *moved_;
-    size_t i;
-    for (i = i0; i < i1; ++i) {
-        const size_t k = (size_t)index[i];
+    real hi = *hi_, lo = *lo_, moved = *moved_, hint = (real)i0;
+    size_t i = i0, passed;
+    /* in p (-u going down), the ramps that end before p = u (before or at, going up:
+     * R = y2 from x2 on; strictly before going down: F = y0 below x1) */
+    passed = !resum ? i0
+                    : bound_from(list_array(c, down, LIST_END_MAX), m->n_ops, down ? -u : u,
+                                 !down, &hint);
+    if (passed > i1) passed = i1;
+    if (resum && down) { /* as below, with the ramp's value y0 */
+        for (; i < passed; ++i, r += REC_N) {
+            real *PIHYST_RESTRICT fk = f + rec_index(r);
+            if (r[REC_Y0] < *fk) *fk = r[REC_Y0];
+        }
+    } else if (resum) { /* y2 */
+        for (; i < passed; ++i, r += REC_N) {
+            real *PIHYST_RESTRICT fk = f + rec_index(r);
+            if (r[REC_Y2] > *fk) *fk = r[REC_Y2];
+        }
+    }
+    for (; i < i1; ++i, r += REC_N) {
+        const size_t k = rec_index(r);
         const real old = f[k];
         real v;
         if (down) {
-            if (!(old > y1[k])) continue; /* at its bottom: F_k(u) >= y1 >= f_k */
-            v = PIHYST_RAMP_VALUE(x1[k], x2[k], y0[k], y1[k], y2[k], u);
-            v = v < old ? v : old;
+            if (!(old > r[REC_Y1])) continue; /* at its bottom: F_k(u) >= y1 >= f_k */
+            v = PIHYST_RAMP_VALUE(r[REC_X1], r[REC_X2], r[REC_Y0], r[REC_Y1], r[REC_Y2], u);
+            if (!(v < old)) continue; /* min(F_k(u), f_k) = f_k */
         } else {
-            if (!(old < y2[k])) continue; /* at its top: R_k(u) <= y2 <= f_k */
-            v = PIHYST_RAMP_VALUE(x1[k], x2[k], y0[k], y1[k], y2[k], u);
-            v = v > old ? v : old;
+            if (!(old < r[REC_Y2])) continue; /* at its top: R_k(u) <= y2 <= f_k */
+            /* the value of PIHYST_RAMP_VALUE (x1 < x2), its commonest case first */
+            v = u >= r[REC_X2] ? r[REC_Y2]
+                               : PIHYST_RAMP_VALUE(r[REC_X1], r[REC_X2], r[REC_Y0], r[REC_Y1],
+                                                   r[REC_Y2], u);
+            if (!(v > old)) continue; /* max(R_k(u), f_k) = f_k */
         }
-        if (v != old) { /* hi + lo += t exactly (Knuth's TwoSum) */
+        f[k] = v;
+        if (!resum) { /* hi + lo += t exactly (Knuth's TwoSum) */
             const real t = w[k] * (v - old), s = hi + t, bp = s - hi;
-            f[k] = v;
-            if (resum) continue;
             lo += (hi - (s - bp)) + (t - bp);
             hi = s;
             moved += R_FABS(t);
@@ -912,8 +953,7 @@ static int ramps_step_sparse(pihyst_compensator *c, real u)
      * M4F) costs less than a TwoSum for each (about 11) */
     resum = 3 * n > K;
     if (few) {
-        ramps_commit_listed(c, down, list_array(c, down, LIST_INDEX), i0, i1, u, resum, &hi,
-                            &lo, &moved);
+        ramps_commit_listed(c, down, i0, i1, u, resum, &hi, &lo, &moved);
         ramps_update_listed(c, ramp_block(c, OFF_ODD), 0, n_odd, u, &hi, &lo, &moved);
     } else {
         ramps_update_listed(c, list_array(c, down, LIST_INDEX), i0, i1, u, &hi, &lo, &moved);
@@ -961,51 +1001,26 @@ static int ramps_sweep(pihyst_compensator *c, int up, real *L_, real *zL_, real 
 {
     const size_t K = c->work_model.n_ops;
     const int side = !up;
-    const real *PIHYST_RESTRICT index = list_array(c, side, LIST_INDEX);
     const real *PIHYST_RESTRICT rec = ramp_block(c, OFF_REC + side * REC_N);
     const real *PIHYST_RESTRICT f = c->work_model.state;
     real *const cell_set = ramp_block(c, OFF_CELL);
     real *set = cell_set, *other = ramp_block(c, OFF_ACTIVE);
     real P = *L_, zP = *zL_;
     size_t n = 0, j;
+    /* the first operator whose ramp ends beyond P, the first starting beyond it */
     size_t i = bound_from(list_array(c, side, LIST_END_MAX), K, P, 1,
                           ramp_sum(c) + SUM_HINTS + 2 * side);
-    const real *r = rec + REC_N * i;
+    size_t g = bound_from(list_array(c, side, LIST_KEY), K, P, 1,
+                          ramp_sum(c) + SUM_HINTS + 2 * side + 1);
     for (;;) {
-        real kappa, z = zP;
+        const real kappa = g < K && rec[REC_N * g + REC_KEY] < end ? rec[REC_N * g + REC_KEY] : end;
+        const size_t i_read = i;
+        real z = zP;
         size_t kept = 0;
         real *PIHYST_RESTRICT lo = set, *PIHYST_RESTRICT hi = set + K, *PIHYST_RESTRICT w = set + 2 * K;
         real *PIHYST_RESTRICT lo2 = other, *PIHYST_RESTRICT hi2 = other + K, *PIHYST_RESTRICT w2 = other + 2 * K;
-        /* read the operators whose ramps start at or before P */
-        if (up) {
-            for (; i < K && r[REC_KEY] <= P; ++i, r += REC_N) {
-                const real fk = f[(size_t)index[i]];
-                real l;
-                if (!(fk < r[REC_LIMIT])) continue;
-                l = r[REC_KEY] + (fk - r[REC_Y1]) * r[REC_INV]; /* x1 + (f - y1) dx/dy */
-                l = l > P ? l : P;
-                if (!(l < r[REC_END])) continue;
-                lo[n] = l;
-                hi[n] = r[REC_END];
-                w[n] = r[REC_SLOPE];
-                ++n;
-            }
-        } else {
-            for (; i < K && r[REC_KEY] <= P; ++i, r += REC_N) {
-                const real fk = f[(size_t)index[i]];
-                real l;
-                if (!(fk > r[REC_LIMIT])) continue;
-                l = r[REC_END] - (fk - r[REC_Y1]) * r[REC_INV]; /* -(x1 + (f - y1) dx/dy) */
-                l = l > P ? l : P;
-                if (!(l < r[REC_END])) continue;
-                lo[n] = l;
-                hi[n] = r[REC_END];
-                w[n] = r[REC_SLOPE];
-                ++n;
-            }
-        }
-        kappa = i < K && r[REC_KEY] < end ? r[REC_KEY] : end;
-        /* z(kappa); the operators still open beyond kappa to the other buffer */
+        /* the operators open at P: z(kappa), and those still open beyond kappa to the
+         * other buffer (lo raised to kappa) */
         for (j = 0; j < n; ++j) {
             const real l = lo[j], h = hi[j], wj = w[j];
             if (h <= kappa) { /* closed: its whole rise */
@@ -1021,11 +1036,56 @@ static int ramps_sweep(pihyst_compensator *c, int up, real *L_, real *zL_, real 
             w2[kept] = wj;
             ++kept;
         }
+        /* the operators whose ramps start at or before P, not read yet: read, summed
+         * to kappa likewise */
+#define PIHYST_SWEEP_READ(L_OF, HI)                                                        \
+    for (; i < g; ++i) {                                                                   \
+        const real *r = rec + REC_N * i;                                                   \
+        const real fk = f[rec_index(r)], h = (HI);                                         \
+        real l;                                                                            \
+        if (!(up ? fk < r[REC_LIMIT] : fk > r[REC_LIMIT])) continue;                       \
+        l = (L_OF);                                                                        \
+        l = l > P ? l : P;                                                                 \
+        if (!(l < h)) continue;                                                            \
+        if (h <= kappa) {                                                                  \
+            z += r[REC_SLOPE] * (h - l);                                                   \
+            continue;                                                                      \
+        }                                                                                  \
+        hi2[kept] = h;                                                                     \
+        w2[kept] = r[REC_SLOPE];                                                           \
+        if (l < kappa) {                                                                   \
+            z += r[REC_SLOPE] * (kappa - l);                                               \
+            l = kappa;                                                                     \
+        }                                                                                  \
+        lo2[kept] = l;                                                                     \
+        ++kept;                                                                            \
+    }
+        if (up) { /* x1 + (f - y1) dx/dy; in p = -u: -(x1 + (f - y1) dx/dy) */
+            PIHYST_SWEEP_READ(r[REC_KEY] + (fk - r[REC_Y1]) * r[REC_INV], r[REC_END])
+        } else {
+            PIHYST_SWEEP_READ(r[REC_END] - (fk - r[REC_Y1]) * r[REC_INV], r[REC_END])
+        }
+#undef PIHYST_SWEEP_READ
         if (z >= target) { /* the bracket [P, kappa]: its operators kept */
             if (set != cell_set) {
                 memcpy(cell_set, lo, n * sizeof(real));
                 memcpy(cell_set + K, hi, n * sizeof(real));
                 memcpy(cell_set + 2 * K, w, n * sizeof(real));
+            }
+            /* and those just read, again (not clipped to kappa) */
+            for (i = i_read; i < g; ++i) {
+                const real *r = rec + REC_N * i;
+                const real fk = f[rec_index(r)], h = r[REC_END];
+                real l;
+                if (!(up ? fk < r[REC_LIMIT] : fk > r[REC_LIMIT])) continue;
+                l = up ? r[REC_KEY] + (fk - r[REC_Y1]) * r[REC_INV]
+                       : r[REC_END] - (fk - r[REC_Y1]) * r[REC_INV];
+                l = l > P ? l : P;
+                if (!(l < h)) continue;
+                cell_set[n] = l;
+                cell_set[K + n] = h;
+                cell_set[2 * K + n] = r[REC_SLOPE];
+                ++n;
             }
             *L_ = P;
             *zL_ = zP;
@@ -1037,6 +1097,7 @@ static int ramps_sweep(pihyst_compensator *c, int up, real *L_, real *zL_, real 
         P = kappa;
         zP = z;
         n = kept;
+        g = (size_t)rec[REC_N * g + REC_NEXT]; /* the operators starting at kappa */
         {
             real *const t = set; /* swap the buffers */
             set = other;
