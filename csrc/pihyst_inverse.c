@@ -952,8 +952,9 @@ static PIHYST_INLINE void ramps_commit_listed(pihyst_compensator *c, int down, s
  * an ulp), if they are few (RAMP_ODD_FEW), are all updated in full, through both ramps,
  * after the one-ramp update (which changes nothing the full update would not:
  * max(R, min(F, max(R, f))) = max(R, min(F, f)), min likewise); if more, every operator
- * of either list with a ramp between u_p and u is updated in full. With the AVX2 model step, returns 0, having done nothing, if
- * that would be more than K / 2 visits (the full step is cheaper then). */
+ * of either list with a ramp between u_p and u is updated in full. With the AVX2 model
+ * step, returns 0, having done nothing, if that would be more than K / 2 visits (the
+ * full step is cheaper then). */
 static int ramps_step_sparse(pihyst_compensator *c, real u)
 {
     pihyst_model *m = &c->work_model;
@@ -1043,7 +1044,8 @@ static int ramps_sweep(pihyst_compensator *c, int up, real *L_, real *zL_, real 
     size_t g = bound_from(list_array(c, side, LIST_KEY), K, P, 1,
                           ramp_sum(c) + SUM_HINTS + 2 * side + 1);
     for (;;) {
-        const real kappa = g < K && rec[REC_N * g + REC_KEY] < end ? rec[REC_N * g + REC_KEY] : end;
+        const real kappa =
+            g < K && rec[REC_N * g + REC_KEY] < end ? rec[REC_N * g + REC_KEY] : end;
         const size_t i_read = i;
         /* reading the operators that start at P = kappa of the last round, each ending by
          * this kappa (the next start): an operator at rest adds its term of the records */
@@ -1051,8 +1053,9 @@ static int ramps_sweep(pihyst_compensator *c, int up, real *L_, real *zL_, real 
                          P == rec[REC_N * i_read + REC_KEY];
         real z = zP;
         size_t kept = 0;
-        real *PIHYST_RESTRICT lo = set, *PIHYST_RESTRICT hi = set + K, *PIHYST_RESTRICT w = set + 2 * K;
-        real *PIHYST_RESTRICT lo2 = other, *PIHYST_RESTRICT hi2 = other + K, *PIHYST_RESTRICT w2 = other + 2 * K;
+        real *PIHYST_RESTRICT lo = set, *PIHYST_RESTRICT hi = set + K;
+        real *PIHYST_RESTRICT w = set + 2 * K, *PIHYST_RESTRICT lo2 = other;
+        real *PIHYST_RESTRICT hi2 = other + K, *PIHYST_RESTRICT w2 = other + 2 * K;
         /* the operators open at P: z(kappa), and those still open beyond kappa to the
          * other buffer (lo raised to kappa) */
         for (j = 0; j < n; ++j) {
