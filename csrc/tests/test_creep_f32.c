@@ -233,7 +233,7 @@ static void test_round_trip(void)
     static float coef[PIHYST_COEF_LEN(K)], f[K], wk[K];
     static float rx[4 * K], ry[4 * K], fx[4 * K], fy[4 * K];
     static size_t st[K + 1];
-    static float scratch[PIHYST_COMPENSATOR_SCRATCH_LEN_F32(K, 4 * K)];
+    static float scratch[PIHYST_COMPENSATOR_SCRATCH_LEN_F32(K, 8 * K)]; /* 4 K rising, 4 K falling */
     pihyst_model m;
     pihyst_pwl pwl;
     size_t k;
