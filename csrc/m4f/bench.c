@@ -116,6 +116,15 @@ static float uniform(void)
     return (float)(lcg >> 8) / 16777216.0f;
 }
 
+/* each row draws its own numbers (seeded by its name, FNV-1a): a row's figures do not
+ * depend on which rows ran before it */
+static void seed_row(const char *name)
+{
+    uint32_t h = 2166136261u;
+    for (; *name; ++name) h = (h ^ (uint8_t)*name) * 16777619u;
+    lcg = h;
+}
+
 /* signals */
 static float u_track[N_TRACK], u_jump[N_WORST], y_track[N_TRACK], y_jump[N_WORST];
 static volatile float sink;
@@ -137,6 +146,7 @@ static void bench_pi(const char *name, pihyst_model_f32 *m, float *scratch, size
     float y_lo = INFINITY, y_hi = -INFINITY;
     double r;
     size_t t;
+    seed_row(name);
     make_voltages(m->u_min, m->u_max);
     pihyst_model_reset_f32(m, NULL);
     TRACK(r, N_TRACK, sink = pihyst_model_step_f32(m, u_track[t_]));
@@ -174,12 +184,13 @@ static void bench_classical(size_t K)
     pihyst_params_f32 p = {.family = PIHYST_CLASSICAL, .n_ops = K, .thresholds = r_buf,
                            .weights = w_buf, .u_min = 0.0f, .u_max = 150.0f};
     size_t k;
+    snprintf(name, sizeof name, "classical-K%u", (unsigned)K);
+    seed_row(name);
     for (k = 0; k < K; ++k) {
         r_buf[k] = 150.0f * (float)k / (float)K;
         w_buf[k] = 0.02f + 0.1f * uniform();
     }
     if (pihyst_model_init_f32(&m, &p, coef_buf, state_buf) != PIHYST_OK) return;
-    snprintf(name, sizeof name, "classical-K%u", (unsigned)K);
     bench_pi(name, &m, scratch_buf, sizeof scratch_buf / sizeof *scratch_buf);
 }
 
@@ -209,6 +220,7 @@ static void bench_pwl(void)
     pihyst_params_f32 p = {.family = PIHYST_PWL, .n_ops = K, .weights = w_buf,
                            .u_min = 0.0f, .u_max = 150.0f};
     size_t k, i;
+    seed_row("pwl-K16");
     for (k = 0; k <= K; ++k) st[k] = NP * k;
     for (k = 0; k < K; ++k) {
         const float rk = 75.0f * (float)k / (float)K;
@@ -259,6 +271,7 @@ static void bench_boucwen(const char *name, const pihyst_bw_params_f32 *params)
     double r;
     size_t t;
     if (pihyst_bw_init_f32(&m, params) != PIHYST_OK) return;
+    seed_row(name);
     make_voltages(0.0f, 150.0f);
     TRACK(r, N_TRACK, sink = pihyst_bw_step_f32(&m, u_track[t_]));
     report(name, "model-tracking", r);
@@ -311,6 +324,7 @@ static void bench_bw_creep(void)
         printf("m4f: bouc-wen-creep: init failed\n");
         return;
     }
+    seed_row("bouc-wen-creep");
     make_voltages(0.0f, 150.0f);
     h0 = pihyst_bw_output_f32(&m, m.u, m.z);
     pihyst_creep_settle_f32(&cr, h0);
@@ -359,6 +373,7 @@ static void bench_creep(void)
     }
     snprintf(name, sizeof name, "kp-P885-K%u-creep", (unsigned)KP_P885_N_OPS);
     snprintf(lags, sizeof lags, "creep-lags-%u", (unsigned)KP_P885_CREEP_CREEP_LAGS);
+    seed_row(name);
     make_voltages(m.u_min, m.u_max);
     h0 = pihyst_model_step_f32(&m, u_track[0]);
     pihyst_model_reset_f32(&m, kp_p885_initial_state);
