@@ -21,9 +21,9 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   the hysteresis does not enter; unit static gain, so the static model keeps the gain at
   rest), the dynamics inverted exactly per harmonic of the scan, their correction faded
   out below the band they were measured in (``HammersteinModel.trusted_from``, the 20 Hz
-  record's fundamental: none up to 20 Hz, all from 40 Hz; ``--no-fade``: the whole
-  inverse everywhere, as before), then the same periodic hysteresis inverse (with
-  creep) as the static inverse's;
+  record's fundamental: none up to 20 Hz, all from 80 Hz, over two octaves;
+  ``--no-fade``: the whole inverse everywhere), then the same periodic hysteresis
+  inverse (with creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -46,7 +46,8 @@ Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unsc
      [--learn-from-hammerstein]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
-     static and Hammerstein inverses only; --true-dynamics: beside them, the static model
+     static and Hammerstein inverses only, at 1, 10, 50, 100 Hz, fmode/8 and fmode/20
+     (with --quick or --fresh too); --true-dynamics: beside them, the static model
      behind the stage's true modes and delay inverted per harmonic; --ratio-only: the
      Hammerstein model's dynamics from the ratio of rates alone, without the numerator's
      refit on the static model; --learn-from-hammerstein: learn from the Hammerstein
@@ -61,6 +62,7 @@ import numpy as np
 
 import pihyst
 from pihyst.dynamics import fit_dynamics, periodic_inverse_dynamics
+from pihyst.dynamics._compensate import FADE_OCTAVES
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
 from pihyst.learn import learn_periodic
@@ -276,8 +278,10 @@ def main():
                   for label, name, modes, seed, tuned in STAGES]
     for label, make, modes, seed, tuned in stages:
         fmode = modes[0][0]
-        rates = [10.0, 50.0, 100.0] if quick else [1.0, 10.0, 50.0, 100.0]
+        rates = [10.0, 50.0, 100.0] if quick and learn else [1.0, 10.0, 50.0, 100.0]
         rates += [] if fmode / 8 in rates else [fmode / 8]
+        # without learning (cheap): also the boundary, fmode/20
+        rates += [] if learn or fmode / 20 in rates else [fmode / 20]
         tag = "tuned on" if tuned else "held out"
         print(f"\n{label} (seed {seed}, {tag})")
         rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
@@ -288,7 +292,7 @@ def main():
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
                           for p in np.roots(ham.a[0]) if p.imag >= 0)
               + f"; correction faded in from {ham.trusted_from * CLOCK_HZ:g} Hz to "
-                f"{2 * ham.trusted_from * CLOCK_HZ:g} Hz")
+                f"{2 ** FADE_OCTAVES * ham.trusted_from * CLOCK_HZ:g} Hz")
         if not learn:
             print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}"
                   + (f" {'true G':>7} {'ratio':>6}" if "--true-dynamics" in sys.argv else ""))

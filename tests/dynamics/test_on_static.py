@@ -225,18 +225,21 @@ def test_fit_dynamics_records_the_band_it_measured():
 
 @settings(max_examples=30, deadline=None)
 @given(f_t=st.floats(1e-4, 0.2), f=st.lists(st.floats(0, 0.5), min_size=1, max_size=20))
-def test_the_weight_fades_in_over_the_octave_above_the_measured_band(f_t, f):
+def test_the_weight_fades_in_over_two_octaves_above_the_measured_band(f_t, f):
     W = trust_weight(f, f_t)
     f = np.asarray(f)
     assert np.all((W >= 0) & (W <= 1))
-    assert np.all(W[f <= f_t] == 0) and np.all(W[f >= 2 * f_t] == 1)
+    assert np.all(W[f <= f_t] == 0) and np.all(W[f >= 4 * f_t] == 1)
+    middle = (f > 1.01 * f_t) & (f < 3.99 * f_t)
+    assert np.all((W[middle] > 0) & (W[middle] < 1))
+    assert np.allclose(W[np.isclose(f, 2 * f_t, rtol=1e-12)], 0.5)
     order = np.argsort(f)
     assert np.all(np.diff(W[order]) >= 0)
     assert np.all(trust_weight(f, 0.0) == 1)
 
 
 def test_below_the_measured_band_the_inverse_is_the_static_one():
-    """A period with one line below f_t and one above 2 f_t: the dynamics are inverted
+    """A period with one line below f_t and one above 4 f_t: the dynamics are inverted
     exactly on the fast line and left alone on the slow one (periodic and ZPETC paths)."""
     a, b = mode(), np.array([0.0, 0.9, 0.5])
     b = b * a.sum() / b.sum()

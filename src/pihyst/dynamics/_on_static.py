@@ -44,10 +44,12 @@ the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d ->
 Below the slowest fast record's fundamental f_t = 1 / n (n its samples per period) the
 dynamics are not measured: only the slow record's harmonics (where G ~ 1 to within the
 static model's own error) and G(1) = 1 pin them. The model records f_t
-(``HammersteinModel.trusted_from``, ``fade=True``) and the compensators fade the
-dynamics' correction out below it (:func:`pihyst.dynamics.trust_weight`): the static
-model, fitted on slow records, has absorbed part of the stage's lag there as loop width,
-which the full G^-1 would add a second time.
+(``HammersteinModel.trusted_from``, ``fade=True``) and the compensators leave the
+dynamics' correction out below it and fade it in over the two octaves above
+(:func:`pihyst.dynamics.trust_weight`): the static model, fitted on slow records, has
+absorbed part of the stage's lag as loop width, which the full G^-1 would add a second
+time; up to a few f_t the correction of a scan's fundamental is no larger than the
+static model's own phase error there (pihyst.dynamics._compensate's notes).
 """
 
 import math
