@@ -18,11 +18,13 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   the stage (``pihyst.dynamics.fit_dynamics``: one drive shape, a triangle's first 15
   harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
   to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
-  the hysteresis does not enter; unit static gain, so the static model keeps the gain at
-  rest), the dynamics inverted exactly per harmonic of the scan, their correction faded
-  out below the band they were measured in (``HammersteinModel.trusted_from``, the 20 Hz
-  record's fundamental: none up to 20 Hz, all from 80 Hz, over two octaves;
-  ``--no-fade``: the whole inverse everywhere), then the same periodic hysteresis
+  the hysteresis does not enter, taken relative to the creep the static model predicts
+  between the rates (``sample_period=``; the inverse undoes that creep itself); unit
+  static gain, so the static model keeps the gain at rest), the dynamics inverted
+  exactly per harmonic of the scan, their correction faded out below the band they
+  were measured in (``HammersteinModel.trusted_from``, the 20 Hz record's fundamental:
+  none up to 20 Hz, all from 80 Hz, over two octaves; ``--no-fade``: the whole inverse
+  everywhere), then the same periodic hysteresis
   inverse (with creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
@@ -43,7 +45,7 @@ are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
      [--no-learning [--true-dynamics]] [--ratio-only] [--no-fade]
-     [--learn-from-hammerstein]
+     [--learn-from-hammerstein] [--no-creep-ratio]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
      static and Hammerstein inverses only, at 1, 10, 50, 100 Hz, fmode/8 and fmode/20
@@ -51,7 +53,9 @@ Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unsc
      behind the stage's true modes and delay inverted per harmonic; --ratio-only: the
      Hammerstein model's dynamics from the ratio of rates alone, without the numerator's
      refit on the static model; --learn-from-hammerstein: learn from the Hammerstein
-     model, its hysteresis with the static model's creep, instead of the static model)
+     model, its hysteresis with the static model's creep, instead of the static model;
+     --no-creep-ratio: the dynamics measured without the static model's creep, as
+     before)
 """
 
 import sys
@@ -139,7 +143,8 @@ ID_SPAN_V = (10.0, 140.0)
 ID_HARMONICS = 15
 
 
-def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True):
+def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True,
+                      no_creep=False):
     """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
     triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
     stage settled on each; one period each)."""
@@ -151,7 +156,7 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, f
         return u, stage.run_periodic(u)
     return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
                         numerator_on_static=numerator_on_static, keep_creep=keep_creep,
-                        fade=fade)
+                        fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ)
 
 
 def scan(make, rate_hz, fmode):
@@ -219,10 +224,11 @@ def true_dynamics_error(make, model, modes, desired):
 
 
 def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False,
-              fade=True, true_modes=None):
+              fade=True, true_modes=None, no_creep=False):
     model = fitted_model(make)
-    ham = hammerstein_model(make, model, numerator_on_static, fade=fade)
-    learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True)
+    ham = hammerstein_model(make, model, numerator_on_static, fade=fade, no_creep=no_creep)
+    learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True,
+                                    no_creep=no_creep)
                   if from_ham else model)
     rows = []
     for rate in rates:
@@ -261,7 +267,8 @@ def main():
     scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
-                         "--learn-from-hammerstein", "--no-fade", "--true-dynamics")]
+                         "--learn-from-hammerstein", "--no-fade", "--true-dynamics",
+                         "--no-creep-ratio")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -287,7 +294,8 @@ def main():
         rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
                               "--learn-from-hammerstein" in sys.argv[1:],
                               "--no-fade" not in sys.argv[1:],
-                              modes if "--true-dynamics" in sys.argv[1:] else None)
+                              modes if "--true-dynamics" in sys.argv[1:] else None,
+                              "--no-creep-ratio" in sys.argv[1:])
         print(f"  Hammerstein: na {ham.a[0].size - 1}, nb {ham.b[0].shape[1]}; poles "
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
                           for p in np.roots(ham.a[0]) if p.imag >= 0)
