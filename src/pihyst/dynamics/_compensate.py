@@ -42,8 +42,9 @@ dynamics' correction of a scan's fundamental is a phase of a degree or less, the
 the static model's own phase error on that fundamental (a loop width that is right to a
 degree at the rate it was fitted at), and the two are correlated (the slow fit holds
 part of the stage's lag as width), so the full correction there made the fundamental
-worse (paper-beam at fmode/20 = 40 Hz: 1.6 % above the static inverse with one octave,
-4.5 % below with two). With f_t = 0 (the default) W = 1. The ZPETC path applies the
+worse (bench_learn.py, random stage 5003 at fmode/20 = 35 Hz: 0.5 % above the static
+inverse with one octave, 0.7 % below with two; paper-beam at 40 Hz: 1.6 % below and 6 %
+below). With f_t = 0 (the default) W = 1. The ZPETC path applies the
 same W to h_d - r, by FFT over the trajectory with ``len(r)`` samples of rest on each
 side (the correction is zero at rest: unit static gain).
 
