@@ -93,14 +93,34 @@ def _plain(model):
     return model
 
 
+#: creep lags up to this many periods are settled by running the period (longer ones
+#: start, and stay, at the period's mean), and at most this many samples are run
+CREEP_SETTLED_PERIODS, CREEP_MAX_SAMPLES = 10, 100_000
+
+
 def _creep_output(static, sample_period):
-    """u -> the static model's output over one settled period of u with its creep (the
-    lags settled at the period's mean, as the learning's periodic inverse runs them), or
-    None without creep or without ``sample_period``."""
+    """u -> the static model's output over one settled period of u with its creep, or
+    None without creep or without ``sample_period``. As the learning's periodic inverse
+    runs it (pihyst.learn._model_parts): the lags start at the period's mean hysteresis
+    output, and P periods are run, P long enough for three time constants of the lags up
+    to CREEP_SETTLED_PERIODS periods (at most CREEP_MAX_SAMPLES samples); the last is
+    returned."""
     if sample_period is None or getattr(static, "creep", None) is None:
         return None
-    from pihyst.learn._model_parts import model_parts
-    return model_parts(static, float(sample_period)).hysteresis_output
+    model = static.replace(delay=0) if getattr(static, "delay", 0) else static
+    plain = model.replace(creep=None)
+    T = float(sample_period)
+
+    def output(u):
+        n = u.size
+        h = plain.predict(np.tile(u, 2))[n:]
+        taus = [tau for tau in model.creep.tau if tau <= CREEP_SETTLED_PERIODS * n * T]
+        p = 2 + (int(np.ceil(3 * max(taus) / (n * T))) if taus else 0)
+        p = int(min(p, max(2, CREEP_MAX_SAMPLES // n)))
+        y = model.predict(np.tile(u, p), t=np.arange(p * n) * T,
+                          creep_state=np.full(len(model.creep.tau), float(np.mean(h))))
+        return y[-n:]
+    return output
 
 
 def _one_period(record, i):
