@@ -18,12 +18,14 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   the stage (``pihyst.dynamics.fit_dynamics``: one drive shape, a triangle's first 15
   harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
   to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
-  the hysteresis does not enter; unit static gain, so the static model keeps the gain at
-  rest), the dynamics inverted exactly per harmonic of the scan, their correction faded
-  out below the band they were measured in (``HammersteinModel.trusted_from``, the 20 Hz
-  record's fundamental: none up to 20 Hz, all from 40 Hz; ``--no-fade``: the whole
-  inverse everywhere, as before), then the same periodic hysteresis inverse (with
-  creep) as the static inverse's;
+  the hysteresis does not enter, taken relative to the creep the static model predicts
+  between the rates (``sample_period=``; the inverse undoes that creep itself); unit
+  static gain, so the static model keeps the gain at rest), the dynamics inverted
+  exactly per harmonic of the scan, their correction faded out below the band they
+  were measured in (``HammersteinModel.trusted_from``, the 20 Hz record's fundamental:
+  none up to 20 Hz, all from 80 Hz, over two octaves; ``--no-fade``: the whole inverse
+  everywhere), then the same periodic hysteresis
+  inverse (with creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -43,14 +45,17 @@ are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
      [--no-learning [--true-dynamics]] [--ratio-only] [--no-fade]
-     [--learn-from-hammerstein]
+     [--learn-from-hammerstein] [--no-creep-ratio]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
-     static and Hammerstein inverses only; --true-dynamics: beside them, the static model
+     static and Hammerstein inverses only, at 1, 10, 50, 100 Hz, fmode/8 and fmode/20
+     (with --quick or --fresh too); --true-dynamics: beside them, the static model
      behind the stage's true modes and delay inverted per harmonic; --ratio-only: the
      Hammerstein model's dynamics from the ratio of rates alone, without the numerator's
      refit on the static model; --learn-from-hammerstein: learn from the Hammerstein
-     model, its hysteresis with the static model's creep, instead of the static model)
+     model, its hysteresis with the static model's creep, instead of the static model;
+     --no-creep-ratio: the dynamics measured without the static model's creep, as
+     before)
 """
 
 import sys
@@ -61,6 +66,7 @@ import numpy as np
 
 import pihyst
 from pihyst.dynamics import fit_dynamics, periodic_inverse_dynamics
+from pihyst.dynamics._compensate import FADE_OCTAVES
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
 from pihyst.learn import learn_periodic
@@ -137,7 +143,8 @@ ID_SPAN_V = (10.0, 140.0)
 ID_HARMONICS = 15
 
 
-def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True):
+def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True,
+                      no_creep=False):
     """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
     triangle of ID_HARMONICS harmonics over ID_SPAN_V at ID_SLOW_HZ and at ID_RATES, the
     stage settled on each; one period each)."""
@@ -149,7 +156,7 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, f
         return u, stage.run_periodic(u)
     return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
                         numerator_on_static=numerator_on_static, keep_creep=keep_creep,
-                        fade=fade)
+                        fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ)
 
 
 def scan(make, rate_hz, fmode):
@@ -217,10 +224,11 @@ def true_dynamics_error(make, model, modes, desired):
 
 
 def run_stage(make, fmode, rates, learn=True, numerator_on_static=True, from_ham=False,
-              fade=True, true_modes=None):
+              fade=True, true_modes=None, no_creep=False):
     model = fitted_model(make)
-    ham = hammerstein_model(make, model, numerator_on_static, fade=fade)
-    learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True)
+    ham = hammerstein_model(make, model, numerator_on_static, fade=fade, no_creep=no_creep)
+    learn_from = (hammerstein_model(make, model, numerator_on_static, keep_creep=True,
+                                    no_creep=no_creep)
                   if from_ham else model)
     rows = []
     for rate in rates:
@@ -259,7 +267,8 @@ def main():
     scale = None if "--unscaled" in sys.argv[1:] else RANDOM_RANGE_UM
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
-                         "--learn-from-hammerstein", "--no-fade", "--true-dynamics")]
+                         "--learn-from-hammerstein", "--no-fade", "--true-dynamics",
+                         "--no-creep-ratio")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -276,19 +285,22 @@ def main():
                   for label, name, modes, seed, tuned in STAGES]
     for label, make, modes, seed, tuned in stages:
         fmode = modes[0][0]
-        rates = [10.0, 50.0, 100.0] if quick else [1.0, 10.0, 50.0, 100.0]
+        rates = [10.0, 50.0, 100.0] if quick and learn else [1.0, 10.0, 50.0, 100.0]
         rates += [] if fmode / 8 in rates else [fmode / 8]
+        # without learning (cheap): also the issue's boundary, fmode/20
+        rates += [] if learn or fmode / 20 in rates else [fmode / 20]
         tag = "tuned on" if tuned else "held out"
         print(f"\n{label} (seed {seed}, {tag})")
         rows, ham = run_stage(make, fmode, rates, learn, "--ratio-only" not in sys.argv[1:],
                               "--learn-from-hammerstein" in sys.argv[1:],
                               "--no-fade" not in sys.argv[1:],
-                              modes if "--true-dynamics" in sys.argv[1:] else None)
+                              modes if "--true-dynamics" in sys.argv[1:] else None,
+                              "--no-creep-ratio" in sys.argv[1:])
         print(f"  Hammerstein: na {ham.a[0].size - 1}, nb {ham.b[0].shape[1]}; poles "
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
                           for p in np.roots(ham.a[0]) if p.imag >= 0)
               + f"; correction faded in from {ham.trusted_from * CLOCK_HZ:g} Hz to "
-                f"{2 * ham.trusted_from * CLOCK_HZ:g} Hz")
+                f"{2 ** FADE_OCTAVES * ham.trusted_from * CLOCK_HZ:g} Hz")
         if not learn:
             print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}"
                   + (f" {'true G':>7} {'ratio':>6}" if "--true-dynamics" in sys.argv else ""))

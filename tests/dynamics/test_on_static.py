@@ -20,7 +20,8 @@ from pihyst.dynamics import (
 from pihyst.dynamics._linear import response
 from pihyst.exceptions import InvalidArgumentError, InvalidModelError
 from pihyst.inverse import compensate
-from pihyst.model import BoucWenModel, ClassicalPI
+from pihyst.learn._model_parts import model_parts
+from pihyst.model import BoucWenModel, ClassicalPI, Creep
 
 N = 1000
 
@@ -214,6 +215,35 @@ def test_compensation_stays_within_the_limits(desired, lo, width, periodic, trus
     assert u.size == len(desired) and np.all((u >= lo) & (u <= lo + width))
 
 
+def test_fit_dynamics_measures_the_dynamics_relative_to_the_static_models_creep():
+    """A system that is a static model with creep (its lags settled at the period's mean,
+    as the periodic inverse runs them) followed by B/A: with the records' sample period
+    the dynamics come back, the creep's change between the rates left to the static
+    model; without it the ratio of rates takes that change for dynamics."""
+    T = 1e-3
+    H = static_model().replace(creep=Creep([0.2, 2.0], [0.08, 0.08], dt=T))
+    creep_output = model_parts(H, T).hysteresis_output
+    a, b = mode(), np.array([0.0, 0.9, 0.5])
+    b = b * a.sum() / b.sum()
+    u0 = shape(4000)
+    slow = (u0, creep_output(u0))
+    fast = [(u, periodic_output(a, b, creep_output(u)))
+            for u in map(shape, (100, 200, 250, 400, 500))]
+    n = 300                                       # a period the fit did not see
+    true_G = response(a, b[None, :], n)[1:40, 0]
+
+    def worst(model):
+        return np.max(np.abs(response(model.a[0], model.b[0], n)[1:40, 0] - true_G))
+
+    relative = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None,
+                            sample_period=T)
+    blind = fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None)
+    assert worst(relative) < 0.01 * np.abs(true_G).max()
+    assert worst(blind) > 5 * worst(relative)
+    with pytest.raises(InvalidArgumentError, match="sample_period"):
+        fit_dynamics(H, slow, fast, orders=((2, 3),), validation=None, sample_period=0.0)
+
+
 def test_fit_dynamics_records_the_band_it_measured():
     H, a = static_model(), mode()
     slow, fast = rate_records(H, a, np.array([0.0, 0.9, 0.5]))
@@ -225,18 +255,21 @@ def test_fit_dynamics_records_the_band_it_measured():
 
 @settings(max_examples=30, deadline=None)
 @given(f_t=st.floats(1e-4, 0.2), f=st.lists(st.floats(0, 0.5), min_size=1, max_size=20))
-def test_the_weight_fades_in_over_the_octave_above_the_measured_band(f_t, f):
+def test_the_weight_fades_in_over_two_octaves_above_the_measured_band(f_t, f):
     W = trust_weight(f, f_t)
     f = np.asarray(f)
     assert np.all((W >= 0) & (W <= 1))
-    assert np.all(W[f <= f_t] == 0) and np.all(W[f >= 2 * f_t] == 1)
+    assert np.all(W[f <= f_t] == 0) and np.all(W[f >= 4 * f_t] == 1)
+    middle = (f > 1.01 * f_t) & (f < 3.99 * f_t)
+    assert np.all((W[middle] > 0) & (W[middle] < 1))
+    assert np.allclose(W[np.isclose(f, 2 * f_t, rtol=1e-12)], 0.5)
     order = np.argsort(f)
     assert np.all(np.diff(W[order]) >= 0)
     assert np.all(trust_weight(f, 0.0) == 1)
 
 
 def test_below_the_measured_band_the_inverse_is_the_static_one():
-    """A period with one line below f_t and one above 2 f_t: the dynamics are inverted
+    """A period with one line below f_t and one above 4 f_t: the dynamics are inverted
     exactly on the fast line and left alone on the slow one (periodic and ZPETC paths)."""
     a, b = mode(), np.array([0.0, 0.9, 0.5])
     b = b * a.sum() / b.sum()

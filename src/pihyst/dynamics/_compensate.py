@@ -31,13 +31,20 @@ known: its loop has absorbed part of the stage's lag (the converter delay, the m
 phase) as a rate-independent width, so the static inverse already leads by part of what
 G^-1 would add, and adding the whole G^-1 there makes the error larger (7 % at 10 Hz on
 the paper-beam stage, docs/theory/learning.md). The correction G^-1 - 1 is therefore
-faded in over the octave above f_t,
+faded in over the FADE_OCTAVES = 2 octaves above f_t,
 
     H_d(k) = R(k) (1 + W(f_k) (1 / G(z_k) - 1)),
-    W(f) = clip(log2(f / f_t), 0, 1):   0 up to f_t, 1 from 2 f_t,
+    W(f) = clip(log2(f / f_t) / 2, 0, 1):   0 up to f_t, 1 from 4 f_t,
 
-(f_k = k / N): at low rates the Hammerstein inverse is the static inverse, within the
-measured band the full one. With f_t = 0 (the default) W = 1. The ZPETC path applies the
+(f_k = k / N): at low rates the Hammerstein inverse is the static inverse, well within
+the measured band the full one. Two octaves, not one: from f_t to a few f_t the
+dynamics' correction of a scan's fundamental is a phase of a degree or less, the size of
+the static model's own phase error on that fundamental (a loop width that is right to a
+degree at the rate it was fitted at), and the two are correlated (the slow fit holds
+part of the stage's lag as width), so the full correction there made the fundamental
+worse (bench_learn.py, random stage 5003 at fmode/20 = 35 Hz: 0.5 % above the static
+inverse with one octave, 0.7 % below with two; paper-beam at 40 Hz: 1.6 % below and 6 %
+below). With f_t = 0 (the default) W = 1. The ZPETC path applies the
 same W to h_d - r, by FFT over the trajectory with ``len(r)`` samples of rest on each
 side (the correction is zero at rest: unit static gain).
 
@@ -58,6 +65,7 @@ from pihyst.exceptions import InvalidArgumentError
 from pihyst.inverse import compensate
 
 ZERO_TOLERANCE = 1e-12   # leading coefficients of B below this (relative): pure delay
+FADE_OCTAVES = 2.0       # the dynamics' correction fades in from f_t to 2**FADE_OCTAVES f_t
 
 
 def _lfilter():
@@ -128,14 +136,14 @@ def trust_weight(f: ArrayLike, trusted_from: float) -> NDArray[np.float64]:
     Examples
     --------
     >>> from pihyst.dynamics import trust_weight
-    >>> trust_weight([0.0, 0.01, 0.015, 0.02, 0.3], 0.01).round(3).tolist()
-    [0.0, 0.0, 0.585, 1.0, 1.0]
+    >>> trust_weight([0.0, 0.01, 0.02, 0.03, 0.04, 0.3], 0.01).round(3).tolist()
+    [0.0, 0.0, 0.5, 0.792, 1.0, 1.0]
     """
     f = np.asarray(f, dtype=float)
     if not trusted_from > 0:
         return np.ones_like(f)
     with np.errstate(divide="ignore"):
-        return np.clip(np.log2(f / trusted_from), 0.0, 1.0)
+        return np.clip(np.log2(f / trusted_from) / FADE_OCTAVES, 0.0, 1.0)
 
 
 def _faded(r, h_d, trusted_from):

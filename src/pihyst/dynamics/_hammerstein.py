@@ -62,8 +62,9 @@ class HammersteinModel:
     trusted_from : float
         The lowest frequency (cycles per sample) at which the dynamics were measured
         (:func:`fit_dynamics`: the slowest fast record's fundamental); 0: trusted at
-        every frequency. Below it the compensators fade the dynamics' correction out
-        over an octave (:func:`trust_weight`); it needs unit static gain.
+        every frequency. The compensators apply none of the dynamics' correction below
+        it and fade it in over the two octaves above (:func:`trust_weight`); it needs
+        unit static gain.
 
     Examples
     --------

@@ -41,13 +41,30 @@ while the poles, measured without the static model, cannot move to fit it. Then
 The static model holds the gain at rest; the dynamics add only what changes with rate. As
 the rate goes to zero the Hammerstein inverse becomes the static inverse (h_d -> r).
 
+Creep (``sample_period=``). The ratio assumes the static part gives the same output per
+phase at every rate; creep does not: its fast lags (time constants of 0.1 s and up) lag
+the slow record's harmonics more than the fast ones'. The ratio then takes the creep's
+change between the rates for dynamics (on one random stage a real pole at 1.8 Hz, whose
+inverse made the Hammerstein inverse 28 % worse than the static one at 50 Hz), and a
+compensator that inverts the static model's creep as well undoes it twice. With the
+records' sample period the static model's own periodic output with its creep, C_k (lags
+settled at the period's mean), is computed per record, and the ratio is taken relative
+to what it predicts between the rates:
+
+    Y_f,k = G(k f) Y_slow,k C_f,k / C_slow,k,
+
+the hysteresis cancelling in C_f,k / C_slow,k as in the ratio itself; the numerator is
+refitted on C_k, the output the compensator inverts. Without creep C_f,k / C_slow,k = 1.
+
 Below the slowest fast record's fundamental f_t = 1 / n (n its samples per period) the
 dynamics are not measured: only the slow record's harmonics (where G ~ 1 to within the
 static model's own error) and G(1) = 1 pin them. The model records f_t
-(``HammersteinModel.trusted_from``, ``fade=True``) and the compensators fade the
-dynamics' correction out below it (:func:`pihyst.dynamics.trust_weight`): the static
-model, fitted on slow records, has absorbed part of the stage's lag there as loop width,
-which the full G^-1 would add a second time.
+(``HammersteinModel.trusted_from``, ``fade=True``) and the compensators leave the
+dynamics' correction out below it and fade it in over the two octaves above
+(:func:`pihyst.dynamics.trust_weight`): the static model, fitted on slow records, has
+absorbed part of the stage's lag as loop width, which the full G^-1 would add a second
+time; up to a few f_t the correction of a scan's fundamental is no larger than the
+static model's own phase error there (pihyst.dynamics._compensate's notes).
 """
 
 import math
@@ -76,6 +93,36 @@ def _plain(model):
     return model
 
 
+#: creep lags up to this many periods are settled by running the period (longer ones
+#: start, and stay, at the period's mean), and at most this many samples are run
+CREEP_SETTLED_PERIODS, CREEP_MAX_SAMPLES = 10, 100_000
+
+
+def _creep_output(static, sample_period):
+    """u -> the static model's output over one settled period of u with its creep, or
+    None without creep or without ``sample_period``. As the learning's periodic inverse
+    runs it (pihyst.learn._model_parts): the lags start at the period's mean hysteresis
+    output, and P periods are run, P long enough for three time constants of the lags up
+    to CREEP_SETTLED_PERIODS periods (at most CREEP_MAX_SAMPLES samples); the last is
+    returned."""
+    if sample_period is None or getattr(static, "creep", None) is None:
+        return None
+    model = static.replace(delay=0) if getattr(static, "delay", 0) else static
+    plain = model.replace(creep=None)
+    T = float(sample_period)
+
+    def output(u):
+        n = u.size
+        h = plain.predict(np.tile(u, 2))[n:]
+        taus = [tau for tau in model.creep.tau if tau <= CREEP_SETTLED_PERIODS * n * T]
+        p = 2 + (int(np.ceil(3 * max(taus) / (n * T))) if taus else 0)
+        p = int(min(p, max(2, CREEP_MAX_SAMPLES // n)))
+        y = model.predict(np.tile(u, p), t=np.arange(p * n) * T,
+                          creep_state=np.full(len(model.creep.tau), float(np.mean(h))))
+        return y[-n:]
+    return output
+
+
 def _one_period(record, i):
     u, y = (np.asarray(v, dtype=float).ravel() for v in record)
     if u.size != y.size or u.size < 4:
@@ -90,9 +137,13 @@ def _harmonics(slow):
     return 1 + np.flatnonzero(np.abs(U) > HARMONIC_FLOOR * np.abs(U).max())
 
 
-def _ratio_spectra(slow, fast, ks, period):
-    """(V, Y) per fast record on the lines of ``period``: V = Y_slow,k, Y = Y_f,k."""
+def _ratio_spectra(slow, fast, ks, period, static_output=None):
+    """(V, Y) per fast record on the lines of ``period``: V = Y_slow,k, Y = Y_f,k; with
+    ``static_output`` (u -> the static model's periodic output, its creep included),
+    V = Y_slow,k C_f,k / C_slow,k (module notes, "Creep")."""
     U0, Y0 = (np.fft.rfft(v)[ks] / v.size for v in slow)
+    if static_output is not None:
+        C0 = np.fft.rfft(static_output(slow[0]))[ks] / slow[0].size
     out = []
     for i, (u, y) in enumerate(fast):
         n = u.size
@@ -108,6 +159,8 @@ def _ratio_spectra(slow, fast, ks, period):
         V_line = np.zeros(period // 2 + 1, complex)
         Y_line = np.zeros(period // 2 + 1, complex)
         V_line[ks * (period // n)] = Y0
+        if static_output is not None:
+            V_line[ks * (period // n)] *= (np.fft.rfft(static_output(u))[ks] / n) / C0
         Y_line[ks * (period // n)] = Y
         out.append((V_line[:, None], Y_line))
     return out
@@ -126,14 +179,14 @@ def _output_error(a, b, spectra, period):
     return float(sum(np.sum(np.abs(Y - G * V[:, 0]) ** 2) for V, Y in spectra))
 
 
-def _numerator_on_static(H, a, nb, records):
+def _numerator_on_static(static_output, a, nb, records):
     """B with A fixed, fitted on the static model's output: on the drive harmonics k of
-    each record (u, y), Y_k A(z_k) = B(z_k) H_k with H_k of h = H[u] over a settled period,
-    linear least squares in b (z_k = exp(-2 pi i k / n))."""
+    each record (u, y), Y_k A(z_k) = B(z_k) H_k with H_k of h = static_output(u), a
+    settled period, linear least squares in b (z_k = exp(-2 pi i k / n))."""
     rows, target = [], []
     for u, y in records:
         n = u.size
-        h = H.predict(np.tile(u, 2))[n:]
+        h = static_output(u)
         U = np.fft.rfft(u)[1:(n + 1) // 2]
         k = 1 + np.flatnonzero(np.abs(U) > HARMONIC_FLOOR * np.abs(U).max())
         z = np.exp(-2j * np.pi * np.outer(k, np.arange(max(a.size, nb))) / n)
@@ -148,7 +201,7 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
                  orders: Sequence[Sequence[int]] = DEFAULT_ORDERS,
                  validation: int | None = -1, tolerance: float = 0.01,
                  numerator_on_static: bool = True, keep_creep: bool = False,
-                 fade: bool = True) -> HammersteinModel:
+                 fade: bool = True, sample_period: float | None = None) -> HammersteinModel:
     """A SISO :class:`HammersteinModel`: ``static`` (without creep and delay) followed by
     unit-static-gain dynamics measured by the ratio of rates (module notes).
 
@@ -181,6 +234,12 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
         Record the slowest fast record's fundamental (cycles per sample) as the
         model's ``trusted_from``, below which the compensators fade the dynamics'
         correction out (module notes); False: 0, the whole inverse everywhere.
+    sample_period : float, optional
+        The records' sample period (s). With a static model with creep, the dynamics
+        are then measured relative to the creep the static model predicts between the
+        rates, and the numerator refitted on its output with that creep (module notes,
+        "Creep"): for compensators that invert the creep too (the learning's periodic
+        inverse, ``keep_creep``). Without it the creep is left out of both.
 
     Returns
     -------
@@ -226,7 +285,11 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
         sizes = ", ".join(str(u.size) for u, _ in fast)
         raise InvalidArgumentError(f"the fast records' periods ({sizes} samples) have no "
                                    f"common multiple up to {MAX_COMMON_PERIOD:,} samples")
-    spectra = _ratio_spectra(slow, fast, ks, period)
+    if sample_period is not None and not sample_period > 0:
+        raise InvalidArgumentError(f"sample_period must be > 0 s, got {sample_period!r}")
+    H = _plain(static)
+    static_output = _creep_output(static, sample_period)
+    spectra = _ratio_spectra(slow, fast, ks, period, static_output)
     if validation is not None and len(orders) > 1:
         if len(spectra) < 2:
             raise InvalidArgumentError("choosing the order needs at least two fast records "
@@ -242,9 +305,9 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
     else:
         na, nb = orders[0]
     a, b = fit_oe_periodic(spectra + [_unit_dc(spectra, period)], na, nb, period)
-    H = _plain(static)
     if numerator_on_static:
-        b = _numerator_on_static(H, a, nb, [slow] + fast)
+        b = _numerator_on_static(static_output or (lambda u: H.predict(np.tile(u, 2))[u.size:]),
+                                 a, nb, [slow] + fast)
     gain = float(np.sum(b) / np.sum(a))
     if not abs(gain) > 1e-12:
         raise InvalidArgumentError("the fitted dynamics have no static gain (B(1) = 0)")
