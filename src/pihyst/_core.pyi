@@ -14,6 +14,8 @@ FLAG_NAN: int
 FLAG_SLEW: int
 
 _Vector = NDArray[np.float64]
+# (G, rhs, sums, sum of d, d^T d, samples) of one role of Bank.gram_segments
+_RoleSums = tuple[NDArray[np.float64], _Vector, _Vector, float, float, int]
 _Polyline = tuple[ArrayLike, ArrayLike]
 
 class CoreError(ValueError): ...
@@ -45,6 +47,10 @@ class Bank:
     def gram(
         self, u: ArrayLike, d: ArrayLike, block: int | None = None
     ) -> tuple[NDArray[np.float64], _Vector, _Vector]: ...
+    def gram_segments(
+        self, u: ArrayLike, d: ArrayLike, starts: ArrayLike, stops: ArrayLike,
+        roles: ArrayLike
+    ) -> tuple[_RoleSums, _RoleSums]: ...
     def envelopes(self, u: float) -> tuple[_Vector, _Vector]: ...
 
 class Compensator:

@@ -222,6 +222,74 @@ cdef class Bank:
             sums += phi.sum(axis=0)
         return gram, rhs, sums
 
+    def gram_segments(self, u, d, starts, stops, roles):
+        """The normal equations of a record cut into consecutive segments, per role,
+        advancing the state over each: segment i is u[starts[i]:stops[i]]; roles[i] 0
+        only runs the operators (settling), 1 and 2 add the segment's sums to the first
+        or second role's. Each segment's (Phi^T Phi, Phi^T d, Phi^T 1) starts from zero
+        (pihyst_model_gram) and is then added to its role's, the numbers gram() per
+        segment and a running sum give; sum(d) and d^T d are summed sample by sample.
+        One call for a cut of thousands of cycles, where a call per segment spent
+        20 us of Python on each.
+
+        Returns ((G, rhs, sums, sum of d, d^T d, samples) of role 1, the same of 2)."""
+        cdef const double[::1] u_v = _vector(u, name="u")
+        cdef const double[::1] d_v = _vector(d, u_v.shape[0], "d")
+        cdef const Py_ssize_t[::1] a_v = np.ascontiguousarray(starts, dtype=np.intp)
+        cdef const Py_ssize_t[::1] z_v = np.ascontiguousarray(stops, dtype=np.intp)
+        cdef const Py_ssize_t[::1] r_v = np.ascontiguousarray(roles, dtype=np.intp)
+        cdef Py_ssize_t n_seg = a_v.shape[0], i, a, z, r, j, t, k = self.n_ops, longest = 1
+        if z_v.shape[0] != n_seg or r_v.shape[0] != n_seg:
+            raise ValueError("starts, stops and roles must have one entry per segment")
+        for i in range(n_seg):
+            if not (0 <= a_v[i] <= z_v[i] <= u_v.shape[0]) or not (0 <= r_v[i] <= 2):
+                raise ValueError(f"segment {i}: [{a_v[i]}, {z_v[i]}) role {r_v[i]} is not "
+                                 f"within the record's {u_v.shape[0]} samples and roles 0-2")
+            longest = max(longest, z_v[i] - a_v[i])
+        gram = np.zeros((2, k, k))
+        rhs = np.zeros((2, k))
+        sums = np.zeros((2, k))
+        data = np.zeros((2, 2))
+        counts = np.zeros(2, dtype=np.intp)
+        g_seg = np.empty((k, k))
+        r_seg = np.empty(k)
+        s_seg = np.empty(k)
+        settle = np.empty(longest)
+        cdef double[:, :, ::1] g_v = gram
+        cdef double[:, ::1] rhs_v = rhs
+        cdef double[:, ::1] sums_v = sums
+        cdef double[:, ::1] data_v = data
+        cdef Py_ssize_t[::1] n_v = counts
+        cdef double[:, ::1] gs_v = g_seg
+        cdef double[::1] rs_v = r_seg
+        cdef double[::1] ss_v = s_seg
+        cdef double[::1] y_v = settle
+        with nogil:
+            for i in range(n_seg):
+                a, z, r = a_v[i], z_v[i], r_v[i]
+                if z == a:
+                    continue
+                if r == 0:
+                    pihyst_model_run(&self.m, &u_v[a], &y_v[0], z - a)
+                    continue
+                r -= 1
+                memset(&gs_v[0, 0], 0, k * k * sizeof(double))
+                memset(&rs_v[0], 0, k * sizeof(double))
+                memset(&ss_v[0], 0, k * sizeof(double))
+                pihyst_model_gram(&self.m, &u_v[a], &d_v[a], z - a, &gs_v[0, 0], &rs_v[0],
+                                  &ss_v[0])
+                for j in range(k):
+                    for t in range(k):
+                        g_v[r, j, t] = g_v[r, j, t] + gs_v[j, t]
+                    rhs_v[r, j] = rhs_v[r, j] + rs_v[j]
+                    sums_v[r, j] = sums_v[r, j] + ss_v[j]
+                for t in range(a, z):
+                    data_v[r, 0] += d_v[t]
+                    data_v[r, 1] += d_v[t] * d_v[t]
+                n_v[r] += z - a
+        return tuple((gram[q], rhs[q], sums[q], float(data[q, 0]), float(data[q, 1]),
+                      int(counts[q])) for q in range(2))
+
     def envelopes(self, double u):
         """(R_k(u), F_k(u)) for every operator."""
         rise = np.empty(self.n_ops)

@@ -107,3 +107,42 @@ def test_blocked_gram_matches_the_c_accumulation(family, k, params):
         assert np.array_equal(fast.state, state_after)
     with pytest.raises(ValueError):
         fast.gram(u, d, block=0)
+
+
+@pytest.mark.parametrize("family,k,params", PARAMS, ids=[f"K{k}" for _, k, _ in PARAMS])
+@pytest.mark.parametrize("seed", range(3))
+def test_segment_grams_are_the_per_segment_grams_summed(family, k, params, seed):
+    """Bank.gram_segments (one call for a cut record) against gram() per segment, added
+    up per role in order, and run() over the settling segments: the same G, rhs and sums
+    bit for bit, the data sums to rounding, the same state after."""
+    rng = np.random.default_rng(seed)
+    u = SIGNALS["random_walk"][:900]
+    d = np.cos(u) + rng.normal(0, 0.1, u.size)
+    cuts = np.unique(np.r_[0, np.sort(rng.integers(0, u.size, 12)), u.size])
+    starts, stops = cuts[:-1], cuts[1:]
+    roles = rng.integers(0, 3, starts.size)
+    fast, _ = banks(params)
+    got = fast.gram_segments(u, d, starts, stops, roles)
+    after = fast.state
+    fast.reset()
+    want = [[np.zeros((k, k)), np.zeros(k), np.zeros(k), 0.0, 0.0, 0] for _ in range(2)]
+    for a, z, r in zip(starts, stops, roles):
+        if r == 0:
+            fast.run(u[a:z])
+            continue
+        acc = want[r - 1]
+        for i, part in enumerate(fast.gram(u[a:z], d[a:z])):
+            acc[i] = acc[i] + part
+        acc[3] += float(d[a:z].sum())
+        acc[4] += float(d[a:z] @ d[a:z])
+        acc[5] += int(z - a)
+    assert np.array_equal(fast.state, after)
+    for g, w in zip(got, want):
+        for i in range(3):
+            assert np.array_equal(g[i], w[i])
+        np.testing.assert_allclose(g[3:5], w[3:5], rtol=1e-12, atol=1e-9)
+        assert g[5] == w[5]
+    with pytest.raises(ValueError, match="segment 0"):
+        fast.gram_segments(u, d, [5], [4], [1])
+    with pytest.raises(ValueError, match="one entry per segment"):
+        fast.gram_segments(u, d, [0, 5], [5], [1])
