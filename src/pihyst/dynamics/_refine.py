@@ -75,9 +75,13 @@ def _poles(rho, phi, sigma):
     return lam, dlam_drho, MAX_RADIUS * t, MAX_RADIUS * (1 - t * t)
 
 
-def refine(model, omega, G, weight=None, max_nfev=50):
-    """The refined :class:`StateSpace` (module notes), or ``model`` itself when the
-    refinement does not lower the weighted error."""
+def fit_modes(model, omega, G, weight=None, max_nfev=50):
+    """Levenberg-Marquardt on the modal parameters of ``model`` (module notes).
+
+    Returns ``(layout, theta0, theta, cost0, cost)``: the packing, the start and the
+    fitted parameters, and the weighted squared error of ``model`` itself and of the
+    fit; None when ``model`` has no modal form (defective or ill-sorted modes).
+    """
     from scipy.optimize import least_squares
 
     G = np.asarray(G)
@@ -86,7 +90,7 @@ def refine(model, omega, G, weight=None, max_nfev=50):
     z = np.exp(1j * np.asarray(omega, dtype=float))
     pairs, reals = _modes(model)
     if 2 * pairs[0].size + reals[0].size != model.order:
-        return model                     # defective or ill-sorted modes: no modal form
+        return None
     layout = _Layout(pairs[0].size, reals[0].size, p, m)
     theta0 = _pack(pairs, reals, model.D)
 
@@ -134,11 +138,20 @@ def refine(model, omega, G, weight=None, max_nfev=50):
     # judged against the model itself (its modal form may round differently)
     cost0 = float(np.sum(np.abs(W * (model.response(omega) - G)) ** 2))
     res = least_squares(residual, theta0, jac=jacobian, method="lm", max_nfev=max_nfev)
-    if not 2 * res.cost < cost0:
-        return model
-    rho, phi, c, b, sigma, cr, br, D = layout.split(res.x)
+    return layout, theta0, res.x, cost0, 2 * float(res.cost)
+
+
+def modal_parameters(layout, theta):
+    """(pair poles, pair c, pair b, real poles, real c, real b, D) of packed ``theta``."""
+    rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
     lam, _, lr, _ = _poles(rho, phi, sigma)
-    n = model.order
+    return lam, c, b, lr, cr, br, D
+
+
+def real_modal_state_space(lam, c, b, lr, cr, br, D):
+    """The real modal-form :class:`StateSpace` of modal parameters (module notes)."""
+    p, m = D.shape
+    n = 2 * lam.size + lr.size
     A, B, C = np.zeros((n, n)), np.zeros((n, m)), np.zeros((p, n))
     for q in range(lam.size):
         k = 2 * q
@@ -150,3 +163,15 @@ def refine(model, omega, G, weight=None, max_nfev=50):
         A[k0 + q, k0 + q] = lr[q]
         B[k0 + q], C[:, k0 + q] = br[q], cr[q]
     return StateSpace(A, B, C, D)
+
+
+def refine(model, omega, G, weight=None, max_nfev=50):
+    """The refined :class:`StateSpace` (module notes), or ``model`` itself when the
+    refinement does not lower the weighted error."""
+    fitted = fit_modes(model, omega, G, weight, max_nfev)
+    if fitted is None:
+        return model
+    layout, _, theta, cost0, cost = fitted
+    if not cost < cost0:
+        return model
+    return real_modal_state_space(*modal_parameters(layout, theta))
