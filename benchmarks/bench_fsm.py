@@ -159,8 +159,12 @@ def bla_change(root):
         ref = diag if ref is None else ref
         ratio = np.median(diag[f < 600] / ref[f < 600], axis=0)
         peak = f[np.argmax(np.abs(frf.G).sum(axis=(1, 2)))]
+        # steady state in both periods: they differ by the noise only
+        y = np.load(root / FSM_DIR / f"y_{lv}_train.npy") * 1e6
+        change = np.sqrt(np.mean((y[..., 1] - y[..., 0]) ** 2))
         print(f"    BLA {lv}: |G_ii| below 600 Hz / lowest level's "
-              + " ".join(f"{r:.3f}" for r in ratio) + f"; largest response at {peak:.1f} Hz")
+              + " ".join(f"{r:.3f}" for r in ratio) + f"; largest response at {peak:.1f} Hz;"
+              f" period 2 - period 1: {change:.3f} um RMS")
 
 
 def published_rms(predict, records):

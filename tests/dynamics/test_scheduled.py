@@ -157,3 +157,19 @@ def test_fit_needs_two_different_levels():
         fit_scheduled_state_space([low], PERIOD, order=3, discard=0)
     with pytest.raises(InvalidArgumentError, match="differ"):
         fit_scheduled_state_space([low, low], PERIOD, order=3, discard=0)
+
+
+def test_the_penalty_keeps_the_modes_near_the_common_ones():
+    """fit_modes: without penalty the level's system is recovered; with a heavy one the
+    parameters stay near the start, and the error lies in between."""
+    from pihyst.dynamics import estimate_bla
+    from pihyst.dynamics._refine import fit_modes
+
+    start = plant_at(0.0)
+    frf = estimate_bla(records_at(1.0, 2), PERIOD, discard=0)
+    free = fit_modes(start, frf.omega, frf.G, max_nfev=200)
+    held = fit_modes(start, frf.omega, frf.G, max_nfev=200, penalty=1e6)
+    some = fit_modes(start, frf.omega, frf.G, max_nfev=200, penalty=1.0)
+    assert free[4] < 1e-12 * free[3]
+    assert np.max(np.abs(held[2] - held[1])) < 0.01 * np.max(np.abs(free[2] - free[1]))
+    assert free[4] < some[4] < held[4] <= held[3]

@@ -8,9 +8,14 @@
    (:func:`~pihyst.dynamics.estimate_bla`) and, from the common modes, the modal
    parameters theta_l fitted to it by Levenberg-Marquardt (:mod:`._refine`):
 
-       min_theta sum_k || G(z_k; theta) - G_l(k) ||_F^2,
+       min_theta sum_k || G(z_k; theta) - G_l(k) ||_F^2
+                 + mu (e_0 / n) sum_j ((theta_j - theta_0j) / s_j)^2,
 
-   kept only if it lowers that error (otherwise the common modes stand for the level).
+   theta_0 the common modes, e_0 their error on G_l, n the number of parameters and s_j
+   the size of a unit change (a pole's bandwidth, a mode's |c| or |b|; ``penalty`` mu,
+   0 by default: no penalty), kept only if it lowers the error (otherwise the common
+   modes stand for the level). The penalty keeps modes that the level's data barely
+   see where they were, so that mode q stays the same resonance at every level.
 3. *Anchors.* The level's amplitude a_l is the mean of its steady-state schedule
    (:func:`~pihyst.dynamics.running_amplitude` over each record played twice, the
    second pass kept): the value the model will see on the same drive.
@@ -56,6 +61,7 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
                               order: int | None = None, *,
                               linear: StateSpace | None = None, window: float = 1024.0,
                               discard: int = 1, max_nfev: int = 50,
+                              penalty: float = 0.0,
                               **state_space_options: Any) -> ScheduledStateSpace:
     """One :class:`~pihyst.dynamics.ScheduledStateSpace` for records at several drive
     amplitudes (module notes).
@@ -79,6 +85,9 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
         Leading periods of each record that are the transient.
     max_nfev : int
         At most this many evaluations of each level's modal fit.
+    penalty : float
+        mu of the modal fit's penalty on changes from the common modes (0: none;
+        :func:`~pihyst.dynamics._refine.fit_modes`).
     **state_space_options
         Passed to :func:`~pihyst.dynamics.fit_state_space` (step 1).
 
@@ -122,7 +131,7 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
     amplitudes, params = [], []
     for g in groups:
         frf = estimate_bla(g, period, discard=discard)
-        fitted = fit_modes(linear, frf.omega, frf.G, max_nfev=max_nfev)
+        fitted = fit_modes(linear, frf.omega, frf.G, max_nfev=max_nfev, penalty=penalty)
         if fitted is None:
             raise InvalidArgumentError("the common model has no modal form (repeated "
                                        "poles): fit it at another order")
