@@ -13,9 +13,11 @@
 
    theta_0 the common modes, e_0 their error on G_l, n the number of parameters and s_j
    the size of a unit change (a pole's bandwidth, a mode's |c| or |b|; ``penalty`` mu,
-   0 by default: no penalty), kept only if it lowers the error (otherwise the common
-   modes stand for the level). The penalty keeps modes that the level's data barely
-   see where they were, so that mode q stays the same resonance at every level.
+   1 by default: a unit change of every parameter costs as much as the common modes'
+   misfit), kept only if it lowers the error (otherwise the common modes stand for the
+   level). The penalty keeps modes that the level's data barely see where they were,
+   so that mode q stays the same resonance at every level (without it, on the FSM,
+   weak modes jumped by hundreds of Hz between the levels' fits).
 3. *Anchors.* The level's amplitude a_l is the mean of its steady-state schedule
    (:func:`~pihyst.dynamics.running_amplitude` over each record played twice, the
    second pass kept): the value the model will see on the same drive.
@@ -61,7 +63,7 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
                               order: int | None = None, *,
                               linear: StateSpace | None = None, window: float = 1024.0,
                               discard: int = 1, max_nfev: int = 50,
-                              penalty: float = 0.0,
+                              penalty: float = 1.0,
                               **state_space_options: Any) -> ScheduledStateSpace:
     """One :class:`~pihyst.dynamics.ScheduledStateSpace` for records at several drive
     amplitudes (module notes).
@@ -86,8 +88,8 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
     max_nfev : int
         At most this many evaluations of each level's modal fit.
     penalty : float
-        mu of the modal fit's penalty on changes from the common modes (0: none;
-        :func:`~pihyst.dynamics._refine.fit_modes`).
+        mu of the modal fit's penalty on changes from the common modes (module notes;
+        0: none, each level's modes fitted freely).
     **state_space_options
         Passed to :func:`~pihyst.dynamics.fit_state_space` (step 1).
 
@@ -113,7 +115,7 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
     ...     return StateSpace([[pole]], [[1.0]], [[1.0]], [[0.0]])
     >>> levels = [[(u, plant(p).predict(u)) for u in (multisine(s, g) for s in (1, 2))]
     ...           for g, p in ((1.0, 0.5), (3.0, 0.6))]
-    >>> model = fit_scheduled_state_space(levels, 64, order=1, window=64)
+    >>> model = fit_scheduled_state_space(levels, 64, order=1, window=64, penalty=0)
     >>> [round(float(model.at(a).A[0, 0]), 3) for a in model.amplitudes]
     [0.5, 0.6]
     """
