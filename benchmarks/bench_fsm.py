@@ -198,6 +198,45 @@ def pihyst_rms(predict, records):
     return float(np.sqrt(np.mean(err ** 2)))
 
 
+def line_predictor(G, lines):
+    """Steady-state prediction by a frequency response G (L, p, m) on DFT lines, period
+    by period (for published_rms)."""
+    def predict(u):
+        U = np.fft.rfft(u.reshape(-1, PERIOD, u.shape[1]), axis=1)
+        Y = np.zeros((U.shape[0], U.shape[1], G.shape[1]), complex)
+        Y[:, lines] = np.einsum("kpm,rkm->rkp", G, U[:, lines])
+        return np.fft.irfft(Y, n=PERIOD, axis=1).reshape(-1, G.shape[1])
+    return predict
+
+
+def scheduled_diagnostics(root, sched, fitted, tests):
+    """How the scheduled model's modes move, and what limits it at the levels it was not
+    fitted at (diagnosis on their test records; nothing is chosen from it): the
+    nonparametric BLAs of the fitted levels averaged, each level's own BLA, and the
+    model's linear system taken at other points between its anchors."""
+    fs = 6400.0
+    f_lo, f_hi = (np.angle(sched.poles[k]) * fs / (2 * np.pi) for k in (0, -1))
+    change = 100 * (f_hi - f_lo) / f_lo
+    print(f"    modes from {sched.amplitudes[0]:.4f} to {sched.amplitudes[-1]:.4f} V RMS: "
+          + " ".join(f"{a:.0f}->{b:.0f}" for a, b in sorted(zip(f_lo, f_hi)))
+          + f" Hz ({change.min():+.2f} .. {change.max():+.2f} %)")
+    blas = {lv: estimate_bla(fsm_records(root, lv, "train"), PERIOD, discard=0)
+            for lv in tests}
+    lines = blas[fitted[0]].lines
+    mean = np.mean([blas[lv].G for lv in fitted], axis=0)
+    for lv in (lv for lv in tests if lv not in fitted):
+        own = published_rms(line_predictor(blas[lv].G, lines), tests[lv])
+        mid = published_rms(line_predictor(mean, lines), tests[lv])
+        at = {}
+        for f in (0.3, 0.4, 0.5, 0.6, 0.7):
+            a = sched.amplitudes[0] + f * (sched.amplitudes[-1] - sched.amplitudes[0])
+            G = sched.at(a).response(2 * np.pi * lines / PERIOD)
+            at[f] = published_rms(line_predictor(G, lines), tests[lv])
+        print(f"    {lv} (not fitted): its own nonparam. BLA {own:.3f}, the fitted levels' "
+              f"BLAs averaged {mid:.3f}; the model at a fraction f of the way between its "
+              "anchors: " + ", ".join(f"f {f:.1f}: {e:.3f}" for f, e in at.items()) + " um")
+
+
 def fsm_one_model(scheduled_only=False, order=None, penalties=None):
     """One model for all levels: fitted on the 100 mV and 300 mV training records together
     (12 realisations; the order chosen by validation on realisations 5 and 6 of each
@@ -238,6 +277,8 @@ def fsm_one_model(scheduled_only=False, order=None, penalties=None):
                                           max_nfev=FSM_SCHEDULE_NFEV, penalty=penalty)
         rows.append((f"scheduled, penalty {penalty:g}", sched.predict,
                      time.perf_counter() - t0 + t_lin))
+        print(f"  scheduled, penalty {penalty:g}:")
+        scheduled_diagnostics(root, sched, levels, tests)
     print("    scheduled: anchors " + ", ".join(f"{a:.4f}" for a in sched.amplitudes)
           + f" V RMS, window {sched.window:.0f} samples; schedule on the test records: "
           + ", ".join(f"{lv} {np.mean([np.mean(sched.schedule(u)[PERIOD:]) for u, _ in r]):.4f}"
