@@ -178,3 +178,17 @@ def test_the_penalty_keeps_the_modes_near_the_common_ones():
     assert free[4] < 1e-12 * free[3]
     assert np.max(np.abs(held[2] - held[1])) < 0.01 * np.max(np.abs(free[2] - free[1]))
     assert free[4] < some[4] < held[4] <= held[3]
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), scale=st.floats(1e-6, 1e3),
+       sign=st.sampled_from([-1.0, 1.0]), window=st.floats(1.0, 500.0))
+def test_running_amplitude_scales_with_the_input(seed, scale, sign, window):
+    """a(c u) = |c| a(u), a >= 0, and a constant input has none."""
+    u = np.random.default_rng(seed).normal(size=(400, 3))
+    a = running_amplitude(u, window)
+    assert np.all(a >= 0)
+    np.testing.assert_allclose(running_amplitude(sign * scale * u, window), scale * a,
+                               rtol=1e-9, atol=1e-12 * scale)
+    held = running_amplitude(np.full((400, 3), sign * scale), window)
+    assert held[-1] <= scale * (1 - 1 / window) ** 200     # the start from rest, forgotten
