@@ -22,6 +22,13 @@ simulated beam with its 54 Hz mode.
    - with --polynomial also the MISO polynomial output-error fit per output (na = nb =
      16, frequency domain, pihyst.dynamics.fit_linear with period=), the previous method
      (0.149 / 0.493 um at 100 / 300 mV; a few minutes per level).
+   One model for all levels (fsm_one_model): fitted on the 100 mV and 300 mV training
+   records together, judged on the test records of every level present (200 mV, not
+   fitted, when its files are there: they are in the origin's data/ folder, not in the
+   project's copy), with the benchmark's own test RMSE (published_rms) and pihyst's,
+   beside the published single NL-LFR and all-level BLA: the linear state-space model,
+   the Hammerstein model (--one-model) and the amplitude-scheduled state-space model
+   (pihyst.dynamics.fit_scheduled_state_space) per penalty.
 2. Simulated beam (make_plant("paper-beam", dynamics=True), creep, noise, quantisation):
    fitted on two sweeps at 2 kHz (0.5-20 Hz over 5-145 V with a slow amplitude envelope,
    10-100 Hz at 75 +- 8 V);
@@ -39,8 +46,11 @@ simulated beam with its 54 Hz mode.
    0-150 V limits.
 
 Run: PIHYST_DATA=/path/to/data python benchmarks/bench_fsm.py [--polynomial]
-     [--one-model | --beam-tracking]  (only the one-model FSM table, or only item 2's
-     tracking table)
+     [--one-model | --scheduled | --beam-tracking]  (only the one-model FSM table, the
+     same without the Hammerstein model, or only item 2's tracking table); with
+     --one-model or --scheduled: --order=N (the common modes' order given: no
+     selection, both periods in the BLA) and --penalty=MU[,MU...] (the scheduled
+     models' penalties, default 0,1)
 """
 
 import time
@@ -55,6 +65,7 @@ from pihyst.dynamics import (
     fit_hammerstein,
     fit_hammerstein_ss,
     fit_linear,
+    fit_scheduled_state_space,
     fit_state_space,
     predict_linear,
 )
@@ -70,6 +81,10 @@ PERIOD = 8192
 FSM_ONE_MODEL_ORDERS = range(24, 65, 8)
 #: the published single models for all levels (SOURCE.md): nonlinear LFR, and the BLA
 #: fitted on all levels
+FSM_INIT_WINDOW = 100        # samples of each period the benchmark leaves out
+FSM_SCHEDULE_WINDOW = 1024   # samples (0.16 s) of the scheduled model's running RMS
+FSM_SCHEDULE_NFEV = 50       # evaluations of each level's modal fit
+FSM_SCHEDULE_PENALTIES = (0.0, 1.0)   # mu of the modal fits' penalty, each a model
 PUBLISHED_ONE_MODEL = {"100mV": {"LFR": 0.0866, "BLA": 0.252},
                        "200mV": {"LFR": 0.131, "BLA": 0.179},
                        "300mV": {"LFR": 0.169, "BLA": 0.658}}
@@ -134,46 +149,160 @@ def fsm(polynomial=False):
                   f"  all {np.sqrt(np.mean(err ** 2)):.3f} um{fit_time}")
 
 
-def fsm_one_model():
+def fsm_levels(root):
+    """The amplitude levels whose records are present (the 200 mV ones are not in the
+    project's copy; the origin's data/ folder has them)."""
+    return [lv for lv in PUBLISHED_ONE_MODEL
+            if all((root / FSM_DIR / f"{x}_{lv}_{part}.npy").is_file()
+                   for x in "uy" for part in ("train", "test"))]
+
+
+def bla_change(root):
+    """How each level's BLA (training records, both periods) differs from the lowest's:
+    the median ratio of |G_ii| below 600 Hz per input, and the frequency of the largest
+    sum of |G_ji|."""
+    fs, ref = 6400.0, None
+    print("\nFSM, each level's best linear approximation (training records):")
+    for lv in fsm_levels(root):
+        frf = estimate_bla(fsm_records(root, lv, "train"), PERIOD, discard=0)
+        f = frf.lines * fs / PERIOD
+        diag = np.abs(np.diagonal(frf.G, axis1=1, axis2=2))
+        ref = diag if ref is None else ref
+        ratio = np.median(diag[f < 600] / ref[f < 600], axis=0)
+        peak = f[np.argmax(np.abs(frf.G).sum(axis=(1, 2)))]
+        # steady state in both periods: they differ by the noise only
+        y = np.load(root / FSM_DIR / f"y_{lv}_train.npy") * 1e6
+        change = np.sqrt(np.mean((y[..., 1] - y[..., 0]) ** 2))
+        print(f"    BLA {lv}: |G_ii| below 600 Hz / lowest level's "
+              + " ".join(f"{r:.3f}" for r in ratio) + f"; largest response at {peak:.1f} Hz;"
+              f" period 2 - period 1: {change:.3f} um RMS")
+
+
+def published_rms(predict, records):
+    """The benchmark's test RMSE (nonlinear_benchmarks' FineSteeringMirror submission
+    example; the authors' analyze_models.ipynb): the model simulated in steady state
+    (here: the last period played first, as warm-up), RMS error per output, realisation
+    and period over each period's samples after the first 100 (state initialisation
+    window), then the mean of these RMS values over periods, realisations and outputs."""
+    rms = []
+    for u, y in records:
+        e = predict(np.r_[u[-PERIOD:], u])[PERIOD:] - y
+        e = e.reshape(-1, PERIOD, e.shape[1])[:, FSM_INIT_WINDOW:]
+        rms.append(np.sqrt(np.mean(e ** 2, axis=1)))
+    return float(np.mean(rms))
+
+
+def pihyst_rms(predict, records):
+    """Simulated from rest, RMS error over the second period, all outputs pooled."""
+    err = np.vstack([predict(u)[PERIOD:] - y[PERIOD:] for u, y in records])
+    return float(np.sqrt(np.mean(err ** 2)))
+
+
+def line_predictor(G, lines):
+    """Steady-state prediction by a frequency response G (L, p, m) on DFT lines, period
+    by period (for published_rms)."""
+    def predict(u):
+        U = np.fft.rfft(u.reshape(-1, PERIOD, u.shape[1]), axis=1)
+        Y = np.zeros((U.shape[0], U.shape[1], G.shape[1]), complex)
+        Y[:, lines] = np.einsum("kpm,rkm->rkp", G, U[:, lines])
+        return np.fft.irfft(Y, n=PERIOD, axis=1).reshape(-1, G.shape[1])
+    return predict
+
+
+def scheduled_diagnostics(root, sched, fitted, tests):
+    """How the scheduled model's modes move, and what limits it at the levels it was not
+    fitted at (diagnosis on their test records; nothing is chosen from it): the
+    nonparametric BLAs of the fitted levels averaged, each level's own BLA, and the
+    model's linear system taken at other points between its anchors."""
+    fs = 6400.0
+    f_lo, f_hi = (np.angle(sched.poles[k]) * fs / (2 * np.pi) for k in (0, -1))
+    change = 100 * (f_hi - f_lo) / f_lo
+    print(f"    modes from {sched.amplitudes[0]:.4f} to {sched.amplitudes[-1]:.4f} V RMS: "
+          + " ".join(f"{a:.0f}->{b:.0f}" for a, b in sorted(zip(f_lo, f_hi)))
+          + f" Hz ({change.min():+.2f} .. {change.max():+.2f} %)")
+    blas = {lv: estimate_bla(fsm_records(root, lv, "train"), PERIOD, discard=0)
+            for lv in tests}
+    lines = blas[fitted[0]].lines
+    mean = np.mean([blas[lv].G for lv in fitted], axis=0)
+    for lv in (lv for lv in tests if lv not in fitted):
+        own = published_rms(line_predictor(blas[lv].G, lines), tests[lv])
+        mid = published_rms(line_predictor(mean, lines), tests[lv])
+        at = {}
+        for f in (0.3, 0.4, 0.5, 0.6, 0.7):
+            a = sched.amplitudes[0] + f * (sched.amplitudes[-1] - sched.amplitudes[0])
+            G = sched.at(a).response(2 * np.pi * lines / PERIOD)
+            at[f] = published_rms(line_predictor(G, lines), tests[lv])
+        print(f"    {lv} (not fitted): its own nonparam. BLA {own:.3f}, the fitted levels' "
+              f"BLAs averaged {mid:.3f}; the model at a fraction f of the way between its "
+              "anchors: " + ", ".join(f"f {f:.1f}: {e:.3f}" for f, e in at.items()) + " um")
+
+
+def fsm_one_model(scheduled_only=False, order=None, penalties=None):
     """One model for all levels: fitted on the 100 mV and 300 mV training records together
     (12 realisations; the order chosen by validation on realisations 5 and 6 of each
-    level), judged on each level's test records."""
+    level), judged on each level's test records (200 mV: not fitted; judged when its
+    records are present). Models: the linear state-space model; the Hammerstein model
+    from it; the amplitude-scheduled model (pihyst.dynamics.fit_scheduled_state_space:
+    the linear model's modes fitted to each fitted level's BLA, both periods of every
+    record, both steady state; interpolated in the inputs' running RMS over
+    FSM_SCHEDULE_WINDOW samples). Two scores: the benchmark's (published_rms) and
+    pihyst's (pihyst_rms)."""
     root = datasets.data_root()
     if root is None or not (root / FSM_DIR).is_dir():
         print(f"FSM data not found ({FSM_DIR} in $PIHYST_DATA or ../shared/data): skipped")
         return
     levels = ("100mV", "300mV")
     train = [r for level in levels for r in fsm_records(root, level, "train")]
-    tests = {level: fsm_records(root, level, "test") for level in levels}
+    tests = {level: fsm_records(root, level, "test") for level in fsm_levels(root)}
+    bla_change(root)
     n = len(train) // len(levels)
     held = tuple(i * n + r for i in range(len(levels)) for r in (n - 2, n - 1))
     t0 = time.perf_counter()
-    lin, sel = fit_state_space(train, PERIOD, orders=FSM_ONE_MODEL_ORDERS, validation=held,
-                               return_selection=True)
+    if order is None:
+        lin, sel = fit_state_space(train, PERIOD, orders=FSM_ONE_MODEL_ORDERS,
+                                   validation=held, return_selection=True)
+        chosen = (f"order {sel.chosen} chosen (validation RMS "
+                  + " ".join(f"{o}: {e:.3f}" for o, e in zip(sel.orders, sel.errors)) + ")")
+    else:
+        # both periods are steady state (bla_change): all of them in the BLA
+        lin = fit_state_space(train, PERIOD, order=order, discard=0)
+        chosen = f"order {order} given"
     t_lin = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    ham = fit_hammerstein_ss(train, PERIOD, linear=lin, refinements=2, max_nfev=10)
-    t_ham = time.perf_counter() - t0 + t_lin
-    print(f"\nFSM, one model for all levels (fitted on 100 mV and 300 mV together): order "
-          f"{sel.chosen} chosen (validation RMS "
-          + " ".join(f"{o}: {e:.3f}" for o, e in zip(sel.orders, sel.errors)) + ")")
-    print("    hysteresis weights per input: " + "  ".join(
-        np.array2string(H.weights, precision=3) for H in ham.hysteresis))
-    print(f"    {'model':<22}" + "".join(f"{lv:>9}" for lv in PUBLISHED_ONE_MODEL)
-          + "  (test RMS, all outputs, um; 200 mV: no data here)")
-    for name, fields in (("published NL-LFR", "LFR"), ("published BLA, all lvls", "BLA")):
-        print(f"    {name:<22}" + "".join(f"{PUBLISHED_ONE_MODEL[lv][fields]:9.3f}"
-                                          for lv in PUBLISHED_ONE_MODEL))
-    for name, predict, elapsed in ((f"state space {lin.order}", lin.predict, t_lin),
-                                   ("hammerstein", ham.predict, t_ham)):
-        cells = []
-        for lv in PUBLISHED_ONE_MODEL:
-            if lv not in tests:
-                cells.append(f"{'-':>9}")
-                continue
-            err = np.vstack([predict(u)[PERIOD:] - y[PERIOD:] for u, y in tests[lv]])
-            cells.append(f"{np.sqrt(np.mean(err ** 2)):9.3f}")
-        print(f"    {name:<22}" + "".join(cells) + f"   fit {elapsed:.0f} s")
+    print(f"\nFSM, one model for all levels (fitted on 100 mV and 300 mV together): {chosen}")
+    rows = [(f"state space {lin.order}", lin.predict, t_lin)]
+    for penalty in FSM_SCHEDULE_PENALTIES if penalties is None else penalties:
+        t0 = time.perf_counter()
+        sched = fit_scheduled_state_space([train[:n], train[n:]], PERIOD, linear=lin,
+                                          window=FSM_SCHEDULE_WINDOW, discard=0,
+                                          max_nfev=FSM_SCHEDULE_NFEV, penalty=penalty)
+        rows.append((f"scheduled, penalty {penalty:g}", sched.predict,
+                     time.perf_counter() - t0 + t_lin))
+        print(f"  scheduled, penalty {penalty:g}:")
+        scheduled_diagnostics(root, sched, levels, tests)
+    print("    scheduled: anchors " + ", ".join(f"{a:.4f}" for a in sched.amplitudes)
+          + f" V RMS, window {sched.window:.0f} samples; schedule on the test records: "
+          + ", ".join(f"{lv} {np.mean([np.mean(sched.schedule(u)[PERIOD:]) for u, _ in r]):.4f}"
+                      for lv, r in tests.items()))
+    if not scheduled_only:
+        t0 = time.perf_counter()
+        ham = fit_hammerstein_ss(train, PERIOD, linear=lin, refinements=2, max_nfev=10)
+        rows.insert(1, ("hammerstein", ham.predict, time.perf_counter() - t0 + t_lin))
+        print("    hysteresis weights per input: " + "  ".join(
+            np.array2string(H.weights, precision=3) for H in ham.hysteresis))
+    for title, score in (("benchmark's test RMSE (steady state, mean of RMS per output, "
+                          "realisation and period)", published_rms),
+                         ("pihyst's (from rest, 2nd period, all outputs pooled)",
+                          pihyst_rms)):
+        print(f"    {title}, um:")
+        print(f"    {'model':<24}" + "".join(f"{lv:>9}" for lv in PUBLISHED_ONE_MODEL))
+        if score is published_rms:
+            for name, field in (("published NL-LFR", "LFR"), ("published BLA, all lvls", "BLA")):
+                print(f"    {name:<24}" + "".join(f"{PUBLISHED_ONE_MODEL[lv][field]:9.3f}"
+                                                  for lv in PUBLISHED_ONE_MODEL))
+        for name, predict, elapsed in rows:
+            cells = [f"{score(predict, tests[lv]):9.3f}" if lv in tests else f"{'-':>9}"
+                     for lv in PUBLISHED_ONE_MODEL]
+            print(f"    {name:<24}" + "".join(cells) + f"   fit {elapsed:.0f} s")
 
 
 def sweep(fs, duration, f0, f1, level, amplitude, envelope=True):
@@ -287,8 +416,12 @@ def beam_tracking(fs=2000.0, na=2, nb=3):
 if __name__ == "__main__":
     import sys
     print(__doc__.split("\n\n")[0])
-    if "--one-model" in sys.argv[1:]:
-        fsm_one_model()
+    if "--one-model" in sys.argv[1:] or "--scheduled" in sys.argv[1:]:
+        opts = dict(a[2:].split("=", 1) for a in sys.argv[1:] if "=" in a)
+        fsm_one_model(scheduled_only="--scheduled" in sys.argv[1:],
+                      order=int(opts["order"]) if "order" in opts else None,
+                      penalties=([float(v) for v in opts["penalty"].split(",")]
+                                 if "penalty" in opts else None))
         sys.exit(0)
     if "--beam-tracking" in sys.argv[1:]:
         beam_tracking()

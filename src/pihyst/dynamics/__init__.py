@@ -7,6 +7,9 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   :func:`estimate_bla` the nonparametric frequency response it starts from;
 - :func:`fit_hammerstein_ss` / :class:`StateSpaceHammerstein`: classical PI per input,
   then those MIMO dynamics;
+- :func:`fit_scheduled_state_space` / :class:`ScheduledStateSpace`: one model for
+  several drive amplitudes, its modes interpolated in the running input amplitude
+  (:func:`running_amplitude`);
 - :func:`fit_hammerstein` / :class:`HammersteinModel`: classical PI per input, then
   A_j(q) y_j = sum_i B_ji(q) h_i per output (any records, e.g. sweeps);
 - :func:`fit_dynamics`: a given static model (``pihyst.fit``, any family) followed by
@@ -31,6 +34,7 @@ from pihyst.dynamics._compensate import (
     trust_weight,
     zpetc,
 )
+from pihyst.dynamics._fit_scheduled import fit_scheduled_state_space
 from pihyst.dynamics._fit_state_space import OrderSelection, fit_state_space
 from pihyst.dynamics._hammerstein import (
     HammersteinModel,
@@ -42,11 +46,14 @@ from pihyst.dynamics._hammerstein import (
 from pihyst.dynamics._hammerstein_io import load_hammerstein
 from pihyst.dynamics._hammerstein_ss import StateSpaceHammerstein, fit_hammerstein_ss
 from pihyst.dynamics._on_static import fit_dynamics
+from pihyst.dynamics._scheduled import ScheduledStateSpace, running_amplitude
 from pihyst.dynamics._statespace import StateSpace, fsid
 
-__all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "StateSpace",
+__all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "ScheduledStateSpace",
+           "StateSpace",
            "StateSpaceHammerstein", "compensate_hammerstein", "compensate_mimo",
            "default_thresholds",
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
-           "fit_state_space", "fsid", "load_hammerstein", "periodic_inverse_dynamics",
-           "predict_linear", "trust_weight", "zpetc"]
+           "fit_scheduled_state_space", "fit_state_space", "fsid", "load_hammerstein",
+           "periodic_inverse_dynamics",
+           "predict_linear", "running_amplitude", "trust_weight", "zpetc"]

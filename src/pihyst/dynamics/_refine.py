@@ -75,9 +75,38 @@ def _poles(rho, phi, sigma):
     return lam, dlam_drho, MAX_RADIUS * t, MAX_RADIUS * (1 - t * t)
 
 
-def refine(model, omega, G, weight=None, max_nfev=50):
-    """The refined :class:`StateSpace` (module notes), or ``model`` itself when the
-    refinement does not lower the weighted error."""
+def change_scales(layout, theta):
+    """Per parameter, the size of a change that counts as one unit in the penalty of
+    :func:`fit_modes`: a pole's radius in log-odds (already relative to 1 - r), its
+    angle in units of 1 - r (its half-power bandwidth), a real pole in arctanh, each
+    mode's c and b relative to their norm, D relative to its RMS."""
+    P, Rn, p, m = layout.shape
+    rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
+    lam, _, _, _ = _poles(rho, phi, sigma)
+    tiny = 1e-12
+    nc = np.maximum(np.linalg.norm(c, axis=1), tiny)
+    nb = np.maximum(np.linalg.norm(b, axis=1), tiny)
+    ncr = np.maximum(np.linalg.norm(cr, axis=1), tiny)
+    nbr = np.maximum(np.linalg.norm(br, axis=1), tiny)
+    return np.concatenate([np.ones(P), np.maximum(1 - np.abs(lam), tiny),
+                           np.repeat(nc, p), np.repeat(nc, p), np.repeat(nb, m),
+                           np.repeat(nb, m), np.ones(Rn), np.repeat(ncr, p),
+                           np.repeat(nbr, m),
+                           np.full(p * m, max(float(np.sqrt(np.mean(D ** 2))), tiny))])
+
+
+def fit_modes(model, omega, G, weight=None, max_nfev=50, penalty=0.0):
+    """Levenberg-Marquardt on the modal parameters of ``model`` (module notes).
+
+    With ``penalty`` mu > 0 the criterion gains mu sum_j ((theta_j - theta0_j) / s_j)^2
+    (s_j from :func:`change_scales` at the start, scaled by the start's error per
+    parameter): the smallest change of the modes that explains ``G``.
+
+    Returns ``(layout, theta0, theta, cost0, cost)``: the packing, the start and the
+    fitted parameters, and the weighted squared error of ``model`` itself and of the
+    fit (penalty left out); None when ``model`` has no modal form (defective or
+    ill-sorted modes).
+    """
     from scipy.optimize import least_squares
 
     G = np.asarray(G)
@@ -86,9 +115,14 @@ def refine(model, omega, G, weight=None, max_nfev=50):
     z = np.exp(1j * np.asarray(omega, dtype=float))
     pairs, reals = _modes(model)
     if 2 * pairs[0].size + reals[0].size != model.order:
-        return model                     # defective or ill-sorted modes: no modal form
+        return None
     layout = _Layout(pairs[0].size, reals[0].size, p, m)
     theta0 = _pack(pairs, reals, model.D)
+    cost0 = float(np.sum(np.abs(W * (model.response(omega) - G)) ** 2))
+    # mu (cost0 / n) per unit change: a change of one unit in every parameter costs
+    # mu times the start's own error
+    prior = (np.sqrt(penalty * cost0 / theta0.size) / change_scales(layout, theta0)
+             if penalty > 0 else None)
 
     def response(theta):
         rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
@@ -100,7 +134,8 @@ def refine(model, omega, G, weight=None, max_nfev=50):
 
     def residual(theta):
         e = (W * (response(theta) - G)).ravel()
-        return np.r_[e.real, e.imag]
+        r = np.r_[e.real, e.imag]
+        return r if prior is None else np.r_[r, prior * (theta - theta0)]
 
     def jacobian(theta):
         rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
@@ -129,16 +164,27 @@ def refine(model, omega, G, weight=None, max_nfev=50):
             1, p, m, p * m), (L, p, m, p * m)))
         J = np.concatenate(cols, axis=3) * W[..., None]
         J = J.reshape(L * p * m, -1)
-        return np.vstack([J.real, J.imag])
+        J = np.vstack([J.real, J.imag])
+        return J if prior is None else np.vstack([J, np.diag(prior)])
 
-    # judged against the model itself (its modal form may round differently)
-    cost0 = float(np.sum(np.abs(W * (model.response(omega) - G)) ** 2))
+    # cost0, above, is judged against the model itself (its modal form may round
+    # differently)
     res = least_squares(residual, theta0, jac=jacobian, method="lm", max_nfev=max_nfev)
-    if not 2 * res.cost < cost0:
-        return model
-    rho, phi, c, b, sigma, cr, br, D = layout.split(res.x)
+    e = (W * (response(res.x) - G)).ravel()
+    return layout, theta0, res.x, cost0, float(np.sum(np.abs(e) ** 2))
+
+
+def modal_parameters(layout, theta):
+    """(pair poles, pair c, pair b, real poles, real c, real b, D) of packed ``theta``."""
+    rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
     lam, _, lr, _ = _poles(rho, phi, sigma)
-    n = model.order
+    return lam, c, b, lr, cr, br, D
+
+
+def real_modal_state_space(lam, c, b, lr, cr, br, D):
+    """The real modal-form :class:`StateSpace` of modal parameters (module notes)."""
+    p, m = D.shape
+    n = 2 * lam.size + lr.size
     A, B, C = np.zeros((n, n)), np.zeros((n, m)), np.zeros((p, n))
     for q in range(lam.size):
         k = 2 * q
@@ -150,3 +196,15 @@ def refine(model, omega, G, weight=None, max_nfev=50):
         A[k0 + q, k0 + q] = lr[q]
         B[k0 + q], C[:, k0 + q] = br[q], cr[q]
     return StateSpace(A, B, C, D)
+
+
+def refine(model, omega, G, weight=None, max_nfev=50):
+    """The refined :class:`StateSpace` (module notes), or ``model`` itself when the
+    refinement does not lower the weighted error."""
+    fitted = fit_modes(model, omega, G, weight, max_nfev)
+    if fitted is None:
+        return model
+    layout, _, theta, cost0, cost = fitted
+    if not cost < cost0:
+        return model
+    return real_modal_state_space(*modal_parameters(layout, theta))
