@@ -12,7 +12,7 @@ HEARTBEAT = $(PYTHON) tools/heartbeat.py --
 # the measured data sets (not shipped): $PIHYST_DATA, else ../shared/data beside the clone
 DATA_SOURCE = $(or $(PIHYST_DATA),$(wildcard ../shared/data))
 
-.PHONY: demo test test-slow install ctest lint typecheck pytest docs bench clean data figures screenshot
+.PHONY: demo test test-slow test-heavy install ctest lint typecheck pytest docs bench clean data figures screenshot
 $(BIN)/pihyst: pyproject.toml setup.py $(wildcard csrc/*.c csrc/*.h src/pihyst/*.pyx)
 	@echo "make: installing pihyst and its dependencies into $(VENV) (first time only, a few minutes: pip's progress follows, then the C extensions' build)"
 	$(HEARTBEAT) $(PYTHON) -m venv $(VENV)
@@ -48,6 +48,10 @@ test: ctest lint typecheck pytest
 # the tests marked slow (measured data sets, simulated-beam accuracy, worker processes)
 test-slow: install
 	$(HEARTBEAT) $(BIN)/python -m pytest -m slow
+
+# the tests over five minutes each (the steering mirror's one model for all levels)
+test-heavy: install
+	$(HEARTBEAT) $(BIN)/python -m pytest -m heavy
 
 # the docs extra of pyproject.toml, installed into the venv on first use (read from the
 # file, so that no rebuild of the extension is needed)
