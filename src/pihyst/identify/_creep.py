@@ -54,7 +54,6 @@ from pihyst.model._creep import MAX_TOTAL_GAIN, Creep, default_time_constants
 
 __all__ = ["fit_with_creep"]
 
-CHUNK = 1 << 15
 # rows of operator outputs made at a time: 4,096 x 135 kernels is 4.4 MB, which the
 # allocator reuses block after block; above 32 MB every block is fresh memory from the
 # system, and first touching it cost 6.6 ms per MB on the development machine

@@ -45,10 +45,6 @@ class Gram:
 ROLE_CODES = {"settle": 0, "fit": 1, "held_back": 2}
 
 
-def _empty(k):
-    return Gram(np.zeros((k, k)), np.zeros(k), 0.0, 0)
-
-
 def accumulate(model, u, d, segments, initial_state, *, offset=True, rows_at=()):
     """Normal equations of ``model``'s operators over the parts of a record.
 
