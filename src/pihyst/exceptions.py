@@ -174,7 +174,7 @@ class CSVError(RecordError):
     path : str or os.PathLike
         The file.
     line : int
-        The 1-based line.
+        The 1-based line (0: the file as a whole, e.g. it cannot be opened).
     column : int or None
         The 1-based column (None: the whole line).
     message : str
@@ -184,11 +184,14 @@ class CSVError(RecordError):
     --------
     >>> str(CSVError("loop.csv", 7, 2, "'abc' is not a number"))
     "loop.csv:7:2: 'abc' is not a number"
+    >>> str(CSVError("gone.csv", 0, None, "cannot read file: No such file or directory"))
+    'gone.csv: cannot read file: No such file or directory'
     """
 
     def __init__(self, path: "str | os.PathLike[str]", line: int, column: int | None,
                  message: str) -> None:
         self.line, self.column = line, column
-        where = f"{path}:{line}:{column}" if column else f"{path}:{line}"
+        where = (f"{path}:{line}:{column}" if line and column else
+                 f"{path}:{line}" if line else f"{path}")
         ValueError.__init__(self, f"{where}: {message}")
         self.path, self.message = path, message

@@ -74,7 +74,7 @@ def test_a_bad_record_is_reported_and_the_others_are_fitted(tmp_path):
     errors = {o.record: o.error for o in result.failed}
     assert errors["text.csv"] == f"{folder / 'text.csv'}:3:2: column 'displacement_um': " \
                                  "'abc' is not a number"
-    assert errors["gone.csv"].startswith(f"{missing}:0: cannot read file")
+    assert errors["gone.csv"].startswith(f"{missing}: cannot read file")
     assert errors["short.csv"].startswith(f"{folder / 'short.csv'}")
     assert "sample" in errors["short.csv"] or "samples" in errors["short.csv"]
     for o in result.failed:
