@@ -95,6 +95,29 @@ def test_misreadings_refused_at_line_and_column(tmp_path, content, options, wher
     assert "\n" not in message
 
 
+@pytest.mark.parametrize("header, quantity, hint", [
+    ("Time (s),Voltage (V),Displacement (um)", "voltage",
+     "(is it 'Voltage (V)'? --voltage 'Voltage (V)')"),
+    ("time,voltage_V,Position [µm]", "displacement",
+     "(is it 'Position [µm]'? --displacement 'Position [µm]')"),
+    ("t,V,x", "voltage", "(is it 'V'? --voltage V)"),
+])
+def test_a_missing_column_names_the_one_that_looks_like_it(tmp_path, header, quantity,
+                                                           hint):
+    path = write(tmp_path, f"{header}\n0,0,0\n1,1,1\n")
+    with pytest.raises(CSVError) as err:
+        read(path)
+    assert "missing column" in str(err.value) and str(err.value).endswith(hint), err.value
+
+
+@pytest.mark.parametrize("header", ["a,b,c", "volts,voltage,x", "u,v,y"])
+def test_no_hint_where_no_column_or_several_look_like_it(tmp_path, header):
+    path = write(tmp_path, f"{header}\n0,0,0\n1,1,1\n")
+    with pytest.raises(CSVError) as err:
+        read(path)
+    assert "missing column 'voltage_V'" in str(err.value) and "is it" not in str(err.value)
+
+
 def test_a_field_longer_than_the_csv_modules_limit(tmp_path):
     long = "0." + "1" * 200_000
     path = write(tmp_path, f"voltage_V,displacement_um\n0,1\n{long},2\n2,3\n")

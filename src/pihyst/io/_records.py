@@ -10,6 +10,7 @@ import importlib
 import importlib.util
 import os
 import re
+import shlex
 import sys
 import warnings
 from collections.abc import Callable, Iterator, Sequence
@@ -873,6 +874,18 @@ class _Transform:
         return out
 
 
+def _likely(columns, quantity):
+    """A hint naming the one column whose name looks like ``quantity`` (the lab files'
+    guesses, GUESSES), as the option that selects it; "" if none or several. A CSV's
+    columns are never guessed: a wrong guess would fit, or drive, the wrong signal."""
+    others = [GUESSES[q] for q in GUESSES if q != quantity]
+    hits = [c for c in columns if GUESSES[quantity].search(c)
+            and not any(g.search(c) for g in others)]
+    if len(hits) != 1:
+        return ""
+    return f" (is it {hits[0]!r}? --{quantity} {shlex.quote(hits[0])})"
+
+
 def _text_column(src, quantity, spec, needed):
     """0-based field of a text record for a quantity (None if optional and absent)."""
     d = src.dialect
@@ -891,7 +904,7 @@ def _text_column(src, quantity, spec, needed):
                            f"({', '.join(src.columns)}); name the {quantity} column with "
                            f"--{quantity} NAME or --{quantity} NUMBER"
                            + (", or give the sample rate, --rate HZ" if quantity == "time"
-                              else ""))
+                              else "") + _likely(src.columns, quantity))
         spec = name
     text = str(spec).strip()
     if text.isdigit():
