@@ -27,8 +27,7 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   through :func:`compensate_mimo`;
 - :func:`load_hammerstein`: a HammersteinModel from its JSON file
   (:meth:`HammersteinModel.save`); :func:`load_scheduled_state_space` and
-  :func:`save_scheduled_state_space` (or :meth:`ScheduledStateSpace.save`) the same for
-  a ScheduledStateSpace.
+  :func:`save_scheduled_state_space` the same for a ScheduledStateSpace.
 """
 
 from pihyst.dynamics._bla import FrequencyResponse, estimate_bla

@@ -64,7 +64,7 @@ AMPLITUDE_ITERATIONS = 20
 class ScheduledCompensation:
     """What :func:`compensate_scheduled` returns.
 
-    Attributes
+    Parameters
     ----------
     voltage : ndarray
         (N, m) one period of voltages, within the limits.
@@ -82,6 +82,18 @@ class ScheduledCompensation:
         ``rms_error`` reached ``tol`` of the desired's RMS.
     saturated : bool
         The exact voltages would leave the limits: clipped, tracking not exact.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pihyst.dynamics import ScheduledStateSpace, compensate_scheduled
+    >>> m = ScheduledStateSpace([2.0], [[0.5j]], [[[1.0]]], [[[1.0]]], np.zeros((1, 0)),
+    ...                         np.zeros((1, 0, 1)), np.zeros((1, 0, 1)), [[[0.0]]],
+    ...                         window=20)
+    >>> r = 3 * np.sin(2 * np.pi * np.arange(50) / 50)[:, None]
+    >>> res = compensate_scheduled(m, r, u_min=-1.0, u_max=1.0)   # needs more than 1 V
+    >>> res.saturated, bool(np.abs(res.voltage).max() <= 1.0), res.rms_error > 0.1
+    (True, True, True)
     """
 
     voltage: NDArray[np.float64]

@@ -24,7 +24,6 @@ interpolated in radius and angle, so it stays inside the unit circle. At a const
 amplitude a the model is the linear system :meth:`ScheduledStateSpace.at` (a) returns.
 """
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -291,15 +290,3 @@ class ScheduledStateSpace:
             xr[t + 1] = lr[t] * xr[t] + vr[t]
         return (2 * np.einsum("tqj,tq->tj", c, x).real + np.einsum("tqj,tq->tj", cr, xr)
                 + np.einsum("tji,ti->tj", D, x_in))
-
-    def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the model as JSON to ``path`` (:func:`save_scheduled_state_space`; read
-        back bit for bit by :func:`load_scheduled_state_space`).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The file to write (it appears only once complete).
-        """
-        from pihyst.dynamics._scheduled_io import save_scheduled_state_space
-        save_scheduled_state_space(self, path)

@@ -117,7 +117,11 @@ def _array_from_json(value, complex_, source, key):
                     for n in shape)):
         _bad(source, key, "an object whose 'shape' is a list of sizes (integers >= 0)")
     arrays = [_nested(value[p], shape, source, key, p) for p in parts]
-    return arrays[0] + 1j * arrays[1] if complex_ else arrays[0]
+    if not complex_:
+        return arrays[0]
+    out = np.empty(arrays[0].shape, complex)   # not re + 1j * im: that loses -0.0
+    out.real, out.imag = arrays
+    return out
 
 
 def scheduled_from_dict(d: dict[str, Any], source: str = "model") -> ScheduledStateSpace:
@@ -188,7 +192,7 @@ def load_scheduled_state_space(path_or_dict: str | os.PathLike[str] | dict[str, 
     Parameters
     ----------
     path_or_dict : str, os.PathLike or dict
-        A model file (:meth:`ScheduledStateSpace.save`), or the dict it holds.
+        A model file (:func:`save_scheduled_state_space`), or the dict it holds.
 
     Returns
     -------
