@@ -187,23 +187,37 @@ def periodic_response(model: ScheduledStateSpace, u: ArrayLike,
     """
     u = np.asarray(u, dtype=float)
     a = periodic_schedule(model, u) if schedule is None else np.asarray(schedule, float)
-    lam, c, b, lr, cr, br, D = model._parameters(a)
-    # pairs and real modes in one complex recursion
-    lam_all = np.concatenate([lam, lr.astype(complex)], axis=1)
-    v = np.concatenate([np.einsum("tqi,ti->tq", b, u), np.einsum("tqi,ti->tq", br, u)],
-                       axis=1)
-    n, modes = lam_all.shape
-    x = np.zeros((n + 1, modes), complex)
-    phi = np.ones((n + 1, modes), complex)
-    for t in range(n):
-        x[t + 1] = lam_all[t] * x[t] + v[t]
-        phi[t + 1] = lam_all[t] * phi[t]
-    # x[0] = x^0[N] / (1 - Phi); x[t] = x^0[t] + prod_{s<t} lambda[s] x[0]
-    x = x[:n] + phi[:n] * (x[n] / (1.0 - phi[n]))
-    P = lam.shape[1]
-    return (2 * np.einsum("tqj,tq->tj", c, x[:, :P]).real
-            + np.einsum("tqj,tq->tj", cr, x[:, P:].real)
-            + np.einsum("tji,ti->tj", D, u))
+    return _FixedSchedule(model, a)(u)
+
+
+class _FixedSchedule:
+    """L_a of the module notes for one schedule: the parameters and the products of the
+    poles computed once, applied to many inputs (GMRES)."""
+
+    def __init__(self, model, a):
+        lam, self.c, b, lr, self.cr, br, self.D = model._parameters(a)
+        self.pairs = lam.shape[1]
+        # pairs and real modes in one complex recursion
+        self.lam = np.concatenate([lam, lr.astype(complex)], axis=1)
+        self.b = np.concatenate([b, br.astype(complex)], axis=1)
+        n = a.shape[0]
+        self.phi = np.ones((n + 1, self.lam.shape[1]), complex)
+        for t in range(n):
+            self.phi[t + 1] = self.lam[t] * self.phi[t]
+
+    def __call__(self, u):
+        v = np.einsum("tqi,ti->tq", self.b, u)
+        n = u.shape[0]
+        x = np.zeros((n + 1, v.shape[1]), complex)
+        lam = self.lam
+        for t in range(n):
+            x[t + 1] = lam[t] * x[t] + v[t]
+        # x[0] = x^0[N] / (1 - Phi); x[t] = x^0[t] + prod_{s<t} lambda[s] x[0]
+        x = x[:n] + self.phi[:n] * (x[n] / (1.0 - self.phi[n]))
+        P = self.pairs
+        return (2 * np.einsum("tqj,tq->tj", self.c, x[:, :P]).real
+                + np.einsum("tqj,tq->tj", self.cr, x[:, P:].real)
+                + np.einsum("tji,ti->tj", self.D, u))
 
 
 def _harmonic_inverse(model, amplitude, n):
@@ -394,10 +408,10 @@ def compensate_scheduled(model: ScheduledStateSpace, desired: ArrayLike, *,
     best, best_err, iterations = u, error(u), 0
     while best_err > tol * scale and iterations < max_iterations:
         iterations += 1
-        a = periodic_schedule(model, u)
+        L = _FixedSchedule(model, periodic_schedule(model, u))
 
-        def matvec(w, a=a):
-            return periodic_response(model, _apply(Ginv, w.reshape(n, m)), a).ravel()
+        def matvec(w, L=L):
+            return L(_apply(Ginv, w.reshape(n, m))).ravel()
 
         w = _gmres(matvec, r.ravel(), _apply(G, u).ravel(),
                    0.1 * tol * scale * np.sqrt(n * p), n * m)
