@@ -109,6 +109,21 @@ def test_non_minimum_phase_dynamics_are_inverted_exactly(level):
     assert np.max(np.abs(steady(model, res.voltage) - desired)) < 1e-8 * np.ptp(desired)
 
 
+@pytest.mark.parametrize("top", [8.0, 20.0])
+def test_a_gain_that_grows_faster_than_the_amplitude_still_converges(top):
+    """The gain rises ``top``-fold from the first anchor to the second (6x the amplitude):
+    the plain fixed point on the schedule oscillates and diverges there (measured: from
+    top = 8); the mixed one converges."""
+    model = ScheduledStateSpace([0.5, 3.0], [[0.9 * np.exp(0.3j)], [0.95 * np.exp(0.2j)]],
+                                [[[0.1]], [[0.1 * top]]], [[[1.0]], [[1.0]]],
+                                np.zeros((2, 0)), np.zeros((2, 0, 1)), np.zeros((2, 0, 1)),
+                                [[[1.0]], [[top]]], window=WINDOW)
+    desired = steady(model, smooth_drive(1, 1.5))
+    res = compensate_scheduled(model, desired, u_min=-100.0, u_max=100.0)
+    assert res.converged and not res.saturated
+    assert np.max(np.abs(steady(model, res.voltage) - desired)) < 1e-8 * np.ptp(desired)
+
+
 def test_compensate_mimo_takes_a_scheduled_model():
     model = softening_3x3()
     desired = steady(model, smooth_drive(3, 1.0))
