@@ -22,8 +22,12 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   measured in, :func:`trust_weight` fades their correction out;
 - :func:`compensate_mimo`: the same for a square MIMO StateSpaceHammerstein and a
   periodic trajectory (the dynamics inverted per harmonic);
+- :func:`compensate_scheduled`: the same for a square ScheduledStateSpace (its schedule
+  a fixed point of the voltages it produces; voltage limits per input), also reached
+  through :func:`compensate_mimo`;
 - :func:`load_hammerstein`: a HammersteinModel from its JSON file
-  (:meth:`HammersteinModel.save`).
+  (:meth:`HammersteinModel.save`); :func:`load_scheduled_state_space` and
+  :func:`save_scheduled_state_space` the same for a ScheduledStateSpace.
 """
 
 from pihyst.dynamics._bla import FrequencyResponse, estimate_bla
@@ -33,6 +37,10 @@ from pihyst.dynamics._compensate import (
     periodic_inverse_dynamics,
     trust_weight,
     zpetc,
+)
+from pihyst.dynamics._compensate_scheduled import (
+    ScheduledCompensation,
+    compensate_scheduled,
 )
 from pihyst.dynamics._fit_scheduled import fit_scheduled_state_space
 from pihyst.dynamics._fit_state_space import OrderSelection, fit_state_space
@@ -47,13 +55,20 @@ from pihyst.dynamics._hammerstein_io import load_hammerstein
 from pihyst.dynamics._hammerstein_ss import StateSpaceHammerstein, fit_hammerstein_ss
 from pihyst.dynamics._on_static import fit_dynamics
 from pihyst.dynamics._scheduled import ScheduledStateSpace, running_amplitude
+from pihyst.dynamics._scheduled_io import (
+    load_scheduled_state_space,
+    save_scheduled_state_space,
+)
 from pihyst.dynamics._statespace import StateSpace, fsid
 
-__all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "ScheduledStateSpace",
-           "StateSpace",
+__all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "ScheduledCompensation",
+           "ScheduledStateSpace", "StateSpace",
            "StateSpaceHammerstein", "compensate_hammerstein", "compensate_mimo",
+           "compensate_scheduled",
            "default_thresholds",
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
            "fit_scheduled_state_space", "fit_state_space", "fsid", "load_hammerstein",
+           "load_scheduled_state_space",
            "periodic_inverse_dynamics",
-           "predict_linear", "running_amplitude", "trust_weight", "zpetc"]
+           "predict_linear", "running_amplitude", "save_scheduled_state_space", "trust_weight",
+           "zpetc"]

@@ -233,9 +233,13 @@ def compensate_mimo(model: Any, desired: ArrayLike, *, u_min: ArrayLike | None =
     hysteresis inverted over two periods (the second returned), within its limits and
     slew.
 
+    A :class:`ScheduledStateSpace` (dynamics whose modes follow the drive amplitude) is
+    compensated by :func:`compensate_scheduled` (``u_min`` and ``u_max`` required, no
+    ``slew_rate``); the tuple is then (voltage, voltage, [ScheduledCompensation]).
+
     Parameters
     ----------
-    model : StateSpaceHammerstein
+    model : StateSpaceHammerstein or ScheduledStateSpace
         As many inputs as outputs.
     desired : array_like
         (N, p) one period of every output's trajectory.
@@ -275,6 +279,10 @@ def compensate_mimo(model: Any, desired: ArrayLike, *, u_min: ArrayLike | None =
     >>> bool(np.allclose(y, desired))
     True
     """
+    from pihyst.dynamics._scheduled import ScheduledStateSpace
+    if isinstance(model, ScheduledStateSpace):
+        from pihyst.dynamics._compensate_scheduled import compensate_mimo_scheduled
+        return compensate_mimo_scheduled(model, desired, u_min, u_max, slew_rate)
     m, p = model.n_inputs, model.n_outputs
     if m != p:
         raise InvalidArgumentError(f"compensate_mimo needs as many inputs as outputs, got "
