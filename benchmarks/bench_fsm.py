@@ -243,6 +243,46 @@ def scheduled_diagnostics(root, sched, fitted, tests):
               "anchors: " + ", ".join(f"f {f:.1f}: {e:.3f}" for f, e in at.items()) + " um")
 
 
+FSM_SLOPE_WINDOWS = (256.0, 1024.0, 4096.0)   # samples: running RMS of the slope check
+
+
+def schedule_slopes(sched, train_levels):
+    """Can the training records choose the interpolation shape? Within a record the
+    running amplitude a[t] moves by about 1 % about its mean; if the dynamics follow it,
+    the residual of the level's own anchor r = y - G_l u (steady state) holds
+    kappa_l (a[t] - a_l) / (a_2 - a_1) (G_2 - G_1) u, kappa_l being the slope of the
+    schedule at a_l relative to the secant between the anchors. Under g = a^p:
+    kappa_1 / kappa_2 = (a_1 / a_2)^(p - 1) (1 for p = 1, 3 for log a at a ratio of 3).
+    Printed per window: kappa per level (least squares over its records) and the
+    spread over the records (standard deviation of the per-record values / sqrt(R))."""
+    from pihyst.dynamics import running_amplitude
+
+    a1, a2 = sched.amplitudes[0], sched.amplitudes[-1]
+    ends = (sched.at(a1), sched.at(a2))
+
+    def steady(model, u):
+        return model.predict(np.r_[u[-PERIOD:], u])[PERIOD:]
+
+    print("    slope of the schedule within the training records, relative to the secant "
+          "at the lowest and the highest anchor (a^1: 1 and 1; a^0.5: 1.37 and 0.79; "
+          "log a: 1.82 and 0.61):")
+    for window in FSM_SLOPE_WINDOWS:
+        cells = []
+        for model, records in zip(ends, train_levels):
+            per, num, den, spread = [], 0.0, 0.0, []
+            for u, y in records:
+                a = running_amplitude(np.r_[u, u], window)[u.shape[0]:]
+                x = ((a - a.mean()) / (a2 - a1))[:, None] * (steady(ends[1], u)
+                                                              - steady(ends[0], u))
+                r = y - steady(model, u)
+                per.append(np.sum(r * x) / np.sum(x * x))
+                num, den = num + np.sum(r * x), den + np.sum(x * x)
+                spread.append(np.std(a) / a.mean())
+            cells.append(f"{num / den:.2f} +- {np.std(per) / np.sqrt(len(per)):.2f} "
+                         f"(a varies {100 * np.mean(spread):.1f} %)")
+        print(f"      window {window:.0f}: " + ", ".join(cells))
+
+
 def shape_name(exponent):
     return "log a" if exponent == 0 else f"a^{exponent:g}"
 
@@ -294,6 +334,7 @@ def fsm_one_model(scheduled_only=False, order=None, penalties=None, exponents=No
         elapsed = time.perf_counter() - t0 + t_lin
         print(f"  scheduled, penalty {penalty:g}:")
         scheduled_diagnostics(root, sched, levels, tests)
+        schedule_slopes(sched, (train[:n], train[n:]))
         # the shape only acts between the anchors: on the training records (the
         # schedule within 1 % of its anchor) the shapes differ by what is printed here
         for p in FSM_SCHEDULE_EXPONENTS if exponents is None else exponents:
