@@ -215,6 +215,30 @@ def line_predictor(G, lines):
     return predict
 
 
+FSM_BANDS = ((0, 600), (600, 850), (850, 1000), (1000, 2000), (2000, 3001))   # Hz
+
+
+def band_excess(sched, root, level, frf, fractions=(0.0, 0.5, 0.6, 1.0)):
+    """Where the model misses a level's BLA: per band, sum over lines of
+    |G_model - G_level|_F^2 against the BLA's own variance (|G_a - G_b|^2 / 4, G_a and
+    G_b the BLAs of the first and second half of the realisations), the model taken at
+    a fraction f of the way between its anchors (linear in a)."""
+    fs = 6400.0
+    train = fsm_records(root, level, "train")
+    half = len(train) // 2
+    Ga, Gb = (estimate_bla(r, PERIOD, discard=0).G for r in (train[:half], train[half:]))
+    hz = frf.lines * fs / PERIOD
+    var = np.abs(Ga - Gb) ** 2 / 4
+    a1, a2 = sched.amplitudes[0], sched.amplitudes[-1]
+    print(f"    {level}: per band " + " ".join(f"{lo}-{hi}" for lo, hi in FSM_BANDS)
+          + " Hz, the model's squared misfit to its BLA / the BLA's variance:")
+    for f in fractions:
+        e = np.abs(sched.at(a1 + f * (a2 - a1)).response(frf.omega) - frf.G) ** 2
+        print(f"      f {f:.1f}: " + "  ".join(
+            f"{np.sum(e[(hz >= lo) & (hz < hi)]):.0f}/{np.sum(var[(hz >= lo) & (hz < hi)]):.0f}"
+            for lo, hi in FSM_BANDS))
+
+
 def scheduled_diagnostics(root, sched, fitted, tests):
     """How the scheduled model's modes move, and what limits it at the levels it was not
     fitted at (diagnosis on their test records; nothing is chosen from it): the
@@ -230,6 +254,8 @@ def scheduled_diagnostics(root, sched, fitted, tests):
             for lv in tests}
     lines = blas[fitted[0]].lines
     mean = np.mean([blas[lv].G for lv in fitted], axis=0)
+    for k, lv in enumerate(fitted):
+        band_excess(sched, root, lv, blas[lv], fractions=(float(k > 0),))
     for lv in (lv for lv in tests if lv not in fitted):
         own = published_rms(line_predictor(blas[lv].G, lines), tests[lv])
         mid = published_rms(line_predictor(mean, lines), tests[lv])
@@ -238,6 +264,7 @@ def scheduled_diagnostics(root, sched, fitted, tests):
             a = sched.amplitudes[0] + f * (sched.amplitudes[-1] - sched.amplitudes[0])
             G = sched.at(a).response(2 * np.pi * lines / PERIOD)
             at[f] = published_rms(line_predictor(G, lines), tests[lv])
+        band_excess(sched, root, lv, blas[lv])
         print(f"    {lv} (not fitted): its own nonparam. BLA {own:.3f}, the fitted levels' "
               f"BLAs averaged {mid:.3f}; the model at a fraction f of the way between its "
               "anchors: " + ", ".join(f"f {f:.1f}: {e:.3f}" for f, e in at.items()) + " um")
