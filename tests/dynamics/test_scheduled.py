@@ -1,6 +1,8 @@
 """The amplitude-scheduled state-space model and its fit (pihyst.dynamics._scheduled,
 _fit_scheduled)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -193,3 +195,52 @@ def test_running_amplitude_scales_with_the_input(seed, scale, sign, window):
     held = running_amplitude(np.full((400, 3), sign * scale), window)
     # the start from rest, forgotten (to the rounding of the running mean, ulps of it)
     assert held[-1] <= scale * ((1 - 1 / window) ** 200 + 1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), p=st.sampled_from([2.0, 1.0, 0.5, 0.0, -1.0]),
+       f=st.floats(0.0, 1.0))
+def test_the_shape_interpolates_in_a_to_the_p(seed, p, f):
+    """Between two anchors the model at a is the anchors' blend with the weight f of the
+    upper one where g(a) = (1 - f) g(a_1) + f g(a_2), g = a^p (log a for p = 0): at the
+    anchors it is their own system whatever p, and D is exactly the blend."""
+    rng = np.random.default_rng(seed)
+    lo, hi = rng.uniform(0.05, 1.0), rng.uniform(1.5, 4.0)
+    linear = random_modal(rng, K=2, amplitudes=np.array([lo, hi]))
+    model = dataclasses.replace(linear, exponent=p)
+    g = (lambda a: np.log(a)) if p == 0 else (lambda a: a ** p)     # noqa: E731
+    target = (1 - f) * g(lo) + f * g(hi)
+    a = np.exp(target) if p == 0 else target ** (1 / p)
+    np.testing.assert_allclose(model.at(a).D, (1 - f) * model.D[0] + f * model.D[1],
+                               rtol=1e-9, atol=1e-12)
+    omega = np.array([0.4, 1.7])
+    for end in (lo, hi):
+        np.testing.assert_allclose(model.at(end).response(omega),
+                                   linear.at(end).response(omega), rtol=1e-9)
+    assert model.at(a).spectral_radius < 1
+
+
+def test_the_shape_moves_the_middle_level_only():
+    """log a puts the geometric mean of the anchors half-way and a^1 the arithmetic
+    mean; from rest (a = 0) the log shape holds the lowest anchor, no warning."""
+    rng = np.random.default_rng(4)
+    base = random_modal(rng, K=2, amplitudes=np.array([1.0, 4.0]))
+    log = dataclasses.replace(base, exponent=0.0)
+    half = (base.D[0] + base.D[1]) / 2
+    np.testing.assert_allclose(log.at(2.0).D, half, rtol=1e-12)
+    np.testing.assert_allclose(base.at(2.5).D, half, rtol=1e-12)
+    np.testing.assert_allclose(log.at(0.0).D, base.D[0], rtol=1e-12)
+    u = rng.normal(size=(50, 2))
+    assert np.all(np.isfinite(log.predict(u)))
+    with pytest.raises(InvalidArgumentError, match="above 0"):
+        ScheduledStateSpace(np.array([0.0, 1.0]), base.poles, base.c, base.b, base.real_poles,
+            base.real_c, base.real_b, base.D, window=5, exponent=0.0)
+    with pytest.raises(InvalidArgumentError, match="finite"):
+        dataclasses.replace(base, exponent=float("nan"))
+
+
+def test_fit_passes_the_exponent_to_the_model():
+    low, high = records_at(0.0, 1), records_at(1.0, 2)
+    model = fit_scheduled_state_space([low, high], PERIOD, order=3, window=PERIOD,
+                                      discard=0, max_nfev=20, exponent=0.5)
+    assert model.exponent == 0.5

@@ -63,7 +63,7 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
                               order: int | None = None, *,
                               linear: StateSpace | None = None, window: float = 1024.0,
                               discard: int = 1, max_nfev: int = 50,
-                              penalty: float = 1.0,
+                              penalty: float = 1.0, exponent: float = 1.0,
                               **state_space_options: Any) -> ScheduledStateSpace:
     """One :class:`~pihyst.dynamics.ScheduledStateSpace` for records at several drive
     amplitudes (module notes).
@@ -90,6 +90,8 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
     penalty : float
         mu of the modal fit's penalty on changes from the common modes (module notes;
         0: none, each level's modes fitted freely).
+    exponent : float
+        p of the model's interpolation shape a^p (0: log a; :mod:`._scheduled`).
     **state_space_options
         Passed to :func:`~pihyst.dynamics.fit_state_space` (step 1).
 
@@ -155,4 +157,5 @@ def fit_scheduled_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], perio
     for k in range(1, a.size):
         c[k], b[k] = gauge_to(b[0], c[k], b[k])
         cr[k], br[k] = (v.real for v in gauge_to(br[0], cr[k], br[k]))
-    return ScheduledStateSpace(a, lam, c, b, lr, cr, br, D, window=float(window))
+    return ScheduledStateSpace(a, lam, c, b, lr, cr, br, D, window=float(window),
+                               exponent=exponent)

@@ -18,10 +18,17 @@ and per real pole):
     x_q[t+1] = lambda_q(a[t]) x_q[t] + b_q(a[t])^T u[t],
     y[t]     = sum_pairs 2 Re(c_q(a[t]) x_q[t]) + sum_reals c_q(a[t]) x_q[t] + D(a[t]) u[t],
 
-each parameter piecewise linear in a between the anchors a_1 < ... < a_K (the levels it
-was fitted at) and held at the nearest anchor's value outside them; a pair's pole is
-interpolated in radius and angle, so it stays inside the unit circle. At a constant
-amplitude a the model is the linear system :meth:`ScheduledStateSpace.at` (a) returns.
+each parameter piecewise linear in g(a) between the anchors a_1 < ... < a_K (the levels
+it was fitted at) and held at the nearest anchor's value outside them, with
+
+    g(a) = a^p   (p != 0),      g(a) = log a   (p = 0),
+
+``exponent`` p (1 by default: linear in the amplitude; at a_k < a < a_k+1 the weight of
+a_k+1 is (g(a) - g(a_k)) / (g(a_k+1) - g(a_k)), the same for a^p and c a^p, so p = 0,
+the log, is the one shape that does not depend on which power of the amplitude is
+called the amplitude). A pair's pole is interpolated in radius and angle, so it stays
+inside the unit circle. At a constant amplitude a the model is the linear system
+:meth:`ScheduledStateSpace.at` (a) returns.
 """
 
 from dataclasses import dataclass
@@ -69,13 +76,22 @@ def running_amplitude(u: ArrayLike, window: float) -> NDArray[np.float64]:
     return np.sqrt(np.maximum(s, 0.0))
 
 
-def _weights(amplitudes, a):
-    """Index k and fraction f with value = (1 - f) v[k] + f v[k + 1]; clamped outside."""
+def schedule_shape(a, exponent):
+    """g(a) of the module notes: a^p, or log a for p = 0 (a > 0 there)."""
+    a = np.asarray(a, dtype=float)
+    return np.log(a) if exponent == 0 else a ** exponent
+
+
+def _weights(amplitudes, a, exponent=1.0):
+    """Index k and fraction f with value = (1 - f) v[k] + f v[k + 1]; clamped outside;
+    f linear in g(a) = a^p (log a for p = 0)."""
     K = amplitudes.size
     if K == 1:
         return np.zeros(a.shape, int), np.zeros(a.shape)
+    a = np.clip(a, amplitudes[0], amplitudes[-1])
     k = np.clip(np.searchsorted(amplitudes, a, side="right") - 1, 0, K - 2)
-    f = np.clip((a - amplitudes[k]) / (amplitudes[k + 1] - amplitudes[k]), 0.0, 1.0)
+    g, ga = schedule_shape(a, exponent), schedule_shape(amplitudes, exponent)
+    f = np.clip((g - ga[k]) / (ga[k + 1] - ga[k]), 0.0, 1.0)
     return k, f
 
 
@@ -111,12 +127,16 @@ class ScheduledStateSpace:
         (K, p, m) feedthrough.
     window : float
         W of the schedule, samples.
+    exponent : float
+        p of the interpolation's shape g(a) = a^p (0: log a; module notes); 1, linear
+        in the amplitude, by default.
 
     Raises
     ------
     InvalidArgumentError
         Shapes that do not match, anchors not increasing, poles not inside the unit
-        circle, NaN or infinite entries.
+        circle, NaN or infinite entries, an exponent that is not finite, an exponent of
+        0 or below with an anchor at 0.
 
     Examples
     --------
@@ -138,6 +158,7 @@ class ScheduledStateSpace:
     real_b: NDArray[np.float64]
     D: NDArray[np.float64]
     window: float
+    exponent: float = 1.0
 
     def __post_init__(self):
         conv = {"amplitudes": float, "poles": complex, "c": complex, "b": complex,
@@ -169,6 +190,12 @@ class ScheduledStateSpace:
         if not self.window >= 1:
             raise InvalidArgumentError(f"window must be at least 1 sample, not "
                                        f"{self.window!r}")
+        if not np.isfinite(self.exponent):
+            raise InvalidArgumentError(f"exponent must be finite, not {self.exponent!r}")
+        object.__setattr__(self, "exponent", float(self.exponent))
+        if self.exponent <= 0 and a[0] <= 0 and a.size > 1:
+            raise InvalidArgumentError(f"with exponent {self.exponent:g} every anchor must "
+                                       f"be above 0, not {a[0]!r}")
 
     @property
     def n_inputs(self) -> int:
@@ -187,7 +214,7 @@ class ScheduledStateSpace:
 
     def _parameters(self, a):
         """The modal parameters at the amplitudes ``a`` (T,): each with a leading T."""
-        k, f = _weights(self.amplitudes, a)
+        k, f = _weights(self.amplitudes, a, self.exponent)
         radius = _blend(np.abs(self.poles), k, f)
         angle = _blend(np.angle(self.poles), k, f)
         return (radius * np.exp(1j * angle), _blend(self.c, k, f), _blend(self.b, k, f),
