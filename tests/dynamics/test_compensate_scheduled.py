@@ -1,6 +1,8 @@
 """Feedforward compensation of an amplitude-scheduled state-space model
 (pihyst.dynamics._compensate_scheduled)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -77,6 +79,17 @@ def test_periodic_response_is_the_steady_state_of_predict(seed, level):
                                model.schedule(np.tile(u, (SETTLE, 1)))[-N:], rtol=1e-9)
     y = steady(model, u)
     np.testing.assert_allclose(periodic_response(model, u), y, atol=1e-9 * np.ptp(y))
+
+
+@pytest.mark.parametrize("exponent", [0.0, 0.5, 2.0])
+def test_the_compensation_follows_the_schedules_shape(exponent):
+    """Interpolated in log a, sqrt a or a^2 between the anchors: the compensator runs the
+    model's own schedule, whatever its shape."""
+    model = dataclasses.replace(softening_3x3(), exponent=exponent)
+    desired = steady(model, smooth_drive(3, 1.0))
+    res = compensate_scheduled(model, desired, u_min=-20.0, u_max=20.0)
+    assert res.converged and not res.saturated
+    assert np.max(np.abs(steady(model, res.voltage) - desired)) < 1e-8 * np.ptp(desired)
 
 
 @pytest.mark.parametrize("level", [0.3, 1.0, 2.2, 4.0])

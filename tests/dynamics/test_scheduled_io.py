@@ -32,7 +32,8 @@ def random_model(rng, K, P, R, p, m):
     return ScheduledStateSpace(np.cumsum(rng.uniform(1e-3, 2.0, K)),
                                radius * np.exp(1j * angle), cplx(K, P, p), cplx(K, P, m),
                                rng.uniform(-0.999, 0.999, (K, R)), odd(K, R, p), odd(K, R, m),
-                               odd(K, p, m), window=float(rng.uniform(1, 1e4)))
+                               odd(K, p, m), window=float(rng.uniform(1, 1e4)),
+                               exponent=float(rng.choice([1.0, 0.0, 0.5, 2.0, rng.normal()])))
 
 
 def same_bits(a, b):
