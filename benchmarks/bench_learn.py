@@ -196,8 +196,8 @@ def inverse_error(make, model, ham, desired):
     """RMS error of the Hammerstein inverse (``ham`` None: the static inverse, learning's
     trial 0) played periodically on a fresh stage settled on it, and the number of its
     voltages outside the limits."""
-    h_d = desired if ham is None else periodic_inverse_dynamics(ham.a[0], ham.b[0][0],
-                                                                  desired, ham.trusted_from)
+    h_d = desired if ham is None else periodic_inverse_dynamics(
+        ham.a[0], ham.b[0][0], desired, ham.trusted_from, ham.order_trusted_from)
     u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
     stage = make(CLOCK_HZ)
     stage.settle_on(u)
@@ -300,7 +300,10 @@ def main():
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
                           for p in np.roots(ham.a[0]) if p.imag >= 0)
               + f"; correction faded in from {ham.trusted_from * CLOCK_HZ:g} Hz to "
-                f"{2 ** FADE_OCTAVES * ham.trusted_from * CLOCK_HZ:g} Hz")
+                f"{2 ** FADE_OCTAVES * ham.trusted_from * CLOCK_HZ:g} Hz"
+              + ("; on harmonics 1, 3, 5, 7 from " + ", ".join(
+                  "never" if t >= 0.5 else f"{t * CLOCK_HZ:g} Hz"
+                  for t in ham.order_trusted_from[0:7:2]) if ham.order_trusted_from else ""))
         if not learn:
             print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}"
                   + (f" {'true G':>7} {'ratio':>6}" if "--true-dynamics" in sys.argv else ""))
@@ -328,8 +331,10 @@ def main():
     print(f"\nHammerstein inverse (all stages): below the static inverse at every rate above "
           f"fmode/20: {sum(c[6] < c[5] for c in above)} of {len(above)}; not above it at "
           f"or below fmode/20: {sum(c[6] <= c[5] for c in below)} of {len(below)}; "
-          f"ratio to the static: {min(c[6] / c[5] for c in checks):.3f} - "
-          f"{max(c[6] / c[5] for c in checks):.3f}")
+          f"ratio to the static: {min(c[6] / c[5] for c in checks):.4f} - "
+          f"{max(c[6] / c[5] for c in checks):.4f}; worst at or below fmode/20 "
+          f"{max(c[6] / c[5] for c in below):.5f}, worst above "
+          f"{max(c[6] / c[5] for c in above):.4f}")
     held = [c for c in checks if not c[0]]
     if not learn:
         print(f"voltages outside {U_MIN:g}-{U_MAX:g} V: {sum(c[4] for c in checks)}")

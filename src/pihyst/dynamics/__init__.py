@@ -31,6 +31,7 @@ from pihyst.dynamics._compensate import (
     compensate_hammerstein,
     compensate_mimo,
     periodic_inverse_dynamics,
+    periodic_weight,
     trust_weight,
     zpetc,
 )
@@ -55,5 +56,5 @@ __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "Scheduled
            "default_thresholds",
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
            "fit_scheduled_state_space", "fit_state_space", "fsid", "load_hammerstein",
-           "periodic_inverse_dynamics",
+           "periodic_inverse_dynamics", "periodic_weight",
            "predict_linear", "running_amplitude", "trust_weight", "zpetc"]
