@@ -253,7 +253,8 @@ def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike,
     usable = np.abs(G) > 1e-9 * np.abs(G).max()
     H = np.where(usable, R / np.where(usable, G, 1.0), 0.0)
     W = periodic_weight(r.size, trusted_from, order_trusted_from)
-    return np.fft.irfft(R + W * (H - R), r.size)
+    # r plus the correction: exactly r where W is 0 on every line
+    return r + np.fft.irfft(W * (H - R), r.size)
 
 
 def periodic_inverse_mimo(model, r):
