@@ -19,7 +19,9 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
 - :func:`compensate_hammerstein`: zero-phase error tracking inverse of the dynamics (for
   a periodic trajectory, the exact inverse per harmonic), then the exact hysteresis
   inverse with voltage and slew limits (SISO); below the band the dynamics were
-  measured in, :func:`trust_weight` fades their correction out;
+  measured in, :func:`trust_weight` fades their correction out, and on a periodic
+  trajectory's harmonics :func:`periodic_weight` leaves it out where the identification's
+  held-back records showed it not to help;
 - :func:`compensate_mimo`: the same for a square MIMO StateSpaceHammerstein and a
   periodic trajectory (the dynamics inverted per harmonic);
 - :func:`load_hammerstein`: a HammersteinModel from its JSON file

@@ -48,6 +48,15 @@ below). With f_t = 0 (the default) W = 1. The ZPETC path applies the
 same W to h_d - r, by FFT over the trajectory with ``len(r)`` samples of rest on each
 side (the correction is zero at rest: unit static gain).
 
+**Order by order** (periodic trajectories). A model from :func:`fit_dynamics` also
+records, per harmonic order k, from which frequency its records, each held back, showed
+the correction to bring harmonic k closer than the static model alone
+(``HammersteinModel.order_trusted_from``, pihyst.dynamics._on_static's notes). On line k
+of a period the weight is then at most trust_weight from that frequency (0 where it is
+0.5, "never", and on lines past the tuple's end): :func:`periodic_weight`. Where every
+line's weight is 0, h_d is r itself. The ZPETC path has no harmonic orders and uses f_t
+alone.
+
 A square MIMO :class:`StateSpaceHammerstein` (as many inputs as outputs) is compensated
 the same way for a periodic trajectory of all outputs, R(k) a vector per line:
 
