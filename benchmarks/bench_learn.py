@@ -16,14 +16,19 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   own figures, the gain against it);
 - the Hammerstein inverse (no learning): that model followed by dynamics measured on
   the stage (``pihyst.dynamics.fit_dynamics``: one drive shape, a triangle's first 15
-  harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 Hz, and 80 Hz held back
-  to choose the order; the ratio of the fast periods' harmonics to the slow one's, which
-  the hysteresis does not enter, taken relative to the creep the static model predicts
-  between the rates (``sample_period=``; the inverse undoes that creep itself); unit
-  static gain, so the static model keeps the gain at rest), the dynamics inverted
+  harmonics over 10-140 V, played at 1 Hz and at 20, 50, 100, 200 and 80 Hz, each fast
+  record held back in turn to choose the order (the lowest unless a higher one is clearly
+  better) and to find, per harmonic order, from which rate the dynamics' correction
+  brings the output closer than the static model alone; the ratio of the fast periods'
+  harmonics to the slow one's, which the hysteresis does not enter, taken relative to
+  the creep the static model predicts between the rates (``sample_period=``; the
+  inverse undoes that creep itself); unit static gain, so the static model keeps the
+  gain at rest), the dynamics inverted
   exactly per harmonic of the scan, their correction faded out below the band they
   were measured in (``HammersteinModel.trusted_from``, the 20 Hz record's fundamental:
-  none up to 20 Hz, all from 80 Hz, over two octaves; ``--no-fade``: the whole inverse
+  none up to 20 Hz, all from 80 Hz, over two octaves; on harmonic k of the scan from
+  where the held-back records showed the correction to help on harmonic k,
+  ``HammersteinModel.order_trusted_from``; ``--no-fade``: the whole inverse
   everywhere), then the same periodic hysteresis
   inverse (with creep) as the static inverse's;
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
@@ -45,7 +50,7 @@ are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
      [--no-learning [--true-dynamics]] [--ratio-only] [--no-fade]
-     [--learn-from-hammerstein] [--no-creep-ratio]
+     [--learn-from-hammerstein] [--no-creep-ratio] [--former-rules]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
      static and Hammerstein inverses only, at 1, 10, 50, 100 Hz, fmode/8 and fmode/20
@@ -55,9 +60,12 @@ Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unsc
      refit on the static model; --learn-from-hammerstein: learn from the Hammerstein
      model, its hysteresis with the static model's creep, instead of the static model;
      --no-creep-ratio: the dynamics measured without the static model's creep, as
-     before)
+     before; --former-rules: the Hammerstein model's order chosen on the 80 Hz record
+     alone and its correction applied on every harmonic of the scan, as before the
+     held-back rules of fit_dynamics)
 """
 
+import dataclasses
 import sys
 import time
 import warnings
@@ -143,6 +151,12 @@ ID_SPAN_V = (10.0, 140.0)
 ID_HARMONICS = 15
 
 
+#: --former-rules: the order chosen on the last record alone within 1 %, the correction
+#: on every harmonic from the slowest record's fundamental (pihyst before the
+#: held-back rules; the figures' "before")
+FORMER_RULES = "--former-rules" in sys.argv[1:]
+
+
 def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True,
                       no_creep=False):
     """``model`` followed by the stage's dynamics (``fit_dynamics``: the band-limited
@@ -154,9 +168,11 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, f
         stage = make(CLOCK_HZ)
         stage.settle_on(u)
         return u, stage.run_periodic(u)
-    return fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
-                        numerator_on_static=numerator_on_static, keep_creep=keep_creep,
-                        fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ)
+    ham = fit_dynamics(model, period(ID_SLOW_HZ), [period(rate) for rate in ID_RATES],
+                       numerator_on_static=numerator_on_static, keep_creep=keep_creep,
+                       fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ,
+                       **({"validation": -1, "tolerance": 0.01} if FORMER_RULES else {}))
+    return dataclasses.replace(ham, order_trusted_from=()) if FORMER_RULES else ham
 
 
 def scan(make, rate_hz, fmode):
@@ -196,8 +212,8 @@ def inverse_error(make, model, ham, desired):
     """RMS error of the Hammerstein inverse (``ham`` None: the static inverse, learning's
     trial 0) played periodically on a fresh stage settled on it, and the number of its
     voltages outside the limits."""
-    h_d = desired if ham is None else periodic_inverse_dynamics(ham.a[0], ham.b[0][0],
-                                                                  desired, ham.trusted_from)
+    h_d = desired if ham is None else periodic_inverse_dynamics(
+        ham.a[0], ham.b[0][0], desired, ham.trusted_from, ham.order_trusted_from)
     u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
     stage = make(CLOCK_HZ)
     stage.settle_on(u)
@@ -268,7 +284,7 @@ def main():
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
                          "--learn-from-hammerstein", "--no-fade", "--true-dynamics",
-                         "--no-creep-ratio")]
+                         "--no-creep-ratio", "--former-rules")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
@@ -300,7 +316,10 @@ def main():
               + ", ".join(f"{abs(np.log(p)) * CLOCK_HZ / (2 * np.pi):.0f} Hz"
                           for p in np.roots(ham.a[0]) if p.imag >= 0)
               + f"; correction faded in from {ham.trusted_from * CLOCK_HZ:g} Hz to "
-                f"{2 ** FADE_OCTAVES * ham.trusted_from * CLOCK_HZ:g} Hz")
+                f"{2 ** FADE_OCTAVES * ham.trusted_from * CLOCK_HZ:g} Hz"
+              + ("; on harmonics 1, 3, 5, 7 from " + ", ".join(
+                  "never" if t >= 0.5 else f"{t * CLOCK_HZ:g} Hz"
+                  for t in ham.order_trusted_from[0:7:2]) if ham.order_trusted_from else ""))
         if not learn:
             print(f"{'rate Hz':>8} {'N':>6} {'static':>7} {'hammer':>7} {'ratio':>6}"
                   + (f" {'true G':>7} {'ratio':>6}" if "--true-dynamics" in sys.argv else ""))
@@ -328,8 +347,10 @@ def main():
     print(f"\nHammerstein inverse (all stages): below the static inverse at every rate above "
           f"fmode/20: {sum(c[6] < c[5] for c in above)} of {len(above)}; not above it at "
           f"or below fmode/20: {sum(c[6] <= c[5] for c in below)} of {len(below)}; "
-          f"ratio to the static: {min(c[6] / c[5] for c in checks):.3f} - "
-          f"{max(c[6] / c[5] for c in checks):.3f}")
+          f"ratio to the static: {min(c[6] / c[5] for c in checks):.4f} - "
+          f"{max(c[6] / c[5] for c in checks):.4f}; worst at or below fmode/20 "
+          f"{max(c[6] / c[5] for c in below):.5f}, worst above "
+          f"{max(c[6] / c[5] for c in above):.4f}")
     held = [c for c in checks if not c[0]]
     if not learn:
         print(f"voltages outside {U_MIN:g}-{U_MAX:g} V: {sum(c[4] for c in checks)}")

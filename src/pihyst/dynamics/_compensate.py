@@ -48,6 +48,15 @@ below). With f_t = 0 (the default) W = 1. The ZPETC path applies the
 same W to h_d - r, by FFT over the trajectory with ``len(r)`` samples of rest on each
 side (the correction is zero at rest: unit static gain).
 
+**Order by order** (periodic trajectories). A model from :func:`fit_dynamics` also
+records, per harmonic order k, from which frequency its records, each held back, showed
+the correction to bring harmonic k closer than the static model alone
+(``HammersteinModel.order_trusted_from``, pihyst.dynamics._on_static's notes). On line k
+of a period the weight is then at most trust_weight from that frequency (0 where it is
+0.5, "never", and on lines past the tuple's end): :func:`periodic_weight`. Where every
+line's weight is 0, h_d is r itself. The ZPETC path has no harmonic orders and uses f_t
+alone.
+
 A square MIMO :class:`StateSpaceHammerstein` (as many inputs as outputs) is compensated
 the same way for a periodic trajectory of all outputs, R(k) a vector per line:
 
@@ -157,10 +166,63 @@ def _faded(r, h_d, trusted_from):
     return r + np.fft.irfft(W * np.fft.rfft(d), d.size)[n:2 * n]
 
 
+def periodic_weight(n: int, trusted_from: float = 0.0,
+                    order_trusted_from: Any = ()) -> NDArray[np.float64]:
+    """W on the rfft lines k = 0 .. n // 2 of an n-sample period (module notes): on line
+    k, :func:`trust_weight` of k / n from ``trusted_from`` and, when
+    ``order_trusted_from`` is given, at most its weight from that tuple's entry k
+    (an entry of 0.5: 0; lines past its end: 0).
+
+    Parameters
+    ----------
+    n : int
+        Samples per period.
+    trusted_from : float
+        f_t, cycles per sample (0: no limit).
+    order_trusted_from : sequence of float
+        Per harmonic order k = 1, 2, ..., where its weight starts (cycles per sample).
+
+    Returns
+    -------
+    ndarray
+        W per line, between 0 and 1.
+
+    Examples
+    --------
+    >>> from pihyst.dynamics import periodic_weight
+    >>> periodic_weight(8, 0.01).round(3).tolist()
+    [0.0, 1.0, 1.0, 1.0, 1.0]
+    >>> periodic_weight(8, 0.01, (0.0625, 0.5, 0.09375)).round(3).tolist()
+    [0.0, 0.5, 0.0, 1.0, 0.0]
+    """
+    f = np.arange(n // 2 + 1) / n
+    W = trust_weight(f, trusted_from)
+    orders = np.asarray(order_trusted_from, dtype=float).ravel()
+    if orders.size:
+        start = np.full(W.size, 0.5)
+        m = min(orders.size, W.size - 1)
+        start[1:m + 1] = orders[:m]
+        W = np.minimum(W, np.where(start >= 0.5, 0.0,
+                                   _trust_weight_from(f, np.minimum(start, 0.5))))
+    return W
+
+
+def _trust_weight_from(f, start):
+    """:func:`trust_weight` with a start per frequency."""
+    f, start = np.broadcast_arrays(np.asarray(f, dtype=float), np.asarray(start, dtype=float))
+    out = np.ones(f.shape)
+    some = start > 0
+    with np.errstate(divide="ignore"):
+        out[some] = np.clip(np.log2(f[some] / start[some]) / FADE_OCTAVES, 0.0, 1.0)
+    return out
+
+
 def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike,
-                              trusted_from: float = 0.0) -> NDArray[np.float64]:
+                              trusted_from: float = 0.0,
+                              order_trusted_from: Any = ()) -> NDArray[np.float64]:
     """The exact inverse of the dynamics for one period ``r`` of a periodic reference
-    (SISO; module notes: H_d(k) = R(k) / G(z_k), faded out below ``trusted_from``).
+    (SISO; module notes: H_d(k) = R(k) / G(z_k), faded out below ``trusted_from`` and,
+    on the period's k-th harmonic, below ``order_trusted_from[k - 1]``).
 
     Parameters
     ----------
@@ -173,6 +235,9 @@ def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike,
     trusted_from : float
         f_t of the module notes (cycles per sample; needs unit static gain); 0: the
         whole inverse at every frequency.
+    order_trusted_from : sequence of float
+        Per harmonic order, where the correction starts on it (module notes, "Order by
+        order"; ``HammersteinModel.order_trusted_from``); empty: ``trusted_from`` alone.
 
     Returns
     -------
@@ -196,8 +261,9 @@ def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike,
     R = np.fft.rfft(r)
     usable = np.abs(G) > 1e-9 * np.abs(G).max()
     H = np.where(usable, R / np.where(usable, G, 1.0), 0.0)
-    W = trust_weight(np.arange(R.size) / r.size, trusted_from)
-    return np.fft.irfft(R + W * (H - R), r.size)
+    W = periodic_weight(r.size, trusted_from, order_trusted_from)
+    # r plus the correction: exactly r where W is 0 on every line
+    return r + np.fft.irfft(W * (H - R), r.size)
 
 
 def periodic_inverse_mimo(model, r):
@@ -367,7 +433,8 @@ def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | Non
         return res.voltage, h_d, res
     desired = np.asarray(desired, dtype=float)
     h_d = periodic_inverse_dynamics(model.a[0], model.b[0][0], desired,
-                                    getattr(model, "trusted_from", 0.0))
+                                    getattr(model, "trusted_from", 0.0),
+                                    getattr(model, "order_trusted_from", ()))
     res = compensate(H, np.tile(h_d, 2), u_min=u_min, u_max=u_max, slew_rate=slew_rate,
                      sample_period=sample_period)
     return res.voltage[h_d.size:], h_d, res

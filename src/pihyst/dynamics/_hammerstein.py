@@ -65,6 +65,14 @@ class HammersteinModel:
         every frequency. The compensators apply none of the dynamics' correction below
         it and fade it in over the two octaves above (:func:`trust_weight`); it needs
         unit static gain.
+    order_trusted_from : tuple of float
+        Per harmonic order k = 1, 2, ... of a periodic trajectory, the frequency
+        (cycles per sample) from which the correction applies on the period's k-th
+        harmonic (:func:`fit_dynamics`: where the identification's records, each held
+        back, showed it to bring the output closer than the static model alone; 0.5:
+        never), faded in over the two octaves above as ``trusted_from``; orders past
+        its end get no correction. Empty (the default): ``trusted_from`` alone, on
+        every harmonic. Used by the periodic compensation only.
 
     Examples
     --------
@@ -80,6 +88,7 @@ class HammersteinModel:
     a: tuple[Any, ...]
     b: tuple[Any, ...]
     trusted_from: float = 0.0
+    order_trusted_from: tuple[float, ...] = ()
 
     family = FAMILY
 
@@ -170,7 +179,8 @@ class HammersteinModel:
         -------
         dict
             ``family``, ``hysteresis`` (each model's dict), ``a`` and ``b``; and
-            ``trusted_from`` when it is not 0.
+            ``trusted_from`` when it is not 0, ``order_trusted_from`` when it is
+            not empty.
 
         Examples
         --------
@@ -188,6 +198,8 @@ class HammersteinModel:
                              "b": [np.atleast_2d(b).tolist() for b in self.b]}
         if self.trusted_from:
             d["trusted_from"] = float(self.trusted_from)
+        if self.order_trusted_from:
+            d["order_trusted_from"] = [float(t) for t in self.order_trusted_from]
         return d
 
     @classmethod
@@ -198,7 +210,8 @@ class HammersteinModel:
         ----------
         d : dict
             ``family`` ("hammerstein"), ``hysteresis``, ``a`` and ``b``; optionally
-            ``trusted_from`` (cycles per sample, 0 <= it < 0.5).
+            ``trusted_from`` (cycles per sample, 0 <= it < 0.5) and
+            ``order_trusted_from`` (a list of them, each in [0, 0.5]).
         source : str
             What the dict came from, for the messages.
 
@@ -258,7 +271,15 @@ class HammersteinModel:
                 or not 0.0 <= trusted < 0.5):
             raise InvalidModelError(f"{source}: key 'trusted_from' must be a number of "
                                     f"cycles per sample in [0, 0.5), got {trusted!r:.40}")
-        return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b), trusted_from=float(trusted))
+        orders = d.get("order_trusted_from", [])
+        if not isinstance(orders, list) or not all(
+                isinstance(t, (int, float)) and not isinstance(t, bool) and 0.0 <= t <= 0.5
+                for t in orders):
+            raise InvalidModelError(f"{source}: key 'order_trusted_from' must be a list of "
+                                    f"numbers of cycles per sample in [0, 0.5], got "
+                                    f"{orders!r:.40}")
+        return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b), trusted_from=float(trusted),
+                   order_trusted_from=tuple(float(t) for t in orders))
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the model as JSON to ``path`` (the file appears only once complete).
