@@ -405,7 +405,7 @@ def fit_dynamics(static: Any, slow: tuple[Any, Any], fast: Sequence[tuple[Any, A
             raise InvalidArgumentError("choosing the order needs at least two fast records "
                                        "(one held back); give validation=None")
         if validation == "each":
-            held = range(len(spectra))
+            held = list(range(len(spectra)))
         elif isinstance(validation, (int, np.integer)) and not isinstance(validation, bool):
             held = [int(validation) % len(spectra)]
         else:
