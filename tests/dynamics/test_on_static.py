@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.signal import lfilter
 
@@ -401,6 +401,8 @@ def test_where_the_correction_does_not_beat_the_static_models_error_it_is_left_o
 @settings(max_examples=30, deadline=None)
 @given(n=st.integers(2, 400), f_t=st.floats(0, 0.2),
        starts=st.lists(st.one_of(st.floats(0, 0.5), st.just(0.5)), max_size=30))
+@example(n=2, f_t=0.0, starts=[2.225073858507e-311])      # subnormal starts: found by
+@example(n=2, f_t=2.225073858507e-311, starts=[])         # Hypothesis (f / start overflowed)
 def test_the_weight_per_order_never_exceeds_the_bands_and_is_zero_past_the_orders(
         n, f_t, starts):
     W = periodic_weight(n, f_t, starts)

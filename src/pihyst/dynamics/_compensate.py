@@ -151,8 +151,9 @@ def trust_weight(f: ArrayLike, trusted_from: float) -> NDArray[np.float64]:
     f = np.asarray(f, dtype=float)
     if not trusted_from > 0:
         return np.ones_like(f)
+    # log2 f - log2 f_t, not log2(f / f_t): the quotient overflows for a subnormal f_t
     with np.errstate(divide="ignore"):
-        return np.clip(np.log2(f / trusted_from) / FADE_OCTAVES, 0.0, 1.0)
+        return np.clip((np.log2(f) - np.log2(trusted_from)) / FADE_OCTAVES, 0.0, 1.0)
 
 
 def _faded(r, h_d, trusted_from):
@@ -213,7 +214,8 @@ def _trust_weight_from(f, start):
     out = np.ones(f.shape)
     some = start > 0
     with np.errstate(divide="ignore"):
-        out[some] = np.clip(np.log2(f[some] / start[some]) / FADE_OCTAVES, 0.0, 1.0)
+        out[some] = np.clip((np.log2(f[some]) - np.log2(start[some])) / FADE_OCTAVES,
+                            0.0, 1.0)
     return out
 
 
