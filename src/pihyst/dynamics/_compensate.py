@@ -148,12 +148,7 @@ def trust_weight(f: ArrayLike, trusted_from: float) -> NDArray[np.float64]:
     >>> trust_weight([0.0, 0.01, 0.02, 0.03, 0.04, 0.3], 0.01).round(3).tolist()
     [0.0, 0.0, 0.5, 0.792, 1.0, 1.0]
     """
-    f = np.asarray(f, dtype=float)
-    if not trusted_from > 0:
-        return np.ones_like(f)
-    # log2 f - log2 f_t, not log2(f / f_t): the quotient overflows for a subnormal f_t
-    with np.errstate(divide="ignore"):
-        return np.clip((np.log2(f) - np.log2(trusted_from)) / FADE_OCTAVES, 0.0, 1.0)
+    return _trust_weight_from(f, trusted_from)
 
 
 def _faded(r, h_d, trusted_from):
@@ -203,16 +198,16 @@ def periodic_weight(n: int, trusted_from: float = 0.0,
         start = np.full(W.size, 0.5)
         m = min(orders.size, W.size - 1)
         start[1:m + 1] = orders[:m]
-        W = np.minimum(W, np.where(start >= 0.5, 0.0,
-                                   _trust_weight_from(f, np.minimum(start, 0.5))))
+        W = np.minimum(W, np.where(start >= 0.5, 0.0, _trust_weight_from(f, start)))
     return W
 
 
 def _trust_weight_from(f, start):
-    """:func:`trust_weight` with a start per frequency."""
+    """:func:`trust_weight` with a start per frequency (1 where it is not above 0)."""
     f, start = np.broadcast_arrays(np.asarray(f, dtype=float), np.asarray(start, dtype=float))
     out = np.ones(f.shape)
     some = start > 0
+    # log2 f - log2 f_t, not log2(f / f_t): the quotient overflows for a subnormal f_t
     with np.errstate(divide="ignore"):
         out[some] = np.clip((np.log2(f[some]) - np.log2(start[some])) / FADE_OCTAVES,
                             0.0, 1.0)

@@ -357,7 +357,11 @@ def learn_periodic(run_period: Callable[[NDArray[np.float64]], ArrayLike], desir
             # the learning law; the best trial's probe leaves the lines not learned
             kind, probe = "learn", np.zeros(R.size, dtype=complex)
             H_next = learning_law(H_b, E, G, Q, gamma, b.probe)
-        u, y = play(periodic_inverse(parts, np.fft.irfft(H_next, n), lo, hi, max_step))
+        # a step that overflowed (learning_law, _probe) stays non-finite through the
+        # inverse transform; periodic_inverse makes that drive feasible like any other
+        with np.errstate(over="ignore", invalid="ignore"):
+            h_next = np.fft.irfft(H_next, n)
+        u, y = play(periodic_inverse(parts, h_next, lo, hi, max_step))
         sigma = min(noise_sigma(y, sigma_floor), estimate.sigma)
         estimate.add(parts.hysteresis_output(u), y, sigma, parent=best)
         trial.append(_Trial(_rms(y - target), u, y, probe, kind))
