@@ -446,10 +446,12 @@ def compensate_scheduled(model: ScheduledStateSpace, desired: ArrayLike, *,
         return _result(model, r, u, abar, iterations, best_err <= tol * scale, False)
     # the exact voltages leave the limits: projected steps from the clipped ones
     u = np.clip(np.where(np.isfinite(u), u, 0.0), lo, hi)
-    best, best_err = u, error(u)
+    residual = r - periodic_response(model, u)
+    best, best_err = u, float(np.sqrt(np.mean(residual ** 2)))
     for _ in range(max_iterations):
-        u = np.clip(u + _apply(Ginv, r - periodic_response(model, u)), lo, hi)
-        err = error(u)
+        u = np.clip(u + _apply(Ginv, residual), lo, hi)
+        residual = r - periodic_response(model, u)
+        err = float(np.sqrt(np.mean(residual ** 2)))
         if err < best_err:
             best, best_err = u, err
     return _result(model, r, best, abar, iterations + max_iterations, best_err <= tol * scale, True)

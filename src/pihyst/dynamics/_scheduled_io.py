@@ -13,6 +13,7 @@ the file and the key, or the line and column of broken JSON)::
       "real_b": {"shape": [K, R, m], "values": ...},
       "D": {"shape": [K, p, m], "values": ...},
       "window": 1024.0,
+      "exponent": 1.0,                             # optional (1 when absent)
       "metadata": {...}                            # optional, free-form, not read
     }
 
