@@ -30,7 +30,9 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   where the held-back records showed the correction to help on harmonic k,
   ``HammersteinModel.order_trusted_from``; ``--no-fade``: the whole inverse
   everywhere), then the same periodic hysteresis
-  inverse (with creep) as the static inverse's;
+  inverse (with creep) as the static inverse's, its mean voltage moved only as far as
+  the static model's mean error on the 1 Hz record allows (``held_mean``,
+  ``HammersteinModel.static_offset``);
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -61,8 +63,8 @@ Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unsc
      model, its hysteresis with the static model's creep, instead of the static model;
      --no-creep-ratio: the dynamics measured without the static model's creep, as
      before; --former-rules: the Hammerstein model's order chosen on the 80 Hz record
-     alone and its correction applied on every harmonic of the scan, as before the
-     held-back rules of fit_dynamics)
+     alone, its correction applied on every harmonic of the scan and the mean voltage
+     as the inverse gives it, as before the held-back rules of fit_dynamics)
 """
 
 import dataclasses
@@ -73,7 +75,7 @@ import warnings
 import numpy as np
 
 import pihyst
-from pihyst.dynamics import fit_dynamics, periodic_inverse_dynamics
+from pihyst.dynamics import fit_dynamics, held_mean, periodic_inverse_dynamics
 from pihyst.dynamics._compensate import FADE_OCTAVES
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
@@ -172,7 +174,8 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, f
                        numerator_on_static=numerator_on_static, keep_creep=keep_creep,
                        fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ,
                        **({"validation": -1, "tolerance": 0.01} if FORMER_RULES else {}))
-    return dataclasses.replace(ham, order_trusted_from=()) if FORMER_RULES else ham
+    return (dataclasses.replace(ham, order_trusted_from=(), static_offset=None)
+            if FORMER_RULES else ham)
 
 
 def scan(make, rate_hz, fmode):
@@ -212,9 +215,14 @@ def inverse_error(make, model, ham, desired):
     """RMS error of the Hammerstein inverse (``ham`` None: the static inverse, learning's
     trial 0) played periodically on a fresh stage settled on it, and the number of its
     voltages outside the limits."""
-    h_d = desired if ham is None else periodic_inverse_dynamics(
-        ham.a[0], ham.b[0][0], desired, ham.trusted_from, ham.order_trusted_from)
-    u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
+    parts = model_parts(model, 1 / CLOCK_HZ)
+    u = periodic_inverse(parts, desired, U_MIN, U_MAX, None)
+    if ham is not None:
+        h_d = periodic_inverse_dynamics(ham.a[0], ham.b[0][0], desired, ham.trusted_from,
+                                        ham.order_trusted_from)
+        # the voltage's mean moved only as far as the static model's mean error allows
+        u = held_mean(periodic_inverse(parts, h_d, U_MIN, U_MAX, None), u, desired,
+                      ham.static_offset, U_MIN, U_MAX)
     stage = make(CLOCK_HZ)
     stage.settle_on(u)
     player = CheckedStage(stage)
