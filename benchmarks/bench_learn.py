@@ -30,9 +30,9 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   where the held-back records showed the correction to help on harmonic k,
   ``HammersteinModel.order_trusted_from``; ``--no-fade``: the whole inverse
   everywhere), then the same periodic hysteresis
-  inverse (with creep) as the static inverse's, its mean voltage moved only as far as
-  the static model's mean error on the 1 Hz record allows (``held_mean``,
-  ``HammersteinModel.static_offset``);
+  inverse (with creep) as the static inverse's; the static model's mean error on the
+  1 Hz record (``HammersteinModel.static_offset``) bounds the share of the correction
+  applied (``mean_error_share``) and how far the voltage's mean moves (``held_mean``);
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -75,7 +75,12 @@ import warnings
 import numpy as np
 
 import pihyst
-from pihyst.dynamics import fit_dynamics, held_mean, periodic_inverse_dynamics
+from pihyst.dynamics import (
+    fit_dynamics,
+    held_mean,
+    mean_error_share,
+    periodic_inverse_dynamics,
+)
 from pihyst.dynamics._compensate import FADE_OCTAVES
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
@@ -220,7 +225,9 @@ def inverse_error(make, model, ham, desired):
     if ham is not None:
         h_d = periodic_inverse_dynamics(ham.a[0], ham.b[0][0], desired, ham.trusted_from,
                                         ham.order_trusted_from)
-        # the voltage's mean moved only as far as the static model's mean error allows
+        # the share of the correction the static model's mean error allows, then the
+        # voltage's mean moved only as far as it allows
+        h_d = desired + mean_error_share(desired, h_d, ham.static_offset) * (h_d - desired)
         u = held_mean(periodic_inverse(parts, h_d, U_MIN, U_MAX, None), u, desired,
                       ham.static_offset, U_MIN, U_MAX)
     stage = make(CLOCK_HZ)

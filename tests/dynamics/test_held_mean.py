@@ -7,7 +7,13 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.signal import lfilter
 
-from pihyst.dynamics import HammersteinModel, compensate_hammerstein, fit_dynamics, held_mean
+from pihyst.dynamics import (
+    HammersteinModel,
+    compensate_hammerstein,
+    fit_dynamics,
+    held_mean,
+    mean_error_share,
+)
 from pihyst.inverse import compensate
 from pihyst.model import ClassicalPI
 
@@ -121,3 +127,27 @@ def test_a_stage_whose_mean_follows_the_voltage_is_not_made_worse():
         assert np.sqrt(np.mean(e_held ** 2)) <= np.sqrt(np.mean(e_static ** 2)) * (1 + 1e-9)
         grew += abs(e_moved.mean()) > abs(e_static.mean()) * (1 + 1e-4)
     assert grew == 4                                    # all but the slowest
+
+
+@settings(max_examples=300, deadline=None)
+@given(E=finite, seed=st.integers(0, 2 ** 16), size=st.floats(1e-6, 1e3),
+       coupling=st.floats(-1.0, 1.0))
+@example(E=0.0, seed=0, size=1.0, coupling=1.0)
+def test_the_share_of_the_correction_never_makes_the_error_worse(E, seed, size, coupling):
+    """A stage whose static-inverse error is its mean E plus what the correction d = h_d - r
+    removes (zero mean), and whose mean output the share W of the correction moves by
+    c' W rms(d), |c'| <= MEAN_COUPLING: its RMS error with W is never above the static
+    inverse's (docs/theory/hammerstein.md, "The mean error")."""
+    from pihyst.dynamics._compensate import MEAN_COUPLING
+    rng = np.random.default_rng(seed)
+    r = rng.normal(0, 1, 32)
+    d = rng.normal(0, 1, 32)
+    d = size * (d - d.mean()) / np.sqrt(np.mean((d - d.mean()) ** 2))
+    W = mean_error_share(r, r + d, E)
+    assert 0.0 <= W <= 1.0
+    c = coupling * MEAN_COUPLING
+    static = np.sqrt(E ** 2 + np.mean(d ** 2))
+    ham = np.sqrt((E + c * W * size) ** 2 + np.mean(((1 - W) * d) ** 2))
+    assert ham <= static * (1 + 1e-9) + 1e-12
+    if E == 0.0:
+        assert W == 1.0                       # nothing at DC to protect: the whole correction

@@ -38,6 +38,7 @@ from pihyst.dynamics._compensate import (
     compensate_hammerstein,
     compensate_mimo,
     held_mean,
+    mean_error_share,
     periodic_inverse_dynamics,
     periodic_weight,
     trust_weight,
@@ -74,6 +75,6 @@ __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "Scheduled
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
            "fit_scheduled_state_space", "fit_state_space", "fsid", "load_hammerstein",
            "load_scheduled_state_space",
-           "held_mean", "periodic_inverse_dynamics", "periodic_weight",
+           "held_mean", "mean_error_share", "periodic_inverse_dynamics", "periodic_weight",
            "predict_linear", "running_amplitude", "save_scheduled_state_space", "trust_weight",
            "zpetc"]
