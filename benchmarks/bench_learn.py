@@ -52,7 +52,7 @@ are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
      [--no-learning [--true-dynamics]] [--ratio-only] [--no-fade]
-     [--learn-from-hammerstein] [--no-creep-ratio] [--former-rules]
+     [--learn-from-hammerstein] [--no-creep-ratio] [--former-rules] [--no-mean-rules]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
      static and Hammerstein inverses only, at 1, 10, 50, 100 Hz, fmode/8 and fmode/20
@@ -64,7 +64,9 @@ Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unsc
      --no-creep-ratio: the dynamics measured without the static model's creep, as
      before; --former-rules: the Hammerstein model's order chosen on the 80 Hz record
      alone, its correction applied on every harmonic of the scan and the mean voltage
-     as the inverse gives it, as before the held-back rules of fit_dynamics)
+     as the inverse gives it, as before the held-back rules of fit_dynamics;
+     --no-mean-rules: the held-back rules without those of the static model's mean
+     error, as before mean_error_share and held_mean)
 """
 
 import dataclasses
@@ -162,6 +164,10 @@ ID_HARMONICS = 15
 #: on every harmonic from the slowest record's fundamental (pihyst before the
 #: held-back rules; the figures' "before")
 FORMER_RULES = "--former-rules" in sys.argv[1:]
+#: --no-mean-rules: the Hammerstein inverse without the rules of the static model's mean
+#: error (HammersteinModel.static_offset None: the whole correction where the held-back
+#: rules allow it, the voltage's mean as the inverse gives it; pihyst before them)
+MEAN_RULES = "--no-mean-rules" not in sys.argv[1:]
 
 
 def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True,
@@ -179,8 +185,9 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, f
                        numerator_on_static=numerator_on_static, keep_creep=keep_creep,
                        fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ,
                        **({"validation": -1, "tolerance": 0.01} if FORMER_RULES else {}))
-    return (dataclasses.replace(ham, order_trusted_from=(), static_offset=None)
-            if FORMER_RULES else ham)
+    if FORMER_RULES:
+        return dataclasses.replace(ham, order_trusted_from=(), static_offset=None)
+    return ham if MEAN_RULES else dataclasses.replace(ham, static_offset=None)
 
 
 def scan(make, rate_hz, fmode):
@@ -299,7 +306,7 @@ def main():
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
                          "--learn-from-hammerstein", "--no-fade", "--true-dynamics",
-                         "--no-creep-ratio", "--former-rules")]
+                         "--no-creep-ratio", "--former-rules", "--no-mean-rules")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True
