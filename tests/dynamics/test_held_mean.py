@@ -151,3 +151,18 @@ def test_the_share_of_the_correction_never_makes_the_error_worse(E, seed, size, 
     assert ham <= static * (1 + 1e-9) + 1e-12
     if E == 0.0:
         assert W == 1.0                       # nothing at DC to protect: the whole correction
+
+
+def test_a_coupling_of_0_applies_the_whole_correction_and_a_negative_one_is_refused():
+    from pihyst.exceptions import InvalidArgumentError
+    r, h = [0.0, 1.0, 2.0, 1.0], [0.1, 1.1, 1.9, 0.9]
+    assert mean_error_share(r, h, 100.0, coupling=0.0) == 1.0
+    assert mean_error_share(r, h, 100.0) == 0.0
+    with pytest.raises(InvalidArgumentError, match="mean_coupling must be >= 0"):
+        mean_error_share(r, h, 1.0, coupling=-0.1)
+    model = HammersteinModel(hysteresis=(ClassicalPI([0.0, 2.0], [1.0, 0.5]),),
+                             a=([1.0, -0.5],), b=([[0.5]],), static_offset=100.0)
+    r = 10 + 5 * np.sin(2 * np.pi * np.arange(50) / 50)
+    _, h_none, _ = compensate_hammerstein(model, r, periodic=True)
+    _, h_all, _ = compensate_hammerstein(model, r, periodic=True, mean_coupling=0.0)
+    assert np.array_equal(h_none, r) and not np.allclose(h_all, r)

@@ -311,7 +311,8 @@ def periodic_inverse_dynamics(a: ArrayLike, b: ArrayLike, r: ArrayLike,
 MEAN_COUPLING = 0.2
 
 
-def mean_error_share(r: ArrayLike, h_d: ArrayLike, static_offset: float | None) -> float:
+def mean_error_share(r: ArrayLike, h_d: ArrayLike, static_offset: float | None,
+                     coupling: float = MEAN_COUPLING) -> float:
     """The share W of the dynamics' correction h_d - r that cannot make the error worse
     through the stage's mean output (module notes, "The mean error"):
     W = clip((2 - 2 c |E| / rms(h_d - r)) / (1 + c^2), 0, 1), c = MEAN_COUPLING,
@@ -325,6 +326,9 @@ def mean_error_share(r: ArrayLike, h_d: ArrayLike, static_offset: float | None) 
         One period of the hysteresis output the dynamics need.
     static_offset : float or None
         The static model's mean error (``HammersteinModel.static_offset``).
+    coupling : float
+        c, the bound on the stage's mean coupling (>= 0; 0: W = 1, the correction
+        applied on trust).
 
     Returns
     -------
@@ -340,13 +344,15 @@ def mean_error_share(r: ArrayLike, h_d: ArrayLike, static_offset: float | None) 
     >>> round(mean_error_share(r, [0.1, 1.1, 1.9, 0.9], 0.3), 3)
     0.769
     """
-    if static_offset is None:
+    c = float(coupling)
+    if not c >= 0:
+        raise InvalidArgumentError(f"mean_coupling must be >= 0, got {coupling!r}")
+    if static_offset is None or c == 0:
         return 1.0
     size = float(np.sqrt(np.mean(np.square(np.asarray(h_d, dtype=float)
                                              - np.asarray(r, dtype=float)))))
     if not size > 0:
         return 0.0
-    c = MEAN_COUPLING
     return float(np.clip((2 - 2 * c * abs(static_offset) / size) / (1 + c * c), 0.0, 1.0))
 
 
@@ -503,7 +509,8 @@ def compensate_mimo(model: Any, desired: ArrayLike, *, u_min: ArrayLike | None =
 
 def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | None = None,
                            u_max: float | None = None, slew_rate: float | None = None,
-                           sample_period: float | None = None, periodic: bool = False
+                           sample_period: float | None = None, periodic: bool = False,
+                           mean_coupling: float = MEAN_COUPLING
                            ) -> tuple[NDArray[np.float64], NDArray[np.float64], Any]:
     """Voltages that make a SISO :class:`HammersteinModel` follow ``desired``: the
     ZPETC prefilter, then the hysteresis inverse from the hysteresis model's initial
@@ -528,6 +535,11 @@ def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | Non
         model's ``static_offset``, the voltage's mean then moved only as far as
         :func:`held_mean` allows (a constant shift within the limits: the slew is
         unchanged).
+    mean_coupling : float
+        With ``periodic`` and the model's ``static_offset``: the bound on how far the
+        stage's mean output follows a change of the drive's shape, per unit of the
+        correction's RMS (:func:`mean_error_share`; default MEAN_COUPLING = 0.2); 0:
+        the whole correction where the held-back rules allow it.
 
     Returns
     -------
@@ -573,7 +585,7 @@ def compensate_hammerstein(model: Any, desired: ArrayLike, *, u_min: float | Non
                                     getattr(model, "trusted_from", 0.0),
                                     getattr(model, "order_trusted_from", ()))
     offset = getattr(model, "static_offset", None)
-    h_d = desired + mean_error_share(desired, h_d, offset) * (h_d - desired)
+    h_d = desired + mean_error_share(desired, h_d, offset, mean_coupling) * (h_d - desired)
     res = compensate(H, np.tile(h_d, 2), u_min=u_min, u_max=u_max, slew_rate=slew_rate,
                      sample_period=sample_period)
     voltage = res.voltage[h_d.size:]
