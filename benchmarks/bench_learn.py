@@ -30,7 +30,9 @@ same band-limited triangle, settled; with creep that is less than the settled lo
   where the held-back records showed the correction to help on harmonic k,
   ``HammersteinModel.order_trusted_from``; ``--no-fade``: the whole inverse
   everywhere), then the same periodic hysteresis
-  inverse (with creep) as the static inverse's;
+  inverse (with creep) as the static inverse's; the static model's mean error on the
+  1 Hz record (``HammersteinModel.static_offset``) bounds the share of the correction
+  applied (``mean_error_share``) and how far the voltage's mean moves (``held_mean``);
 - the learned feedforward: ``learn_periodic`` from that model, 10 trials; the RMS per
   trial, and the learned voltages played once more afterwards ("replay", fresh noise:
   the best trial's own figure is the lowest of several noisy measurements).
@@ -50,7 +52,7 @@ are held out.
 
 Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unscaled]
      [--no-learning [--true-dynamics]] [--ratio-only] [--no-fade]
-     [--learn-from-hammerstein] [--no-creep-ratio] [--former-rules]
+     [--learn-from-hammerstein] [--no-creep-ratio] [--former-rules] [--no-mean-rules]
      (--quick: 10, 50, 100 Hz and fmode/8 only; --fresh: N random stages from FIRST_SEED
      (default 1000) instead of the four named ones, at those rates; --no-learning: the
      static and Hammerstein inverses only, at 1, 10, 50, 100 Hz, fmode/8 and fmode/20
@@ -61,8 +63,10 @@ Run: python benchmarks/bench_learn.py [--quick] [--fresh N [FIRST_SEED]] [--unsc
      model, its hysteresis with the static model's creep, instead of the static model;
      --no-creep-ratio: the dynamics measured without the static model's creep, as
      before; --former-rules: the Hammerstein model's order chosen on the 80 Hz record
-     alone and its correction applied on every harmonic of the scan, as before the
-     held-back rules of fit_dynamics)
+     alone, its correction applied on every harmonic of the scan and the mean voltage
+     as the inverse gives it, as before the held-back rules of fit_dynamics;
+     --no-mean-rules: the held-back rules without those of the static model's mean
+     error, as before mean_error_share and held_mean)
 """
 
 import dataclasses
@@ -73,7 +77,12 @@ import warnings
 import numpy as np
 
 import pihyst
-from pihyst.dynamics import fit_dynamics, periodic_inverse_dynamics
+from pihyst.dynamics import (
+    fit_dynamics,
+    held_mean,
+    mean_error_share,
+    periodic_inverse_dynamics,
+)
 from pihyst.dynamics._compensate import FADE_OCTAVES
 from pihyst.exceptions import PihystWarning
 from pihyst.inverse import compensate
@@ -155,6 +164,10 @@ ID_HARMONICS = 15
 #: on every harmonic from the slowest record's fundamental (pihyst before the
 #: held-back rules; the figures' "before")
 FORMER_RULES = "--former-rules" in sys.argv[1:]
+#: --no-mean-rules: the Hammerstein inverse without the rules of the static model's mean
+#: error (HammersteinModel.static_offset None: the whole correction where the held-back
+#: rules allow it, the voltage's mean as the inverse gives it; pihyst before them)
+MEAN_RULES = "--no-mean-rules" not in sys.argv[1:]
 
 
 def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, fade=True,
@@ -172,7 +185,9 @@ def hammerstein_model(make, model, numerator_on_static=True, keep_creep=False, f
                        numerator_on_static=numerator_on_static, keep_creep=keep_creep,
                        fade=fade, sample_period=None if no_creep else 1 / CLOCK_HZ,
                        **({"validation": -1, "tolerance": 0.01} if FORMER_RULES else {}))
-    return dataclasses.replace(ham, order_trusted_from=()) if FORMER_RULES else ham
+    if FORMER_RULES:
+        return dataclasses.replace(ham, order_trusted_from=(), static_offset=None)
+    return ham if MEAN_RULES else dataclasses.replace(ham, static_offset=None)
 
 
 def scan(make, rate_hz, fmode):
@@ -212,9 +227,16 @@ def inverse_error(make, model, ham, desired):
     """RMS error of the Hammerstein inverse (``ham`` None: the static inverse, learning's
     trial 0) played periodically on a fresh stage settled on it, and the number of its
     voltages outside the limits."""
-    h_d = desired if ham is None else periodic_inverse_dynamics(
-        ham.a[0], ham.b[0][0], desired, ham.trusted_from, ham.order_trusted_from)
-    u = periodic_inverse(model_parts(model, 1 / CLOCK_HZ), h_d, U_MIN, U_MAX, None)
+    parts = model_parts(model, 1 / CLOCK_HZ)
+    u = periodic_inverse(parts, desired, U_MIN, U_MAX, None)
+    if ham is not None:
+        h_d = periodic_inverse_dynamics(ham.a[0], ham.b[0][0], desired, ham.trusted_from,
+                                        ham.order_trusted_from)
+        # the share of the correction the static model's mean error allows, then the
+        # voltage's mean moved only as far as it allows
+        h_d = desired + mean_error_share(desired, h_d, ham.static_offset) * (h_d - desired)
+        u = held_mean(periodic_inverse(parts, h_d, U_MIN, U_MAX, None), u, desired,
+                      ham.static_offset, U_MIN, U_MAX)
     stage = make(CLOCK_HZ)
     stage.settle_on(u)
     player = CheckedStage(stage)
@@ -284,7 +306,7 @@ def main():
     args = [a for a in sys.argv[1:]
             if a not in ("--quick", "--unscaled", "--no-learning", "--ratio-only",
                          "--learn-from-hammerstein", "--no-fade", "--true-dynamics",
-                         "--no-creep-ratio", "--former-rules")]
+                         "--no-creep-ratio", "--former-rules", "--no-mean-rules")]
     if args and args[0] == "--fresh":
         n, first = int(args[1]), int(args[2]) if len(args) > 2 else 1000
         quick = True

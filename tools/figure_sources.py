@@ -515,6 +515,66 @@ def learning_stages(options):
     return out
 
 
+def _hammerstein_summary(bench, stages):
+    """``bench_learn.py --no-learning``'s summary over ``stages`` ((make, fmode) pairs, its
+    rates: 1, 10, 50, 100 Hz, fmode/8, fmode/20): at or below fmode/20 how many rates
+    the Hammerstein inverse is not above the static inverse and the worst ratio, above
+    fmode/20 how many it is below and the best and worst ratio, the voltages outside
+    the limits."""
+    import warnings
+
+    from pihyst.exceptions import PihystWarning
+
+    below, above, outside = [], [], 0
+    for make, fmode in stages:
+        rates = [1.0, 10.0, 50.0, 100.0]
+        rates += [] if fmode / 8 in rates else [fmode / 8]
+        rates += [] if fmode / 20 in rates else [fmode / 20]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PihystWarning)
+            rows, _ = bench.run_stage(make, fmode, rates, learn=False)
+        for rate, _n, static, ham, out, _true in rows:
+            (above if rate > fmode / 20 else below).append(ham / static)
+            outside += out
+    return {"below": {"n": len(below), "not_above": sum(r <= 1 for r in below),
+                      "worst": max(below)},
+            "above": {"n": len(above), "below": sum(r < 1 for r in above),
+                      "best": min(above), "worst": max(above)},
+            "outside": outside}
+
+
+@source(slow=True)
+def hammerstein_stages(options):
+    """The README's Hammerstein-inverse row for the four named stages, as
+    ``bench_learn.py --no-learning`` computes it (its own functions; about a minute):
+    :func:`_hammerstein_summary`."""
+    bench = _benchmark("bench_learn")
+    stages = []
+    for _label, name, modes, seed, _tuned in bench.STAGES:
+        def make(r, noise=True, name=name, modes=modes, seed=seed):
+            return bench.named_stage(name, modes, seed if r == bench.CLOCK_HZ else seed + 100,
+                                     r, noise)
+        stages.append((make, modes[0][0]))
+    return _hammerstein_summary(bench, stages)
+
+
+@source(script=True)
+def hammerstein_random(options):
+    """The README's Hammerstein-inverse rows for the random stages, as
+    ``bench_learn.py --no-learning --fresh 10 SEED`` computes them (minutes): per set of
+    ten seeds from 7000, 7300, 7500 and 7600, :func:`_hammerstein_summary`."""
+    bench = _benchmark("bench_learn")
+    out = {}
+    for first in (7000, 7300, 7500, 7600):
+        stages = []
+        for seed in range(first, first + 10):
+            def make(r, noise=True, seed=seed):
+                return bench.random_stage(seed, r, bench.RANDOM_RANGE_UM, noise)[0]
+            stages.append((make, bench.random_stage(seed)[1][0][0]))
+        out[f"s{first}"] = _hammerstein_summary(bench, stages)
+    return out
+
+
 @source(slow=True)
 def creep_holds(options):
     """docs/theory/creep.md's table, as benchmarks/bench_creep.py computes it: every

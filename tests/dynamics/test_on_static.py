@@ -161,16 +161,19 @@ def test_fit_dynamics_refuses_records_it_cannot_compare():
 def test_hammerstein_files_round_trip(tmp_path):
     H, a = static_model(), mode()
     model = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.9, 0.5]]),),
-                             trusted_from=0.002, order_trusted_from=(0.004, 0.5, 0.006))
+                             trusted_from=0.002, order_trusted_from=(0.004, 0.5, 0.006),
+                             static_offset=-0.25)
     path = tmp_path / "ham.json"
     model.save(path)
     back = load_hammerstein(path)
     u = np.linspace(0, 150, 300)
     assert np.array_equal(back.predict(u), model.predict(u))
     assert back.trusted_from == 0.002 and back.order_trusted_from == (0.004, 0.5, 0.006)
+    assert back.static_offset == -0.25
     plain = HammersteinModel(hysteresis=(H,), a=(a,), b=(np.array([[0.0, 0.9, 0.5]]),))
     assert "trusted_from" not in plain.to_dict()     # files of models without it unchanged
     assert "order_trusted_from" not in plain.to_dict()
+    assert "static_offset" not in plain.to_dict() and plain.static_offset is None
     assert json.loads(path.read_text())["family"] == "hammerstein"
 
 
@@ -186,6 +189,8 @@ def test_hammerstein_files_round_trip(tmp_path):
     (lambda d: d.update(trusted_from="low"), "key 'trusted_from' must be a number"),
     (lambda d: d.update(order_trusted_from=[0.1, 0.6]), "key 'order_trusted_from' must be"),
     (lambda d: d.update(order_trusted_from=0.1), "key 'order_trusted_from' must be"),
+    (lambda d: d.update(static_offset="x"), "key 'static_offset' must be a finite number"),
+    (lambda d: d.update(static_offset=True), "key 'static_offset' must be a finite number"),
 ])
 def test_broken_hammerstein_files_are_one_line_errors(tmp_path, change, message):
     d = HammersteinModel(hysteresis=(static_model(),), a=(mode(),),

@@ -21,7 +21,8 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   inverse with voltage and slew limits (SISO); below the band the dynamics were
   measured in, :func:`trust_weight` fades their correction out, and on a periodic
   trajectory's harmonics :func:`periodic_weight` leaves it out where the identification's
-  held-back records showed it not to help;
+  held-back records showed it not to help, and :func:`held_mean` moves the voltage's
+  mean only as far as the static model's known mean error allows;
 - :func:`compensate_mimo`: the same for a square MIMO StateSpaceHammerstein and a
   periodic trajectory (the dynamics inverted per harmonic);
 - :func:`compensate_scheduled`: the same for a square ScheduledStateSpace (its schedule
@@ -36,6 +37,8 @@ from pihyst.dynamics._bla import FrequencyResponse, estimate_bla
 from pihyst.dynamics._compensate import (
     compensate_hammerstein,
     compensate_mimo,
+    held_mean,
+    mean_error_share,
     periodic_inverse_dynamics,
     periodic_weight,
     trust_weight,
@@ -72,6 +75,6 @@ __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "Scheduled
            "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
            "fit_scheduled_state_space", "fit_state_space", "fsid", "load_hammerstein",
            "load_scheduled_state_space",
-           "periodic_inverse_dynamics", "periodic_weight",
+           "held_mean", "mean_error_share", "periodic_inverse_dynamics", "periodic_weight",
            "predict_linear", "running_amplitude", "save_scheduled_state_space", "trust_weight",
            "zpetc"]

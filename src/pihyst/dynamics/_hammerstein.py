@@ -73,6 +73,12 @@ class HammersteinModel:
         never), faded in over the two octaves above as ``trusted_from``; orders past
         its end get no correction. Empty (the default): ``trusted_from`` alone, on
         every harmonic. Used by the periodic compensation only.
+    static_offset : float or None
+        The static model's mean error (output units) on the identification's slow
+        record, measured minus modelled (:func:`fit_dynamics`). With it the periodic
+        compensation moves the voltage's mean only as far as that error proves safe
+        (:func:`pihyst.dynamics.held_mean`); None (the default): the voltage's mean
+        as the hysteresis inverse gives it.
 
     Examples
     --------
@@ -89,6 +95,7 @@ class HammersteinModel:
     b: tuple[Any, ...]
     trusted_from: float = 0.0
     order_trusted_from: tuple[float, ...] = ()
+    static_offset: float | None = None
 
     family = FAMILY
 
@@ -180,7 +187,7 @@ class HammersteinModel:
         dict
             ``family``, ``hysteresis`` (each model's dict), ``a`` and ``b``; and
             ``trusted_from`` when it is not 0, ``order_trusted_from`` when it is
-            not empty.
+            not empty, ``static_offset`` when it is not None.
 
         Examples
         --------
@@ -200,6 +207,8 @@ class HammersteinModel:
             d["trusted_from"] = float(self.trusted_from)
         if self.order_trusted_from:
             d["order_trusted_from"] = [float(t) for t in self.order_trusted_from]
+        if self.static_offset is not None:
+            d["static_offset"] = float(self.static_offset)
         return d
 
     @classmethod
@@ -211,7 +220,8 @@ class HammersteinModel:
         d : dict
             ``family`` ("hammerstein"), ``hysteresis``, ``a`` and ``b``; optionally
             ``trusted_from`` (cycles per sample, 0 <= it < 0.5) and
-            ``order_trusted_from`` (a list of them, each in [0, 0.5]).
+            ``order_trusted_from`` (a list of them, each in [0, 0.5]) and
+            ``static_offset`` (a finite number).
         source : str
             What the dict came from, for the messages.
 
@@ -278,8 +288,14 @@ class HammersteinModel:
             raise InvalidModelError(f"{source}: key 'order_trusted_from' must be a list of "
                                     f"numbers of cycles per sample in [0, 0.5], got "
                                     f"{orders!r:.40}")
+        offset = d.get("static_offset")
+        if offset is not None and (isinstance(offset, bool) or not isinstance(offset, (int, float))
+                                   or not np.isfinite(offset)):
+            raise InvalidModelError(f"{source}: key 'static_offset' must be a finite number, "
+                                    f"got {offset!r:.40}")
         return cls(hysteresis=hysteresis, a=tuple(a), b=tuple(b), trusted_from=float(trusted),
-                   order_trusted_from=tuple(float(t) for t in orders))
+                   order_trusted_from=tuple(float(t) for t in orders),
+                   static_offset=None if offset is None else float(offset))
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the model as JSON to ``path`` (the file appears only once complete).

@@ -7,7 +7,8 @@ the same checks as every model file (one-line errors with the file's line and co
       "a": [[1.0, a_1, ...], ...],                        # one A(q^-1) per output
       "b": [[[b_0, b_1, ...], ...], ...],                 # per output, one row per input
       "trusted_from": f_t,                                # optional, cycles per sample
-      "order_trusted_from": [f_1, f_2, ...]               # optional, per harmonic order
+      "order_trusted_from": [f_1, f_2, ...],              # optional, per harmonic order
+      "static_offset": e_0                                # optional, output units
     }
 """
 

@@ -99,39 +99,56 @@ def powers(period, n):
     return np.exp(-1j * np.outer(w, np.arange(n)))
 
 
+def _used_lines(spectra, Z):
+    """Per spectrum (Zs, V, Y) on the lines where V or Y is not zero: a line with both
+    zero adds nothing to either criterion (its residual and its derivatives are 0), and
+    records placed on a common period fill few of its lines."""
+    out = []
+    for V, Y in spectra:
+        used = np.flatnonzero((Y != 0) | np.any(V != 0, axis=1))
+        out.append((Z[used], V[used], Y[used]))
+    return out
+
+
 def fit_oe_periodic(spectra, na, nb, period, iterations=10, ridge=1e-9):
     """(A, B) from ``spectra``: list of (V, Y) rfft's of one period, V (L, C), Y (L,)."""
     Z = powers(period, max(na + 1, nb))
     C = spectra[0][0].shape[1]
-    weight = np.ones(Z.shape[0])
+    lines = _used_lines(spectra, Z)
+    n_lines = sum(Y.size for _, Y in spectra)     # the scale's mean runs over every line
     a = np.r_[1.0, np.zeros(na)]
+    weights = [np.ones(Y.size) for _, _, Y in lines]
     for _ in range(iterations + 1):
         rows, target = [], []
-        for V, Y in spectra:
+        for (Zs, V, Y), weight in zip(lines, weights):
             # A Y - sum B V = 0:  sum_l a_l z^l Y - sum_c sum_l b_cl z^l V_c = -Y
-            cols = [Z[:, 1:na + 1] * Y[:, None]] + [-Z[:, :nb] * V[:, c:c + 1]
-                                                     for c in range(C)]
+            cols = [Zs[:, 1:na + 1] * Y[:, None]] + [-Zs[:, :nb] * V[:, c:c + 1]
+                                                      for c in range(C)]
             M = np.hstack(cols) * weight[:, None]
             rows += [M.real, M.imag]
             target += [(-Y * weight).real, (-Y * weight).imag]
         X, t = np.vstack(rows), np.concatenate(target)
-        scale = np.sqrt(np.mean(X * X, axis=0)) + 1e-300
+        scale = np.sqrt(np.sum(X * X, axis=0) / (2 * n_lines)) + 1e-300
         G = (X / scale).T @ (X / scale)
         G[np.diag_indices_from(G)] += ridge * np.trace(G) / G.shape[0]
         theta = np.linalg.solve(G, (X / scale).T @ t) / scale
         a = stabilized(np.r_[1.0, theta[:na]])
         b = theta[na:].reshape(C, nb)
-        weight = 1.0 / np.maximum(np.abs(Z[:, :na + 1] @ a), 1e-12)
-    return _refine_periodic(spectra, a, b, Z)
+        weights = [1.0 / np.maximum(np.abs(Zs[:, :na + 1] @ a), 1e-12)
+                   for Zs, _, _ in lines]
+    return _refine_periodic(lines, a, b)
 
 
-def _refine_periodic(spectra, a, b, Z):
+def _refine_periodic(lines, a, b):
     """Gauss-Newton (Levenberg-Marquardt) on the output-error criterion itself, from the
     Sanathanan-Koerner estimate; with e = Y - sum_c (B_c / A) V_c and Yh = sum_c B_c V_c / A,
     de/db_cl = -z^l V_c / A and de/da_l = z^l Yh / A. Kept only if it lowers the cost
-    and A stays stable."""
+    and A stays stable. ``lines``: per spectrum (Z, V, Y) on its used lines."""
     from scipy.optimize import least_squares
     na, (C, nb) = a.size - 1, b.shape
+    Z = np.vstack([Zs for Zs, _, _ in lines])
+    V = np.vstack([Vs for _, Vs, _ in lines])
+    Y = np.concatenate([Ys for _, _, Ys in lines])
     Za, Zb = Z[:, 1:na + 1], Z[:, :nb]
 
     def unpack(theta):
@@ -145,18 +162,15 @@ def _refine_periodic(spectra, a, b, Z):
 
     def residual(theta):
         A, Bz = parts(theta)
-        e = np.concatenate([Y - np.sum(Bz * V, axis=1) / A for V, Y in spectra])
+        e = Y - np.sum(Bz * V, axis=1) / A
         return np.r_[e.real, e.imag]
 
     def jacobian(theta):
         A, Bz = parts(theta)
-        blocks = []
-        for V, _ in spectra:
-            yh = np.sum(Bz * V, axis=1) / A
-            ja = Za * (yh / A)[:, None]
-            jb = np.hstack([-Zb * (V[:, c] / A)[:, None] for c in range(C)])
-            blocks.append(np.hstack([ja, jb]))
-        J = np.vstack(blocks)
+        yh = np.sum(Bz * V, axis=1) / A
+        ja = Za * (yh / A)[:, None]
+        jb = np.hstack([-Zb * (V[:, c] / A)[:, None] for c in range(C)])
+        J = np.hstack([ja, jb])
         return np.vstack([J.real, J.imag])
 
     theta0 = np.r_[a[1:], b.ravel()]
