@@ -45,8 +45,9 @@ from pihyst.identify._constants import (
     TOLERANCE,
 )
 from pihyst.identify._families import CREEP_FAMILIES
+from pihyst.identify._family_fit import ExtraColumns
 from pihyst.identify._qp import solve_qp
-from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
+from pihyst.identify._record_fit import FIT_SAMPLES, fit_record, fit_with_columns
 from pihyst.identify._record_start import record_start_check
 from pihyst.identify._responses import Responses
 from pihyst.model._boucwen import BoucWenModel
@@ -232,6 +233,25 @@ def _fitted_rows(n, start, rows):
     return fitted
 
 
+def _creep_columns(first, start, rec, tie):
+    """The creep columns q = -psi(H) B of the first fit's fitter's record (identify/
+    _family_fit.ExtraColumns): psi_i = H - z_i, the lags driven by the settled output H
+    of ``start``'s model over the aligned record ``rec`` (a proxy: the first estimate of
+    H), at the samples the fitter sums over; p bounded by 0 <= p <= G / (2n) as in
+    :func:`_joint_qp`."""
+    hyst = start.model.replace(delay=0, creep=None)
+    h = hyst.predict(rec.u)
+    every = np.ones(h.size, dtype=bool)
+    q = -tied_deficits(h, hyst.hysteresis_output(hyst.initial_state), rec.dt, rec.tau,
+                       tie, every)
+    kept = getattr(first.attempt.fitter.rec, "kept", None)
+    n = rec.tau.size
+    return ExtraColumns(values=q if kept is None else q[kept],
+                        lower=np.zeros(tie.shape[1]),
+                        upper=np.full(tie.shape[1], MAX_TOTAL_GAIN / (2 * n)),
+                        names=("creep per lag", "creep rise toward slow lags"))
+
+
 def _joint_qp_of(model, fixed_n=None):
     """The joint QP of the model's kind: :func:`_joint_qp` (PI operators) or
     :func:`_joint_qp_boucwen` (``fixed_n``: the exponent the family was given)."""
@@ -351,7 +371,8 @@ def fit_with_creep(u, y, t, options, steps):
                        f"one of {', '.join(CREEP_FAMILIES)}")
     trial = _Trial(u, y, t, d, rec, plain, first, rows, held, decide, steps, responses)
     if not decide:
-        second = trial.structure(start)
+        second = (trial.in_one_pass(start)[0] if trial.one_pass(start) else
+                  trial.structure(start))
         return _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, None)
     second, judged = trial.judged(start)
     second, judged = _other_kind_tried(trial, first, start, second, judged)
@@ -399,7 +420,9 @@ class _Trial:
         """:class:`RecordFit` of the record with the creep ``start``'s joint QP
         estimates (``estimate``, default: :meth:`estimate`) removed (the settled
         displacement the structure is chosen on), among ``families`` (default: every
-        creep-capable family the fit was given)."""
+        creep-capable family the fit was given). Only the other kind's trial
+        (:func:`_other_kind_tried`) still takes this second pass; the start family's
+        structure is chosen in one pass (:meth:`in_one_pass`)."""
         rec = self.rec
         estimate = self.estimate(start) if estimate is None else estimate
         hyst, gains = estimate.model, estimate.gains
@@ -413,21 +436,70 @@ class _Trial:
         # fit without creep (with thresholds= or n_operators=, kp and Bouc-Wen)
         options = self.plain.but(families=names)
         y = np.r_[self.y[:self.d], rec.y + psi @ gains]
+        return self._trial(lambda: fit_record(
+            self.u, y, options, self.steps, t=self.t, delay=self.first.delay.given(),
+            responses=self.responses))
+
+    def _trial(self, fit):
+        """``fit()``; with a judgement its warnings are about a trial structure, and are
+        the user's only if that structure is kept (:meth:`keep_warnings`)."""
         if not self.decide:
-            return fit_record(self.u, y, options, self.steps, t=self.t,
-                              delay=self.first.delay.given(), responses=self.responses)
-        # a trial: its warnings are about the record with this creep estimate removed,
-        # and are the user's only if that structure is kept (keep_warnings)
+            return fit()
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PihystWarning)
-            second = fit_record(self.u, y, options, self.steps, t=self.t,
-                                delay=self.first.delay.given(), responses=self.responses)
+            second = fit()
         self.warnings[id(second)] = [w for w in caught
                                      if issubclass(w.category, PihystWarning)]
         for w in caught:
             if not issubclass(w.category, PihystWarning):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         return second
+
+    def one_pass(self, start):
+        """Whether ``start``'s structure with creep is chosen in one pass: a PI family
+        of the first fit (fitted again on its fitter with the creep columns inside), or
+        the Bouc-Wen model the first fit chose (its shape searched with creep inside)."""
+        if isinstance(start.model, BoucWenModel):
+            return start.family == self.first.result.report.chosen
+        return self.first.attempt is not None
+
+    def in_one_pass(self, start):
+        """(RecordFit, gains on the fitted cycles, held-back RMS with creep) of
+        ``start``'s family with creep inside, without a second pass through the
+        pipeline. A PI family: fitted again on the first fit's fitter with the creep
+        columns beside the offset, q = -psi(H) B (H: the first fit's settled output over
+        the record, its proxy; B: :func:`log_t_basis`), bounded as in :func:`_joint_qp`:
+        thresholds, regularization and weights chosen with creep inside, the held-back
+        RMS from those same normal equations. Bouc-Wen: its shape, linear part and gains
+        fitted together on the fitted cycles (:meth:`estimate`), judged by prediction."""
+        rec = self.rec
+        if isinstance(start.model, BoucWenModel):
+            estimate = self.estimate(start)
+            judged = _judge(self.first.result, self.first, rec, self.rows, self.held,
+                            estimate)
+            return self.first, judged
+        if self._negligible(start):
+            return self.first, _judge(self.first.result, self.first, rec, self.rows,
+                                      self.held)
+        tie = log_t_basis(rec.tau.size, int(np.count_nonzero(rec.tau <= rec.qp["duration"])))
+        extra = _creep_columns(self.first, start, rec, tie)
+        second = self._trial(lambda: fit_with_columns(self.first, start.family, extra,
+                                                       self.plain, self.steps, self.t))
+        fitted = second.choice.chosen
+        fitter = second.attempt.fitter
+        p = fitter.extra_coefficients[id(fitted.fitted.model)][1]
+        held = fitted.fitted.errors["held_back"] or fitted.fitted.errors["fit"]
+        judged = _judgement(self.first.result, fitted.name, float(held["rms"]),
+                            np.clip(tie @ p, 0.0, None))
+        return second, judged
+
+    def _negligible(self, start):
+        """Whether the creep ``start``'s joint QP estimates leaves the record as the
+        first fit saw it (:meth:`_unchanged`): then the structure is the first fit's."""
+        estimate = self.estimate(start)
+        hyst, rec = estimate.model, self.rec
+        psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
+        return self._unchanged(psi @ estimate.gains, [start.family])
 
     def _unchanged(self, shift, names):
         """Whether removing the creep estimate (``shift``, the displacement it adds)
@@ -445,11 +517,15 @@ class _Trial:
         fit of shape, linear part and creep gains on the fitted rows is the one the
         judgement needs, and a second shape search from another start would fit the same
         thing twice (0.35 s of the 2 s fit of P-885)."""
-        estimate = self.estimate(start)
-        second = self.structure(start, families, estimate)
-        fitted = (estimate if isinstance(estimate.model, BoucWenModel)
-                  and second.result.report.chosen == start.family else None)
-        judged = _judge(self.first.result, second, self.rec, self.rows, self.held, fitted)
+        if families is None and self.one_pass(start):
+            second, judged = self.in_one_pass(start)
+        else:
+            estimate = self.estimate(start)
+            second = self.structure(start, families, estimate)
+            fitted = (estimate if isinstance(estimate.model, BoucWenModel)
+                      and second.result.report.chosen == start.family else None)
+            judged = _judge(self.first.result, second, self.rec, self.rows, self.held,
+                            fitted)
         self.steps.done(f"creep estimated with {start.family}: {judged['family_with']} "
                         f"holds back {judged['held_back_rms_with']:.4g}")
         return second, judged
@@ -616,10 +692,16 @@ def _judge(first, second, rec, fit_rows, held_rows, fitted=None):
         hyst, gains = fitted.model, fitted.gains
     with_creep = hyst.replace(creep=Creep(rec.tau, gains, float(np.median(rec.dt))))
     r = with_creep.predict(rec.u, t=rec.t)[held_rows] - rec.y[held_rows]
-    rms_creep = float(np.sqrt(np.mean(r * r)))
+    return _judgement(first, second.result.report.chosen, float(np.sqrt(np.mean(r * r))),
+                      gains)
+
+
+def _judgement(first, name_with, rms_creep, gains):
+    """The judgement of creep: kept when the held-back RMS with it, ``rms_creep`` (of
+    the family ``name_with``, ``gains`` on the fitted cycles), is lower than that of
+    the ordinary fit ``first`` (a FitResult) by more than the choice's tolerance."""
     rms_plain = float(first.report.family(first.report.chosen)["errors"]["held_back"]["rms"])
     kept = rms_creep < (1.0 - TOLERANCE) * rms_plain
-    name_with = second.result.report.chosen
     return {"kept": bool(kept), "held_back_rms_without": rms_plain,
             "family_without": first.report.chosen,
             "held_back_rms_with": rms_creep, "family_with": name_with,
