@@ -16,9 +16,14 @@ yet followed), one QP solves
 
 with psi from the previous estimate H_prev of the hysteresis output, and is repeated with
 H_prev = Phi w + c until H stops changing (creep is a few percent of H, so two or three
-passes; B is :func:`log_t_basis`). The structure (family, thresholds, shape) is chosen by
-the ordinary fit, run again on the record with the estimated creep removed,
-y + sum_i g_i psi_i; the joint QP then refits its weights and the creep gains together.
+passes; B is :func:`log_t_basis`). The structure of the chosen PI family (thresholds,
+regularization) is chosen with creep inside, in one pass: the family is fitted again on
+the first fit's fitter with the columns q = -psi(H) B beside the offset (H: the first
+fit's settled output, a proxy; identify/_family_fit.ExtraColumns), its held-back RMS
+from those augmented normal equations judging creep; the joint QP then refits its
+weights and the creep gains together. Only the other kind's trial (:func:`_other_kind_
+tried`) still runs the ordinary fit again on the record with its estimate removed,
+y + sum_i g_i psi_i.
 
 A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for a fixed
 shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
@@ -338,7 +343,7 @@ def fit_with_creep(u, y, t, options, steps):
     y = np.asarray(y, dtype=np.float64)
     decide = options.creep == "auto"
     plain = options.but(creep="off")
-    responses = Responses()          # the same input is fitted up to three times
+    responses = Responses()          # the other kind's trial fits the input again
     if options.through is not None:
         if decide:
             return _without_creep(fit_record(u, y, plain, steps, t=t).result, {
