@@ -488,9 +488,7 @@ class _Trial:
             return self.first, _judge(self.first.result, self.first, rec, self.rows,
                                       self.held)
         tie = log_t_basis(rec.tau.size, int(np.count_nonzero(rec.tau <= rec.qp["duration"])))
-        import os
-        proxy = estimate.model if os.environ.get("PROXY") == "estimate" else start.model
-        extra = _creep_columns(self.first, proxy, rec, tie)
+        extra = _creep_columns(self.first, start.model, rec, tie)
         second = self._trial(lambda: fit_with_columns(self.first, start.family, extra,
                                                        self.plain, self.steps, self.t))
         fitted = second.choice.chosen
