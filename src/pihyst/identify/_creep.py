@@ -35,7 +35,7 @@ joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_cre
 
 import functools
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -238,23 +238,22 @@ def _fitted_rows(n, start, rows):
     return fitted
 
 
-def _creep_columns(first, model, rec, tie):
-    """The creep columns q = -psi(H) B of the first fit's fitter's record (identify/
-    _family_fit.ExtraColumns): psi_i = H - z_i, the lags driven by the settled output H
-    of ``start``'s model over the aligned record ``rec`` (a proxy: the first estimate of
-    H), at the samples the fitter sums over; p bounded by 0 <= p <= G / (2n) as in
-    :func:`_joint_qp`."""
-    hyst = model.replace(delay=0, creep=None)
-    h = hyst.predict(rec.u)
-    every = np.ones(h.size, dtype=bool)
-    q = -tied_deficits(h, hyst.hysteresis_output(hyst.initial_state), rec.dt, rec.tau,
-                       tie, every)
+def _creep_shift(estimate, rec):
+    """sum_i g_i psi_i over the aligned record ``rec``: what the creep of ``estimate`` (a
+    :class:`CreepEstimate`) takes from the settled displacement, y = H - shift."""
+    hyst = estimate.model
+    psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
+    return psi @ estimate.gains
+
+
+def _known_creep(first, shift):
+    """The creep ``shift`` as a known column of the first fit's fitter's least squares
+    (identify/_family_fit.ExtraColumns, weight 1: y = Phi w + c - shift), at the
+    samples the fitter sums over."""
     kept = getattr(first.attempt.fitter.rec, "kept", None)
-    n = rec.tau.size
-    return ExtraColumns(values=q if kept is None else q[kept],
-                        lower=np.zeros(tie.shape[1]),
-                        upper=np.full(tie.shape[1], MAX_TOTAL_GAIN / (2 * n)),
-                        names=("creep per lag", "creep rise toward slow lags"))
+    q = -(shift if kept is None else shift[kept])[:, None]
+    return ExtraColumns(values=q, lower=np.ones(1), upper=np.ones(1),
+                        names=("creep estimate",), known=True)
 
 
 def _joint_qp_of(model, fixed_n=None):
@@ -430,17 +429,16 @@ class _Trial:
         structure is chosen in one pass (:meth:`in_one_pass`)."""
         rec = self.rec
         estimate = self.estimate(start) if estimate is None else estimate
-        hyst, gains = estimate.model, estimate.gains
-        psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
+        shift = _creep_shift(estimate, rec)
         names = families if families is not None else (
             self.plain.families if self.plain.explicit_family else CREEP_FAMILIES)
-        if self._unchanged(psi @ gains, names):
+        if self._unchanged(shift, names):
             return self.first
         # the families the user named are still theirs (a failure is an error); the
         # default ones are skipped with the reason where they cannot be fitted, as in the
         # fit without creep (with thresholds= or n_operators=, kp and Bouc-Wen)
         options = self.plain.but(families=names)
-        y = np.r_[self.y[:self.d], rec.y + psi @ gains]
+        y = np.r_[self.y[:self.d], rec.y + shift]
         return self._trial(lambda: fit_record(
             self.u, y, options, self.steps, t=self.t, delay=self.first.delay.given(),
             responses=self.responses))
@@ -469,43 +467,35 @@ class _Trial:
         return self.first.attempt is not None
 
     def in_one_pass(self, start):
-        """(RecordFit, gains on the fitted cycles, held-back RMS with creep) of
-        ``start``'s family with creep inside, without a second pass through the
-        pipeline. A PI family: fitted again on the first fit's fitter with the creep
-        columns beside the offset, q = -psi(H) B (H: the first fit's settled output over
-        the record, its proxy; B: :func:`log_t_basis`), bounded as in :func:`_joint_qp`:
-        thresholds, regularization and weights chosen with creep inside, the held-back
-        RMS from those same normal equations. Bouc-Wen: its shape, linear part and gains
-        fitted together on the fitted cycles (:meth:`estimate`), judged by prediction."""
-        rec = self.rec
-        if isinstance(start.model, BoucWenModel):
-            estimate = self.estimate(start)
-            judged = _judge(self.first.result, self.first, rec, self.rows, self.held,
-                            estimate)
-            return self.first, judged
+        """(RecordFit, judgement) of ``start``'s family with creep, without a second
+        pass through the pipeline. A PI family is fitted again on the first fit's
+        fitter (its frame, start state, delay, cycles) with the creep ``start``'s joint
+        QP estimates as a known column beside the offset (its weight 1: the normal
+        equations of the record with that creep removed, b - A^T q): its thresholds,
+        regularization and weights are chosen on the settled displacement, and its
+        held-back RMS with creep comes from those same normal equations. Where the
+        estimate moves no sample by more than NO_CREEP of the span, the first fit's
+        structure is judged as it is. Bouc-Wen: its shape, linear part and gains fitted
+        together on the fitted cycles (:meth:`estimate`), judged by prediction."""
+        rec, first = self.rec, self.first
         estimate = self.estimate(start)
-        if self._negligible(estimate, start):
-            return self.first, _judge(self.first.result, self.first, rec, self.rows,
-                                      self.held)
-        tie = log_t_basis(rec.tau.size, int(np.count_nonzero(rec.tau <= rec.qp["duration"])))
-        extra = _creep_columns(self.first, start.model, rec, tie)
-        second = self._trial(lambda: fit_with_columns(self.first, start.family, extra,
+        if isinstance(start.model, BoucWenModel):
+            judged = _judge(first.result, first, rec, self.rows, self.held, estimate)
+            # the final joint fit searches the shape from the one found with creep inside
+            found = type(first.result)(
+                model=estimate.model.replace(metadata=first.result.model.metadata),
+                report=first.result.report, models=first.result.models)
+            return replace(first, result=found), judged
+        shift = _creep_shift(estimate, rec)
+        if float(np.max(np.abs(shift), initial=0.0)) <= NO_CREEP * float(np.ptp(rec.y)):
+            return first, _judge(first.result, first, rec, self.rows, self.held)
+        extra = _known_creep(first, shift)
+        second = self._trial(lambda: fit_with_columns(first, start.family, extra,
                                                        self.plain, self.steps, self.t))
-        fitted = second.choice.chosen
-        fitter = second.attempt.fitter
-        p = fitter.extra_coefficients[id(fitted.fitted.model)][1]
-        held = fitted.fitted.errors["held_back"] or fitted.fitted.errors["fit"]
-        judged = _judgement(self.first.result, fitted.name, float(held["rms"]),
-                            np.clip(tie @ p, 0.0, None))
-        return second, judged
-
-    def _negligible(self, estimate, start):
-        """Whether the creep ``start``'s joint QP estimates (``estimate``) leaves the
-        record as the first fit saw it (:meth:`_unchanged`): then the structure is the
-        first fit's."""
-        hyst, rec = estimate.model, self.rec
-        psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
-        return self._unchanged(psi @ estimate.gains, [start.family])
+        fitted = second.choice.chosen.fitted
+        held = fitted.errors["held_back"] or fitted.errors["fit"]
+        return second, _judgement(first.result, fitted.name, float(held["rms"]),
+                                  estimate.gains)
 
     def _unchanged(self, shift, names):
         """Whether removing the creep estimate (``shift``, the displacement it adds)

@@ -267,6 +267,12 @@ class ExtraColumns:
     lower: np.ndarray
     upper: np.ndarray
     names: tuple
+    known: bool = False      # one column of weight 1: a known part of the output
+
+    @property
+    def n_columns(self):
+        """The columns appended to the least squares (none for a known part)."""
+        return 0 if self.known else self.values.shape[1]
 
     def rows(self, keep):
         """These columns at the samples ``keep`` (None: all)."""
@@ -285,6 +291,11 @@ class ExtraColumns:
             i = layout.indices(role) if role in roles else np.zeros(0, dtype=int)
             q[i] = self.values[i]
             cross = np.r_[operators.T @ q, q.sum(axis=0)[None, :]]
+            if self.known:           # the normal equations of d - q: b - A^T q
+                out[role] = Gram(g.G, g.b - cross[:, 0],
+                                 g.dd - 2.0 * float(q[:, 0] @ d) + float(q[:, 0] @ q[:, 0]),
+                                 g.n)
+                continue
             out[role] = Gram(np.block([[g.G, cross], [cross.T, q.T @ q]]),
                              np.r_[g.b, q.T @ d], g.dd, g.n)
         return out
@@ -397,7 +408,7 @@ class FamilyFitter:
     def problem(self, family, parts, rows, n_cand, names):
         """SubsetProblem over columns [candidates..., fixed operators..., offset]."""
         rec, extra = self.rec, self.extra
-        n_extra = 0 if extra is None else extra.values.shape[1]
+        n_extra = 0 if extra is None else extra.n_columns
         m = parts["fit"].G.shape[0] - n_extra          # operators and the offset
         keep = list(range(m)) if rec.fit_offset else list(range(m - 1))
         keep += list(range(m, m + n_extra))
@@ -407,8 +418,9 @@ class FamilyFitter:
         if rec.fit_offset:
             lo, hi = np.r_[lo, -np.inf], np.r_[hi, np.inf]
         if extra is not None:
-            lo, hi = np.r_[lo, extra.lower], np.r_[hi, extra.upper]
-            names = names + (["offset"] if rec.fit_offset else []) + list(extra.names)
+            lo, hi = np.r_[lo, extra.lower[:n_extra]], np.r_[hi, extra.upper[:n_extra]]
+            names = (names + (["offset"] if rec.fit_offset else []) +
+                     list(extra.names[:n_extra]))
             return SubsetProblem(fit=fit, judge=judge, n_candidates=n_cand, lower=lo,
                                  upper=hi, names=names)
         A_eq = b_eq = None
@@ -423,7 +435,7 @@ class FamilyFitter:
         """Operators whose output does not vary over the fitted samples."""
         g = parts["fit"]
         n = g.n
-        ones = g.G.shape[0] - 1 - (0 if self.extra is None else self.extra.values.shape[1])
+        ones = g.G.shape[0] - 1 - (0 if self.extra is None else self.extra.n_columns)
         mean = g.G[:n_cols, ones] / n
         var = np.diag(g.G)[:n_cols] / n - mean ** 2
         return np.flatnonzero(var <= (CONSTANT_COLUMN * self.rec.S) ** 2)
@@ -601,7 +613,7 @@ class FamilyFitter:
             self.note("nothing held back: regularization strength not chosen from data")
         probes = kernel_probes(self.responses, template, fam.grid, rec.S, rec.fit_offset)
         if self.extra is not None:       # the probes are rate-independent: no creep
-            probes = np.pad(probes, (0, self.extra.values.shape[1]))
+            probes = np.pad(probes, (0, self.extra.n_columns))
         x = solve(shape, lam, prob.fit, product, warn=True)
         reference = prob.judge.rms(cols, x)
         x, pruning = prune_kernels(x, n_ops, prob.fit, prob.judge, probes, prob,
@@ -666,7 +678,9 @@ class FamilyFitter:
                 return y_hat
         # the model's initial state is the state the record was processed from
         y_hat = model.predict(self.rec.u)
-        if self.extra is not None and id(model) in self.extra_coefficients:
+        if self.extra is not None and self.extra.known:
+            y_hat = y_hat + self.extra.values[:, 0]
+        elif self.extra is not None and id(model) in self.extra_coefficients:
             y_hat = y_hat + self.extra.values @ self.extra_coefficients[id(model)][1]
         self._predictions = [(model, y_hat)] + self._predictions[:PREDICTIONS_KEPT - 1]
         return y_hat
