@@ -17,13 +17,13 @@ yet followed), one QP solves
 with psi from the previous estimate H_prev of the hysteresis output, and is repeated with
 H_prev = Phi w + c until H stops changing (creep is a few percent of H, so two or three
 passes; B is :func:`log_t_basis`). The structure of the chosen PI family (thresholds,
-regularization) is chosen with creep inside, in one pass: the family is fitted again on
-the first fit's fitter with the columns q = -psi(H) B beside the offset (H: the first
-fit's settled output, a proxy; identify/_family_fit.ExtraColumns), its held-back RMS
-from those augmented normal equations judging creep; the joint QP then refits its
-weights and the creep gains together. Only the other kind's trial (:func:`_other_kind_
-tried`) still runs the ordinary fit again on the record with its estimate removed,
-y + sum_i g_i psi_i.
+regularization) is chosen on the record with the estimated creep removed, y + sum_i
+g_i psi_i, in one pass: the family is fitted again on the first fit's fitter with that
+creep as a known column beside the offset (weight 1; identify/_family_fit.ExtraColumns),
+its held-back RMS from those normal equations judging creep; the joint QP then refits
+its weights and the creep gains together. Only the other kind's trial
+(:func:`_other_kind_tried`) still runs the ordinary fit again on the record with its
+estimate removed.
 
 A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for a fixed
 shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
@@ -460,7 +460,8 @@ class _Trial:
 
     def one_pass(self, start):
         """Whether ``start``'s structure with creep is chosen in one pass: a PI family
-        of the first fit (fitted again on its fitter with the creep columns inside), or
+        of the first fit (fitted again on its fitter with the creep estimate as a known
+        column), or
         the Bouc-Wen model the first fit chose (its shape searched with creep inside)."""
         if isinstance(start.model, BoucWenModel):
             return start.family == self.first.result.report.chosen

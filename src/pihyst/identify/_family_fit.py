@@ -257,9 +257,11 @@ def moved_state(model, S, v0, how):
 
 @dataclass(frozen=True)
 class ExtraColumns:
-    """Columns beside the offset in every family's least squares (the creep columns of
-    identify/_creep.py): their ``values`` over the fitter's record (one row per
-    sample), the bounds of their weights and their names. The operators' part of the
+    """Columns beside the offset in every family's least squares: their ``values`` over
+    the fitter's record (one row per sample), the bounds of their weights and their
+    names; or, ``known``, one column whose weight is 1, a known part of the output
+    (the creep estimate of identify/_creep.py), which the normal equations take off
+    the target. The operators' part of the
     normal equations stays the C core's; only the products with these columns are
     added (:meth:`augmented`)."""
 
@@ -324,7 +326,7 @@ class FamilyFitter:
 
     def with_columns(self, extra):
         """This fitter with the :class:`ExtraColumns` ``extra`` in every family's least
-        squares, beside the offset (the creep columns, identify/_creep.py)."""
+        squares, beside the offset (the creep estimate, identify/_creep.py)."""
         if self.rec.through:
             raise FitError("through= (equality constraints) is not available with extra "
                            "columns")

@@ -4,7 +4,8 @@ procedure"): checks -> fitting frame -> start state -> delay -> cycles and held-
 report. Each step is a function below that returns a frozen decision
 (:mod:`pihyst.identify._decisions`); :func:`fit_record` runs them in order. The creep
 step (:mod:`pihyst.identify._creep`) fits the chosen family again on the same fitter
-with the creep columns inside its least squares (:func:`fit_with_columns`).
+with the creep estimate as a known column of its least squares
+(:func:`fit_with_columns`).
 """
 
 import warnings
@@ -53,7 +54,7 @@ class RecordFit:
     settled_sample: int                  # end of the settling sweep (0: none)
     record_start: Optional[list] = None  # a Bouc-Wen model's (x, z) at the record's start
     # the families fitted and the choice made (the creep step fits the chosen family
-    # again on the same fitter, with the creep columns inside: identify/_creep.py)
+    # again on the same fitter, with the creep estimate in it: identify/_creep.py)
     attempt: object = field(default=None, compare=False, repr=False)
 
 
@@ -275,7 +276,7 @@ def fit_with_columns(first, family, extra, options, steps, t):
     fam = next(c.fitted.family for c in attempt.choice.candidates if c.name == family)
     fitter = attempt.fitter.with_columns(extra)
     res, caught = _fit_family(fitter, fam, [], {})
-    steps.done(f"{family} fitted with creep inside: judged RMS {res.judged_rms:.4g}")
+    steps.done(f"{family} fitted with the creep estimate: judged RMS {res.judged_rms:.4g}")
     fitted = FamiliesFitted(results=(res,), skipped=attempt.fitted.skipped,
                             warnings={family: caught})
     choice = choose_family(fitter.rec, fitter, fitted, attempt.validation,
