@@ -326,8 +326,8 @@ def test_a_real_creep_estimate_refits_the_chosen_family_with_creep_inside(monkey
         fitted = pihyst.fit(u, y, t=t, family=["classical", "modified-pi"])
     assert calls == [None]
     decision = fitted.model.metadata["fit"]["creep"]["decision"]
-    assert columns == [decision["family_without"]]
-    assert decision["family_with"] == columns[0], decision
+    assert columns == [[decision["family_without"]]]
+    assert decision["family_with"] == columns[0][0], decision
     assert decision["held_back_rms_with"] < decision["held_back_rms_without"]
 
 

@@ -458,16 +458,17 @@ class _Trial:
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         return second
 
-    def one_pass(self, start):
-        """Whether ``start``'s structure with creep is chosen in one pass: a PI family
-        of the first fit (fitted again on its fitter with the creep estimate as a known
-        column), or
-        the Bouc-Wen model the first fit chose (its shape searched with creep inside)."""
+    def one_pass(self, start, families=None):
+        """Whether the structure with ``start``'s creep estimate is chosen in one pass:
+        among PI families of the first fit (``families``, default ``start``'s; fitted
+        again on its fitter with the creep estimate as a known column), or the Bouc-Wen
+        model the first fit chose (its shape searched with creep inside). Not a Bouc-Wen
+        model tried beside chosen operators: its own fit has no known column yet."""
         if isinstance(start.model, BoucWenModel):
-            return start.family == self.first.result.report.chosen
+            return families is None and start.family == self.first.result.report.chosen
         return self.first.attempt is not None
 
-    def in_one_pass(self, start):
+    def in_one_pass(self, start, families=None):
         """(RecordFit, judgement) of ``start``'s family with creep, without a second
         pass through the pipeline. A PI family is fitted again on the first fit's
         fitter (its frame, start state, delay, cycles) with the creep ``start``'s joint
@@ -476,7 +477,8 @@ class _Trial:
         regularization and weights are chosen on the settled displacement, and its
         held-back RMS with creep comes from those same normal equations. Where the
         estimate moves no sample by more than NO_CREEP of the span, the first fit's
-        structure is judged as it is. Bouc-Wen: its shape, linear part and gains fitted
+        structure is judged as it is. ``families``: the PI families chosen among
+        (default: ``start``'s). Bouc-Wen: its shape, linear part and gains fitted
         together on the fitted cycles (:meth:`estimate`), judged by prediction."""
         rec, first = self.rec, self.first
         estimate = self.estimate(start)
@@ -488,11 +490,13 @@ class _Trial:
                 report=first.result.report, models=first.result.models)
             return replace(first, result=found), judged
         shift = _creep_shift(estimate, rec)
-        if float(np.max(np.abs(shift), initial=0.0)) <= NO_CREEP * float(np.ptp(rec.y)):
+        if families is None and \
+                float(np.max(np.abs(shift), initial=0.0)) <= NO_CREEP * float(np.ptp(rec.y)):
             return first, _judge(first.result, first, rec, self.rows, self.held)
         extra = _known_creep(first, shift)
-        second = self._trial(lambda: fit_with_columns(first, start.family, extra,
-                                                       self.plain, self.steps, self.t))
+        names = [start.family] if families is None else list(families)
+        second = self._trial(lambda: fit_with_columns(first, names, extra, self.plain,
+                                                       self.steps, self.t))
         fitted = second.choice.chosen.fitted
         held = fitted.errors["held_back"] or fitted.errors["fit"]
         return second, _judgement(first.result, fitted.name, float(held["rms"]),
@@ -514,8 +518,8 @@ class _Trial:
         fit of shape, linear part and creep gains on the fitted rows is the one the
         judgement needs, and a second shape search from another start would fit the same
         thing twice (0.35 s of the 2 s fit of P-885)."""
-        if families is None and self.one_pass(start):
-            second, judged = self.in_one_pass(start)
+        if self.one_pass(start, families):
+            second, judged = self.in_one_pass(start, families)
         else:
             estimate = self.estimate(start)
             second = self.structure(start, families, estimate)

@@ -266,23 +266,22 @@ def choose_family(rec, fitter, fitted, validation, minor_loops, options):
                   max_latency=options.max_latency)
 
 
-def fit_with_columns(first, family, extra, options, steps, t):
-    """:class:`RecordFit` of ``family`` (a name) fitted on the fitter, frame, start state
-    and delay of ``first`` (a RecordFit) with the :class:`~pihyst.identify._family_fit.
-    ExtraColumns` ``extra`` in its least squares (its thresholds, regularization and
-    weights chosen with them inside), judged, refitted and reported as :func:`finish`
-    does; the other families fitted in ``first`` are not fitted again."""
+def fit_with_columns(first, families, extra, options, steps, t):
+    """:class:`RecordFit` of the PI ``families`` (names of families ``first`` fitted)
+    fitted on the fitter, frame, start state and delay of ``first`` (a RecordFit) with
+    the :class:`~pihyst.identify._family_fit.ExtraColumns` ``extra`` in their least
+    squares (their thresholds, regularization and weights chosen with them), chosen,
+    refitted and reported as :func:`fit_at_delay` and :func:`finish` do; the other
+    families are not fitted again, nothing before the families' step is done again."""
     attempt = first.attempt
-    fam = next(c.fitted.family for c in attempt.choice.candidates if c.name == family)
+    chosen = options.but(families=[c.fitted.family for c in attempt.choice.candidates
+                                   if c.name in families])
     fitter = attempt.fitter.with_columns(extra)
-    res, caught = _fit_family(fitter, fam, [], {})
-    steps.done(f"{family} fitted with the creep estimate: judged RMS {res.judged_rms:.4g}")
-    fitted = FamiliesFitted(results=(res,), skipped=attempt.fitted.skipped,
-                            warnings={family: caught})
+    fitted = fit_families(fitter.rec, fitter, chosen, attempt.minor_loops, steps, {})
     choice = choose_family(fitter.rec, fitter, fitted, attempt.validation,
-                           attempt.minor_loops, options)
+                           attempt.minor_loops, chosen)
     again = replace(attempt, fitter=fitter, fitted=fitted, choice=choice)
-    return finish(again, first.start, first.delay, options, steps, t)
+    return finish(again, first.start, first.delay, chosen, steps, t)
 
 
 def _latency(model):
