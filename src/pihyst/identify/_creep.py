@@ -21,9 +21,9 @@ regularization) is chosen on the record with the estimated creep removed, y + su
 g_i psi_i, in one pass: the family is fitted again on the first fit's fitter with that
 creep as a known column beside the offset (weight 1; identify/_family_fit.ExtraColumns),
 its held-back RMS from those normal equations judging creep; the joint QP then refits
-its weights and the creep gains together. Only the other kind's trial
-(:func:`_other_kind_tried`) still runs the ordinary fit again on the record with its
-estimate removed.
+its weights and the creep gains together; the other kind's trial (:func:`_other_kind_
+tried`) of PI families is made the same way. Only a Bouc-Wen model tried beside chosen
+operators still runs the ordinary fit again on the record with its estimate removed.
 
 A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for a fixed
 shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
@@ -342,7 +342,7 @@ def fit_with_creep(u, y, t, options, steps):
     y = np.asarray(y, dtype=np.float64)
     decide = options.creep == "auto"
     plain = options.but(creep="off")
-    responses = Responses()          # the other kind's trial fits the input again
+    responses = Responses()          # a Bouc-Wen trial fits the input again
     if options.through is not None:
         if decide:
             return _without_creep(fit_record(u, y, plain, steps, t=t).result, {
@@ -424,9 +424,9 @@ class _Trial:
         """:class:`RecordFit` of the record with the creep ``start``'s joint QP
         estimates (``estimate``, default: :meth:`estimate`) removed (the settled
         displacement the structure is chosen on), among ``families`` (default: every
-        creep-capable family the fit was given). Only the other kind's trial
-        (:func:`_other_kind_tried`) still takes this second pass; the start family's
-        structure is chosen in one pass (:meth:`in_one_pass`)."""
+        creep-capable family the fit was given). Only a Bouc-Wen model tried beside
+        chosen operators (:func:`_other_kind_tried`) still takes this second pass; the
+        others are chosen in one pass (:meth:`in_one_pass`)."""
         rec = self.rec
         estimate = self.estimate(start) if estimate is None else estimate
         shift = _creep_shift(estimate, rec)
