@@ -238,6 +238,14 @@ def _fitted_rows(n, start, rows):
     return fitted
 
 
+def _pi_families(first):
+    """The PI families the first fit fitted: the structure with the creep estimate is
+    chosen among them again, as the ordinary fit chooses (a family other than the one
+    the estimate was made with may fit the settled displacement better)."""
+    return [c.name for c in first.attempt.choice.candidates
+            if not isinstance(c.fitted.model, BoucWenModel)]
+
+
 def _creep_shift(estimate, rec):
     """sum_i g_i psi_i over the aligned record ``rec``: what the creep of ``estimate`` (a
     :class:`CreepEstimate`) takes from the settled displacement, y = H - shift."""
@@ -494,7 +502,7 @@ class _Trial:
                 float(np.max(np.abs(shift), initial=0.0)) <= NO_CREEP * float(np.ptp(rec.y)):
             return first, _judge(first.result, first, rec, self.rows, self.held)
         extra = _known_creep(first, shift)
-        names = [start.family] if families is None else list(families)
+        names = _pi_families(first) if families is None else list(families)
         second = self._trial(lambda: fit_with_columns(first, names, extra, self.plain,
                                                        self.steps, self.t))
         fitted = second.choice.chosen.fitted
