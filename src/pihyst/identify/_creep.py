@@ -16,11 +16,12 @@ yet followed), one QP solves
 
 with psi from the previous estimate H_prev of the hysteresis output, and is repeated with
 H_prev = Phi w + c until H stops changing (creep is a few percent of H, so two or three
-passes; B is :func:`log_t_basis`). The structure of the chosen PI family (thresholds,
-regularization) is chosen on the record with the estimated creep removed, y + sum_i
-g_i psi_i, in one pass: the family is fitted again on the first fit's fitter with that
-creep as a known column beside the offset (weight 1; identify/_family_fit.ExtraColumns),
-its held-back RMS from those normal equations judging creep; the joint QP then refits
+passes; B is :func:`log_t_basis`). The structure (PI family, thresholds, regularization)
+is chosen on the record with the estimated creep removed, y + sum_i g_i psi_i, in one
+pass: the PI families the first fit fitted are fitted again on its fitter with that
+creep as a known column beside the offset (weight 1; identify/_family_fit.ExtraColumns)
+and chosen among, the chosen one's held-back RMS from those normal equations judging
+creep; the joint QP then refits
 its weights and the creep gains together; the other kind's trial (:func:`_other_kind_
 tried`) of PI families is made the same way. Only a Bouc-Wen model tried beside chosen
 operators still runs the ordinary fit again on the record with its estimate removed.
@@ -477,17 +478,18 @@ class _Trial:
         return self.first.attempt is not None
 
     def in_one_pass(self, start, families=None):
-        """(RecordFit, judgement) of ``start``'s family with creep, without a second
-        pass through the pipeline. A PI family is fitted again on the first fit's
-        fitter (its frame, start state, delay, cycles) with the creep ``start``'s joint
-        QP estimates as a known column beside the offset (its weight 1: the normal
-        equations of the record with that creep removed, b - A^T q): its thresholds,
-        regularization and weights are chosen on the settled displacement, and its
-        held-back RMS with creep comes from those same normal equations. Where the
-        estimate moves no sample by more than NO_CREEP of the span, the first fit's
-        structure is judged as it is. ``families``: the PI families chosen among
-        (default: ``start``'s). Bouc-Wen: its shape, linear part and gains fitted
-        together on the fitted cycles (:meth:`estimate`), judged by prediction."""
+        """(RecordFit, judgement) of the structure with ``start``'s creep estimate,
+        without a second pass through the pipeline. The PI families are fitted again on
+        the first fit's fitter (its frame, start state, delay, cycles) with the creep
+        ``start``'s joint QP estimates as a known column beside the offset (its weight
+        1: the normal equations of the record with that creep removed, b - A^T q): their
+        thresholds, regularization and weights are chosen on the settled displacement,
+        the family as the ordinary fit chooses it, and the chosen one's held-back RMS
+        with creep comes from those same normal equations. Where the estimate moves no
+        sample by more than NO_CREEP of the span, the first fit's structure is judged as
+        it is. ``families``: the PI families chosen among (default: those the first fit
+        fitted). Bouc-Wen: its shape, linear part and gains fitted together on the
+        fitted cycles (:meth:`estimate`), judged by prediction."""
         rec, first = self.rec, self.first
         estimate = self.estimate(start)
         if isinstance(start.model, BoucWenModel):
