@@ -16,15 +16,9 @@ yet followed), one QP solves
 
 with psi from the previous estimate H_prev of the hysteresis output, and is repeated with
 H_prev = Phi w + c until H stops changing (creep is a few percent of H, so two or three
-passes; B is :func:`log_t_basis`). The structure (PI family, thresholds, regularization)
-is chosen on the record with the estimated creep removed, y + sum_i g_i psi_i, in one
-pass: the PI families the first fit fitted are fitted again on its fitter with that
-creep as a known column beside the offset (weight 1; identify/_family_fit.ExtraColumns)
-and chosen among, the chosen one's held-back RMS from those normal equations judging
-creep; the joint QP then refits
-its weights and the creep gains together; the other kind's trial (:func:`_other_kind_
-tried`) of PI families is made the same way. Only a Bouc-Wen model tried beside chosen
-operators still runs the ordinary fit again on the record with its estimate removed.
+passes; B is :func:`log_t_basis`). The structure (family, thresholds, shape) is chosen by
+the ordinary fit, run again on the record with the estimated creep removed,
+y + sum_i g_i psi_i; the joint QP then refits its weights and the creep gains together.
 
 A Bouc-Wen model (docs/theory/bouc-wen.md) carries creep the same way: for a fixed
 shape (beta, gamma, n) its output H = c + c_1 x + c_2 x^2 + a z is linear in
@@ -36,7 +30,7 @@ joint fit inside the criterion (:func:`_joint_qp_boucwen`, identify/_boucwen_cre
 
 import functools
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -51,9 +45,8 @@ from pihyst.identify._constants import (
     TOLERANCE,
 )
 from pihyst.identify._families import CREEP_FAMILIES
-from pihyst.identify._family_fit import ExtraColumns
 from pihyst.identify._qp import solve_qp
-from pihyst.identify._record_fit import FIT_SAMPLES, fit_record, fit_with_columns
+from pihyst.identify._record_fit import FIT_SAMPLES, fit_record
 from pihyst.identify._record_start import record_start_check
 from pihyst.identify._responses import Responses
 from pihyst.model._boucwen import BoucWenModel
@@ -239,32 +232,6 @@ def _fitted_rows(n, start, rows):
     return fitted
 
 
-def _pi_families(first):
-    """The PI families the first fit fitted: the structure with the creep estimate is
-    chosen among them again, as the ordinary fit chooses (a family other than the one
-    the estimate was made with may fit the settled displacement better)."""
-    return [c.name for c in first.attempt.choice.candidates
-            if not isinstance(c.fitted.model, BoucWenModel)]
-
-
-def _creep_shift(estimate, rec):
-    """sum_i g_i psi_i over the aligned record ``rec``: what the creep of ``estimate`` (a
-    :class:`CreepEstimate`) takes from the settled displacement, y = H - shift."""
-    hyst = estimate.model
-    psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
-    return psi @ estimate.gains
-
-
-def _known_creep(first, shift):
-    """The creep ``shift`` as a known column of the first fit's fitter's least squares
-    (identify/_family_fit.ExtraColumns, weight 1: y = Phi w + c - shift), at the
-    samples the fitter sums over."""
-    kept = getattr(first.attempt.fitter.rec, "kept", None)
-    q = -(shift if kept is None else shift[kept])[:, None]
-    return ExtraColumns(values=q, lower=np.ones(1), upper=np.ones(1),
-                        names=("creep estimate",), known=True)
-
-
 def _joint_qp_of(model, fixed_n=None):
     """The joint QP of the model's kind: :func:`_joint_qp` (PI operators) or
     :func:`_joint_qp_boucwen` (``fixed_n``: the exponent the family was given)."""
@@ -351,7 +318,7 @@ def fit_with_creep(u, y, t, options, steps):
     y = np.asarray(y, dtype=np.float64)
     decide = options.creep == "auto"
     plain = options.but(creep="off")
-    responses = Responses()          # a Bouc-Wen trial fits the input again
+    responses = Responses()          # the same input is fitted up to three times
     if options.through is not None:
         if decide:
             return _without_creep(fit_record(u, y, plain, steps, t=t).result, {
@@ -384,8 +351,7 @@ def fit_with_creep(u, y, t, options, steps):
                        f"one of {', '.join(CREEP_FAMILIES)}")
     trial = _Trial(u, y, t, d, rec, plain, first, rows, held, decide, steps, responses)
     if not decide:
-        second = (trial.in_one_pass(start)[0] if trial.one_pass(start) else
-                  trial.structure(start))
+        second = trial.structure(start)
         return _with_creep_fit(first, second, rec, t, d, dt_fixed, duration, None)
     second, judged = trial.judged(start)
     second, judged = _other_kind_tried(trial, first, start, second, judged)
@@ -433,84 +399,35 @@ class _Trial:
         """:class:`RecordFit` of the record with the creep ``start``'s joint QP
         estimates (``estimate``, default: :meth:`estimate`) removed (the settled
         displacement the structure is chosen on), among ``families`` (default: every
-        creep-capable family the fit was given). Only a Bouc-Wen model tried beside
-        chosen operators (:func:`_other_kind_tried`) still takes this second pass; the
-        others are chosen in one pass (:meth:`in_one_pass`)."""
+        creep-capable family the fit was given)."""
         rec = self.rec
         estimate = self.estimate(start) if estimate is None else estimate
-        shift = _creep_shift(estimate, rec)
+        hyst, gains = estimate.model, estimate.gains
+        psi = _lag_deficits(hyst, hyst.predict(rec.u), rec.dt, rec.tau, hyst.initial_state)
         names = families if families is not None else (
             self.plain.families if self.plain.explicit_family else CREEP_FAMILIES)
-        if self._unchanged(shift, names):
+        if self._unchanged(psi @ gains, names):
             return self.first
         # the families the user named are still theirs (a failure is an error); the
         # default ones are skipped with the reason where they cannot be fitted, as in the
         # fit without creep (with thresholds= or n_operators=, kp and Bouc-Wen)
         options = self.plain.but(families=names)
-        y = np.r_[self.y[:self.d], rec.y + shift]
-        return self._trial(lambda: fit_record(
-            self.u, y, options, self.steps, t=self.t, delay=self.first.delay.given(),
-            responses=self.responses))
-
-    def _trial(self, fit):
-        """``fit()``; with a judgement its warnings are about a trial structure, and are
-        the user's only if that structure is kept (:meth:`keep_warnings`)."""
+        y = np.r_[self.y[:self.d], rec.y + psi @ gains]
         if not self.decide:
-            return fit()
+            return fit_record(self.u, y, options, self.steps, t=self.t,
+                              delay=self.first.delay.given(), responses=self.responses)
+        # a trial: its warnings are about the record with this creep estimate removed,
+        # and are the user's only if that structure is kept (keep_warnings)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PihystWarning)
-            second = fit()
+            second = fit_record(self.u, y, options, self.steps, t=self.t,
+                                delay=self.first.delay.given(), responses=self.responses)
         self.warnings[id(second)] = [w for w in caught
                                      if issubclass(w.category, PihystWarning)]
         for w in caught:
             if not issubclass(w.category, PihystWarning):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         return second
-
-    def one_pass(self, start, families=None):
-        """Whether the structure with ``start``'s creep estimate is chosen in one pass:
-        among PI families of the first fit (``families``, default ``start``'s; fitted
-        again on its fitter with the creep estimate as a known column), or the Bouc-Wen
-        model the first fit chose (its shape searched with creep inside). Not a Bouc-Wen
-        model tried beside chosen operators: its own fit has no known column yet."""
-        if isinstance(start.model, BoucWenModel):
-            return families is None and start.family == self.first.result.report.chosen
-        return self.first.attempt is not None
-
-    def in_one_pass(self, start, families=None):
-        """(RecordFit, judgement) of the structure with ``start``'s creep estimate,
-        without a second pass through the pipeline. The PI families are fitted again on
-        the first fit's fitter (its frame, start state, delay, cycles) with the creep
-        ``start``'s joint QP estimates as a known column beside the offset (its weight
-        1: the normal equations of the record with that creep removed, b - A^T q): their
-        thresholds, regularization and weights are chosen on the settled displacement,
-        the family as the ordinary fit chooses it, and the chosen one's held-back RMS
-        with creep comes from those same normal equations. Where the estimate moves no
-        sample by more than NO_CREEP of the span, the first fit's structure is judged as
-        it is. ``families``: the PI families chosen among (default: those the first fit
-        fitted). Bouc-Wen: its shape, linear part and gains fitted together on the
-        fitted cycles (:meth:`estimate`), judged by prediction."""
-        rec, first = self.rec, self.first
-        estimate = self.estimate(start)
-        if isinstance(start.model, BoucWenModel):
-            judged = _judge(first.result, first, rec, self.rows, self.held, estimate)
-            # the final joint fit searches the shape from the one found with creep inside
-            found = type(first.result)(
-                model=estimate.model.replace(metadata=first.result.model.metadata),
-                report=first.result.report, models=first.result.models)
-            return replace(first, result=found), judged
-        shift = _creep_shift(estimate, rec)
-        if families is None and \
-                float(np.max(np.abs(shift), initial=0.0)) <= NO_CREEP * float(np.ptp(rec.y)):
-            return first, _judge(first.result, first, rec, self.rows, self.held)
-        extra = _known_creep(first, shift)
-        names = _pi_families(first) if families is None else list(families)
-        second = self._trial(lambda: fit_with_columns(first, names, extra, self.plain,
-                                                       self.steps, self.t))
-        fitted = second.choice.chosen.fitted
-        held = fitted.errors["held_back"] or fitted.errors["fit"]
-        return second, _judgement(first.result, fitted.name, float(held["rms"]),
-                                  estimate.gains)
 
     def _unchanged(self, shift, names):
         """Whether removing the creep estimate (``shift``, the displacement it adds)
@@ -528,15 +445,11 @@ class _Trial:
         fit of shape, linear part and creep gains on the fitted rows is the one the
         judgement needs, and a second shape search from another start would fit the same
         thing twice (0.35 s of the 2 s fit of P-885)."""
-        if self.one_pass(start, families):
-            second, judged = self.in_one_pass(start, families)
-        else:
-            estimate = self.estimate(start)
-            second = self.structure(start, families, estimate)
-            fitted = (estimate if isinstance(estimate.model, BoucWenModel)
-                      and second.result.report.chosen == start.family else None)
-            judged = _judge(self.first.result, second, self.rec, self.rows, self.held,
-                            fitted)
+        estimate = self.estimate(start)
+        second = self.structure(start, families, estimate)
+        fitted = (estimate if isinstance(estimate.model, BoucWenModel)
+                  and second.result.report.chosen == start.family else None)
+        judged = _judge(self.first.result, second, self.rec, self.rows, self.held, fitted)
         self.steps.done(f"creep estimated with {start.family}: {judged['family_with']} "
                         f"holds back {judged['held_back_rms_with']:.4g}")
         return second, judged
@@ -703,16 +616,10 @@ def _judge(first, second, rec, fit_rows, held_rows, fitted=None):
         hyst, gains = fitted.model, fitted.gains
     with_creep = hyst.replace(creep=Creep(rec.tau, gains, float(np.median(rec.dt))))
     r = with_creep.predict(rec.u, t=rec.t)[held_rows] - rec.y[held_rows]
-    return _judgement(first, second.result.report.chosen, float(np.sqrt(np.mean(r * r))),
-                      gains)
-
-
-def _judgement(first, name_with, rms_creep, gains):
-    """The judgement of creep: kept when the held-back RMS with it, ``rms_creep`` (of
-    the family ``name_with``, ``gains`` on the fitted cycles), is lower than that of
-    the ordinary fit ``first`` (a FitResult) by more than the choice's tolerance."""
+    rms_creep = float(np.sqrt(np.mean(r * r)))
     rms_plain = float(first.report.family(first.report.chosen)["errors"]["held_back"]["rms"])
     kept = rms_creep < (1.0 - TOLERANCE) * rms_plain
+    name_with = second.result.report.chosen
     return {"kept": bool(kept), "held_back_rms_without": rms_plain,
             "family_without": first.report.chosen,
             "held_back_rms_with": rms_creep, "family_with": name_with,

@@ -8,7 +8,7 @@ Equations: the normal equations of ``_gram``, the QP of ``_qp``, the subset sear
 """
 
 import copy
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -255,54 +255,6 @@ def moved_state(model, S, v0, how):
     return model.simulate(np.array(path, dtype=float)).final_state
 
 
-@dataclass(frozen=True)
-class ExtraColumns:
-    """Columns beside the offset in every family's least squares: their ``values`` over
-    the fitter's record (one row per sample), the bounds of their weights and their
-    names; or, ``known``, one column whose weight is 1, a known part of the output
-    (the creep estimate of identify/_creep.py), which the normal equations take off
-    the target. The operators' part of the
-    normal equations stays the C core's; only the products with these columns are
-    added (:meth:`augmented`)."""
-
-    values: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    names: tuple
-    known: bool = False      # one column of weight 1: a known part of the output
-
-    @property
-    def n_columns(self):
-        """The columns appended to the least squares (none for a known part)."""
-        return 0 if self.known else self.values.shape[1]
-
-    def rows(self, keep):
-        """These columns at the samples ``keep`` (None: all)."""
-        return self if keep is None else replace(self, values=self.values[keep])
-
-    def augmented(self, parts, operators, d, layout, roles):
-        """The normal equations ``parts`` (role: Gram over [operators..., 1]) with these
-        columns Q appended: G' = [[G, A^T Q], [Q^T A, Q^T Q]], b' = [b, Q^T d], from the
-        ``operators``' outputs and the target ``d`` at the samples of each of ``roles``
-        (the others' parts are empty)."""
-        out = {}
-        for role, g in parts.items():
-            # Q with the rows of the other roles zero: one product over the operators'
-            # outputs as they are, no copy of their rows
-            q = np.zeros_like(self.values)
-            i = layout.indices(role) if role in roles else np.zeros(0, dtype=int)
-            q[i] = self.values[i]
-            cross = np.r_[operators.T @ q, q.sum(axis=0)[None, :]]
-            if self.known:           # the normal equations of d - q: b - A^T q
-                out[role] = Gram(g.G, g.b - cross[:, 0],
-                                 g.dd - 2.0 * float(q[:, 0] @ d) + float(q[:, 0] @ q[:, 0]),
-                                 g.n)
-                continue
-            out[role] = Gram(np.block([[g.G, cross], [cross.T, q.T @ q]]),
-                             np.r_[g.b, q.T @ d], g.dd, g.n)
-        return out
-
-
 class FamilyFitter:
     """Fits families to one record with the options common to all families; each
     family's :meth:`~pihyst.identify._families.Family.fit` calls :meth:`fit_subsets` or
@@ -319,21 +271,8 @@ class FamilyFitter:
         self.n_candidates, self.n_operators = n_candidates, n_operators
         self.nonnegative, self.bounds = nonnegative, bounds
         self.max_exhaustive = max_exhaustive
-        self.extra = None              # ExtraColumns beside the offset (creep), or None
         self.notes = []
         self._predictions = []
-        self.extra_coefficients = {}   # id(model): (model, its extra columns' weights)
-
-    def with_columns(self, extra):
-        """This fitter with the :class:`ExtraColumns` ``extra`` in every family's least
-        squares, beside the offset (the creep estimate, identify/_creep.py)."""
-        if self.rec.through:
-            raise FitError("through= (equality constraints) is not available with extra "
-                           "columns")
-        out = copy.copy(self)
-        out.extra, out.notes, out._predictions = extra, [], []
-        out.extra_coefficients = {}
-        return out
 
     def subsampled(self, max_samples, note=None):
         """This fitter on the record subsampled to about ``max_samples`` samples and
@@ -346,8 +285,6 @@ class FamilyFitter:
             return self
         out = copy.copy(self)
         out.rec, out._predictions = rec, []
-        if self.extra is not None:
-            out.extra = self.extra.rows(self.rec.sample_indices(max_samples))
         if note is None:
             self.note(f"fitted on {rec.u.size} of {self.rec.u.size} samples (evenly spaced, "
                       f"and every input extremum); errors on all")
@@ -360,8 +297,6 @@ class FamilyFitter:
         cycle's end), with the note ``note(kept, n)``."""
         out = copy.copy(self)
         out.rec, out._predictions = self.rec.shifted(0, stop), []
-        if self.extra is not None:
-            out.extra = self.extra.rows(np.arange(out.rec.u.size))
         self.note(note(out.rec.u.size, self.rec.u.size))
         return out
 
@@ -387,9 +322,6 @@ class FamilyFitter:
                     for a, z, r in rec.layout.segments]
         parts, rows = accumulate(template, rec.v, rec.d, segments, state0, offset=True,
                                  rows_at=rec.through)
-        if self.extra is not None:
-            parts = self.extra.augmented(parts, template.operators(rec.v, initial_state=state0),
-                                         rec.d, rec.layout, roles)
         return state0, parts, rows
 
     def _bounds(self, family, n_ops):
@@ -409,22 +341,14 @@ class FamilyFitter:
 
     def problem(self, family, parts, rows, n_cand, names):
         """SubsetProblem over columns [candidates..., fixed operators..., offset]."""
-        rec, extra = self.rec, self.extra
-        n_extra = 0 if extra is None else extra.n_columns
-        m = parts["fit"].G.shape[0] - n_extra          # operators and the offset
+        rec = self.rec
+        m = parts["fit"].G.shape[0]
         keep = list(range(m)) if rec.fit_offset else list(range(m - 1))
-        keep += list(range(m, m + n_extra))
         fit = _restrict(parts["fit"], keep)
         judge = _restrict(parts["held_back"], keep) if rec.has_held_back else fit
         lo, hi = self._bounds(family, m - 1)
         if rec.fit_offset:
             lo, hi = np.r_[lo, -np.inf], np.r_[hi, np.inf]
-        if extra is not None:
-            lo, hi = np.r_[lo, extra.lower[:n_extra]], np.r_[hi, extra.upper[:n_extra]]
-            names = (names + (["offset"] if rec.fit_offset else []) +
-                     list(extra.names[:n_extra]))
-            return SubsetProblem(fit=fit, judge=judge, n_candidates=n_cand, lower=lo,
-                                 upper=hi, names=names)
         A_eq = b_eq = None
         if rec.through:
             A_eq = np.array([rows[i][keep] for i in rec.through])
@@ -437,8 +361,7 @@ class FamilyFitter:
         """Operators whose output does not vary over the fitted samples."""
         g = parts["fit"]
         n = g.n
-        ones = g.G.shape[0] - 1 - (0 if self.extra is None else self.extra.n_columns)
-        mean = g.G[:n_cols, ones] / n
+        mean = g.G[:n_cols, -1] / n
         var = np.diag(g.G)[:n_cols] / n - mean ** 2
         return np.flatnonzero(var <= (CONSTANT_COLUMN * self.rec.S) ** 2)
 
@@ -614,8 +537,6 @@ class FamilyFitter:
             rule = "default (nothing held back to choose it on)"
             self.note("nothing held back: regularization strength not chosen from data")
         probes = kernel_probes(self.responses, template, fam.grid, rec.S, rec.fit_offset)
-        if self.extra is not None:       # the probes are rate-independent: no creep
-            probes = np.pad(probes, (0, self.extra.n_columns))
         x = solve(shape, lam, prob.fit, product, warn=True)
         reference = prob.judge.rms(cols, x)
         x, pruning = prune_kernels(x, n_ops, prob.fit, prob.judge, probes, prob,
@@ -650,7 +571,6 @@ class FamilyFitter:
         n_ops = len(ops) + fam.n_fixed
         w = x[:n_ops]
         c = (x[n_ops] if rec.fit_offset else 0.0) + rec.fixed_offset
-        coefficients = x[n_ops + int(rec.fit_offset):]
         idx = list(chosen) + list(range(len(cand), len(cand) + fam.n_fixed))
         state = state0[idx]
         if fam.operators_key == "kernels":
@@ -659,8 +579,6 @@ class FamilyFitter:
             model = fam.final_model(ops, w, c, state, rec.lo, rec.S)
         else:
             model = fam.final_model(np.asarray(ops, dtype=float), w, c, state, rec.lo, rec.S)
-        if self.extra is not None:
-            self.extra_coefficients[id(model)] = (model, coefficients)
         return model, tuple(ops), w, float(c)
 
     def _fit_result(self, fam, model, ops, w, c, refit, **how):
@@ -680,10 +598,6 @@ class FamilyFitter:
                 return y_hat
         # the model's initial state is the state the record was processed from
         y_hat = model.predict(self.rec.u)
-        if self.extra is not None and self.extra.known:
-            y_hat = y_hat + self.extra.values[:, 0]
-        elif self.extra is not None and id(model) in self.extra_coefficients:
-            y_hat = y_hat + self.extra.values @ self.extra_coefficients[id(model)][1]
         self._predictions = [(model, y_hat)] + self._predictions[:PREDICTIONS_KEPT - 1]
         return y_hat
 

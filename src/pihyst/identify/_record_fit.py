@@ -3,13 +3,12 @@ procedure"): checks -> fitting frame -> start state -> delay -> cycles and held-
 -> candidate operators, weights and structure of every family -> choice -> refit ->
 report. Each step is a function below that returns a frozen decision
 (:mod:`pihyst.identify._decisions`); :func:`fit_record` runs them in order. The creep
-step (:mod:`pihyst.identify._creep`) fits the chosen family again on the same fitter
-with the creep estimate as a known column of its least squares
-(:func:`fit_with_columns`).
+step (:mod:`pihyst.identify._creep`) runs :func:`fit_record` on the record with its
+creep estimate removed, handing it the delay decided on the record itself.
 """
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import numpy as np
@@ -53,9 +52,6 @@ class RecordFit:
     choice: Choice
     settled_sample: int                  # end of the settling sweep (0: none)
     record_start: Optional[list] = None  # a Bouc-Wen model's (x, z) at the record's start
-    # the families fitted and the choice made (the creep step fits the chosen family
-    # again on the same fitter, with the creep estimate in it: identify/_creep.py)
-    attempt: object = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -266,24 +262,6 @@ def choose_family(rec, fitter, fitted, validation, minor_loops, options):
                   max_latency=options.max_latency)
 
 
-def fit_with_columns(first, families, extra, options, steps, t):
-    """:class:`RecordFit` of the PI ``families`` (names of families ``first`` fitted)
-    fitted on the fitter, frame, start state and delay of ``first`` (a RecordFit) with
-    the :class:`~pihyst.identify._family_fit.ExtraColumns` ``extra`` in their least
-    squares (their thresholds, regularization and weights chosen with them), chosen,
-    refitted and reported as :func:`fit_at_delay` and :func:`finish` do; the other
-    families are not fitted again, nothing before the families' step is done again."""
-    attempt = first.attempt
-    chosen = options.but(families=[c.fitted.family for c in attempt.choice.candidates
-                                   if c.name in families])
-    fitter = attempt.fitter.with_columns(extra)
-    fitted = fit_families(fitter.rec, fitter, chosen, attempt.minor_loops, steps, {})
-    choice = choose_family(fitter.rec, fitter, fitted, attempt.validation,
-                           attempt.minor_loops, chosen)
-    again = replace(attempt, fitter=fitter, fitted=fitted, choice=choice)
-    return finish(again, first.start, first.delay, chosen, steps, t)
-
-
 def _latency(model):
     if model.family != "bouc-wen" and np.any(model.weights < 0):
         return None                  # negative weights (nonnegative=False): no compensator
@@ -320,8 +298,7 @@ def finish(attempt, start, delay, options, steps, t):
     models[best.name] = model
     return RecordFit(result=FitResult(model=model, report=report, models=models),
                      start=start, delay=delay, choice=attempt.choice,
-                     settled_sample=int(rec.layout.settle_end), record_start=record_start,
-                     attempt=attempt)
+                     settled_sample=int(rec.layout.settle_end), record_start=record_start)
 
 
 def refit(attempt, options, steps, quiet):
