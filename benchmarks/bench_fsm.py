@@ -29,6 +29,9 @@ simulated beam with its 54 Hz mode.
    beside the published single NL-LFR and all-level BLA: the linear state-space model,
    the Hammerstein model (--one-model) and the amplitude-scheduled state-space model
    (pihyst.dynamics.fit_scheduled_state_space) per penalty and interpolation shape.
+   With --feedback: one model for all levels as a feedback loop inside the actuator
+   (pihyst.dynamics.fit_feedback_state_space, fsm_feedback), G_0 of order
+   FSM_FEEDBACK_ORDER started from the 100 mV records' own fit.
 2. Simulated beam (make_plant("paper-beam", dynamics=True), creep, noise, quantisation):
    fitted on two sweeps at 2 kHz (0.5-20 Hz over 5-145 V with a slow amplitude envelope,
    10-100 Hz at 75 +- 8 V);
@@ -46,8 +49,9 @@ simulated beam with its 54 Hz mode.
    0-150 V limits.
 
 Run: PIHYST_DATA=/path/to/data python benchmarks/bench_fsm.py [--polynomial]
-     [--one-model | --scheduled | --beam-tracking]  (only the one-model FSM table, the
-     same without the Hammerstein model, or only item 2's tracking table); with
+     [--one-model | --scheduled | --feedback | --beam-tracking]  (only the one-model FSM
+     table, the same without the Hammerstein model, only the feedback model's table, or
+     only item 2's tracking table); with
      --one-model or --scheduled: --order=N (the common modes' order given: no
      selection, both periods in the BLA), --penalty=MU[,MU...] (the scheduled
      models' penalties, default 0,1) and --exponent=P[,P...] (their interpolation
@@ -403,12 +407,13 @@ def fsm_one_model(scheduled_only=False, order=None, penalties=None, exponents=No
 
 
 def fsm_feedback(order=FSM_FEEDBACK_ORDER, linear=None):
-    """One model for all levels as a feedback loop (pihyst.dynamics.fit_feedback_state_space):
-    G_0 started from the 100 mV training records' own state-space fit at ``order`` (or
-    ``linear``), then G_0, the output feedback K and the input gain M fitted on the
-    100 mV and 300 mV training records together; judged like fsm_one_model, beside the
-    published single models. Printed first, from the training records only: per band,
-    the model's squared misfit to each fitted level's BLA against that BLA's variance."""
+    """One model for all levels as a feedback loop inside the actuator
+    (pihyst.dynamics.fit_feedback_state_space): G_0 started from the 100 mV training
+    records' own state-space fit at ``order`` (or ``linear``), then G_0 and the loop C_z
+    fitted on the 100 mV and 300 mV training records together; judged like
+    fsm_one_model, beside the published single models. Printed first, from the
+    training records only: per band, the model's squared misfit to each fitted level's
+    BLA against that BLA's variance."""
     root = datasets.data_root()
     if root is None or not (root / FSM_DIR).is_dir():
         print(f"FSM data not found ({FSM_DIR} in $PIHYST_DATA or ../shared/data): skipped")

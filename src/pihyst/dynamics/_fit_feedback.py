@@ -1,39 +1,39 @@
 """One model for several drive amplitudes whose amplitude dependence is a feedback
-loop: fixed linear dynamics G_0, the output fed back to the input through a gain that
-grows linearly with the running input amplitude (docs/theory/hammerstein.md).
+loop inside the actuator: fixed linear dynamics G_0 = C (zI - A)^-1 B + D, and a
+signal of their state fed back to their own input through a gain that grows linearly
+with the running input amplitude (docs/theory/hammerstein.md).
 
 A piezo's compliance grows about linearly with its excursion (Rayleigh's law): the
-actuator pushes back less, in proportion to the amplitude, i.e. a stiffness change fed
-back from the displacement to the actuator's own force, and its free stroke grows, an
-input gain. In the describing-function view, at running amplitude a (the schedule of
-:mod:`._scheduled`),
+actuator pushes back less, in proportion to the amplitude, i.e. a force proportional to
+its own elongation z = C_z x, applied where the actuator drives the structure (through
+B, like the drive). In the describing-function view, at running amplitude a (the
+schedule of :mod:`._scheduled`):
 
-    y = G(a) u,   G(a) = (I + delta G_0 K)^-1 G_0 (I + delta M),
+    v = u - delta z,   z = C_z x,   x[t+1] = A x + B v,   y = C x + D v,
     delta = (a - a_1) / (a_L - a_1),
 
-G_0 (p x m) the linear system at the lowest level's amplitude a_1, K (m x p) the output
-feedback and M (m x m) the input gain reached at the highest level a_L. Whatever the
-levels, the amplitude dependence has m p + m^2 parameters (18 for the 3 x 3 mirror), and
-G_0 is fitted on every level's records at once; the resonances move, as they do on the
-actuator, because the loop moves them, all through the same K. (The scheduled model of
-:mod:`._fit_scheduled` gives every mode of every level its own parameters instead.)
+so that, with H_z = C_z (zI - A)^-1 B (m x m, G_0's poles and input vectors),
+
+    G(a) = G_0 (I + delta H_z)^-1,
+
+G_0 the system at the lowest level's amplitude a_1 and C_z (m x n) the loop reached at
+the highest level a_L. G_0 is fitted on every level's records at once; the amplitude
+dependence is the m n numbers of C_z: the resonances move through the one loop, and
+each mode's shape (its c, b) changes only as the loop makes it.
 
 The fit, on the levels' best linear approximations G_l(k):
 
 1. G_0 starts from the given linear model (e.g. the lowest level's own fit);
-2. K, M start from the equation error, linear in them:
-   (I + delta_l G_0 K) G_l = G_0 (I + delta_l M)  <=>
-   delta_l (G_0 K G_l - G_0 M) = G_0 - G_l, least squares over lines and levels;
-3. G_0's modal parameters (:mod:`._refine`), K and M together by Levenberg-Marquardt on
+2. C_z starts from the equation error, linear in it: G_l (I + delta_l H_z) = G_0
+   <=> delta_l G_l H_z = G_0 - G_l, least squares over lines and levels;
+3. G_0's modal parameters (:mod:`._refine`) and C_z's (one complex vector per pole
+   pair, a real one per real pole) together by Levenberg-Marquardt on
    sum_l sum_k || G(z_k; delta_l) - G_l(k) ||_F^2, analytic Jacobian:
-   dG = S dG_0 (N - delta K G),  dG = -delta S G_0 dK G,  dG = delta S G_0 dM,
-   S = (I + delta G_0 K)^-1, N = I + delta M.
+   dG = dG_0 S - delta G dH_z S,  S = (I + delta H_z)^-1.
 
-With the output y = C x + D v and the input v = N u - delta K y, the closed loop at
-delta is the state-space model
+The loop at delta is the state-space model
 
-    E = (I + delta D K)^-1,
-    A_d = A - delta B K E C,  B_d = B (I - delta K E D) N,  C_d = E C,  D_d = E D N,
+    A_d = A - delta B C_z,  B_d = B,  C_d = C - delta D C_z,  D_d = D,
 
 returned at ``n_anchors`` amplitudes evenly spaced from a_1 to a_L as a
 :class:`~pihyst.dynamics.ScheduledStateSpace` (its modes matched from one anchor to the
@@ -63,42 +63,61 @@ from pihyst.dynamics._statespace import StateSpace
 from pihyst.exceptions import FitError, InvalidArgumentError
 
 
-def feedback_response(G0, K, M, delta):
-    """(I + delta G_0 K)^-1 G_0 (I + delta M) on every line of G0 (L, p, m)."""
-    G0 = np.asarray(G0)
-    p, m = G0.shape[1:]
-    S = np.linalg.inv(np.eye(p) + delta * G0 @ K)
-    return S @ G0 @ (np.eye(m) + delta * M)
+def feedback_response(G0, Hz, delta):
+    """G_0 (I + delta H_z)^-1 on every line (G0 (L, p, m), Hz (L, m, m))."""
+    Hz = np.asarray(Hz)
+    return np.asarray(G0) @ np.linalg.inv(np.eye(Hz.shape[-1]) + delta * Hz)
 
 
-def closed_loop(model: StateSpace, K, M, delta) -> StateSpace:
+def closed_loop(model: StateSpace, Cz, delta) -> StateSpace:
     """The state-space model of the loop at ``delta`` (module notes)."""
-    p, m = model.D.shape
-    K, M = np.asarray(K, dtype=float), np.asarray(M, dtype=float)
-    N = np.eye(m) + delta * M
-    E = np.linalg.inv(np.eye(p) + delta * model.D @ K)
-    return StateSpace(model.A - delta * model.B @ K @ E @ model.C,
-                      model.B @ (np.eye(m) - delta * K @ E @ model.D) @ N,
-                      E @ model.C, E @ model.D @ N)
+    Cz = np.asarray(Cz, dtype=float)
+    return StateSpace(model.A - delta * model.B @ Cz, model.B,
+                      model.C - delta * model.D @ Cz, model.D)
 
 
-def _start_feedback(G0s, blas, deltas):
-    """K, M from the equation error (module notes, step 2); G0s: G_0 on each level's
-    lines."""
+def _loop_layout(layout):
+    """The layout of H_z's modal parameters (m outputs), and where each of its columns
+    lies among the fit's parameters (G_0's, then C_z's); -1: H_z's D, held at 0."""
+    P, R, p, m = layout.shape
+    lz = _Layout(P, R, m, m)
+    e, ez = layout.edges, lz.edges
+    n0 = e[-1]
+    own = [np.arange(e[0], e[1]), np.arange(e[1], e[2]),                     # rho, phi
+           n0 + np.arange(2 * P * m),                                         # c_z re, im
+           np.arange(e[4], e[6]), np.arange(e[6], e[7]),                      # b, sigma
+           n0 + 2 * P * m + np.arange(R * m),                                 # real c_z
+           np.arange(e[8], e[9]), np.full(ez[10] - ez[9], -1)]                # real b, D
+    return lz, np.concatenate(own), n0 + (2 * P + R) * m
+
+
+def _loop_theta(layout, lz, theta, n0):
+    """H_z's packed parameters: G_0's poles and b, the loop's c_z, D = 0."""
+    P, R, p, m = layout.shape
+    e = layout.edges
+    cz = theta[n0:]
+    return np.concatenate([theta[e[0]:e[2]], cz[:2 * P * m], theta[e[4]:e[7]],
+                           cz[2 * P * m:], theta[e[8]:e[9]], np.zeros(m * m)])
+
+
+def _start_loop(layout, lz, theta, zs, blas, deltas, n0, where):
+    """C_z from the equation error (module notes, step 2)."""
     rows, rhs = [], []
-    for G0, G, d in zip(G0s, blas, deltas):
+    loop_cols = where >= n0
+    for z, G, d in zip(zs, blas, deltas):
         if d == 0:
             continue
-        L, p, m = G0.shape
-        # vec(G0 K G) = (G^T kron G0) vec(K), column-major vec, per line
-        AK = np.einsum("kbi,kja->kjiab", G, G0).reshape(L, p * m, m * p)
-        AM = -np.einsum("kja,bi->kjiab", G0, np.eye(m)).reshape(L, p * m, m * m)
-        A = d * np.concatenate([AK, AM], axis=2).reshape(L * p * m, -1)
+        G0 = modal_response(layout, theta[:n0], z)
+        # H_z is linear in c_z: its Jacobian columns are the basis
+        basis = modal_jacobian(lz, _loop_theta(layout, lz, theta, n0), z)[..., loop_cols]
+        A = d * np.einsum("kja,kain->kjin", G, basis).reshape(-1, basis.shape[-1])
         r = (G0 - G).reshape(-1)
         rows.append(np.vstack([A.real, A.imag]))
         rhs.append(np.r_[r.real, r.imag])
     x = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
-    return x[:m * p].reshape(m, p), x[m * p:].reshape(m, m)
+    out = np.zeros(where.max() + 1 - n0)
+    out[where[loop_cols] - n0] = x
+    return out
 
 
 def _match_modes(prev, lam, c, b):
@@ -109,10 +128,10 @@ def _match_modes(prev, lam, c, b):
     return lam[col], c[col], b[col]
 
 
-def feedback_scheduled(linear: StateSpace, K, M, amplitudes, window: float,
+def feedback_scheduled(linear: StateSpace, Cz, amplitudes, window: float,
                        n_anchors: int = 9) -> ScheduledStateSpace:
-    """The loop of ``linear`` with ``K``, ``M`` (module notes) at ``n_anchors``
-    amplitudes from ``amplitudes[0]`` (delta 0) to ``amplitudes[1]`` (delta 1), as a
+    """The loop of ``linear`` with ``Cz`` (module notes) at ``n_anchors`` amplitudes
+    from ``amplitudes[0]`` (delta 0) to ``amplitudes[1]`` (delta 1), as a
     :class:`~pihyst.dynamics.ScheduledStateSpace`.
 
     Raises
@@ -124,23 +143,19 @@ def feedback_scheduled(linear: StateSpace, K, M, amplitudes, window: float,
     a1, a2 = float(amplitudes[0]), float(amplitudes[1])
     params = []
     for delta in np.linspace(0.0, 1.0, n_anchors):
-        ss = closed_loop(linear, K, M, delta)
+        ss = closed_loop(linear, Cz, delta)
         radius = np.abs(np.linalg.eigvals(ss.A)).max() if ss.order else 0.0
         if not radius < 1:
             raise FitError(f"the feedback loop is unstable at delta {delta:.3f} "
                            f"(spectral radius {radius:.6f})")
         (lam, c, b), (lr, cr, br) = _modes(ss)
+        if params and (lam.size != params[0][0].size or lr.size != params[0][3].size):
+            raise FitError(f"the loop's poles change kind (real or pair) at delta "
+                           f"{delta:.3f}")
         if params:
-            if lam.size != params[0][0].size or lr.size != params[0][3].size:
-                raise FitError(f"the loop's poles change kind (real or pair) at delta "
-                               f"{delta:.3f}")
             lam, c, b = _match_modes(params[-1][0], lam, c, b)
-            order = np.argsort(lr)
-            lr, cr, br = lr[order], cr[order], br[order]
-        else:
-            order = np.argsort(lr)
-            lr, cr, br = lr[order], cr[order], br[order]
-        params.append((lam, c, b, lr, cr, br, ss.D))
+        order = np.argsort(lr)
+        params.append((lam, c, b, lr[order], cr[order], br[order], ss.D))
     lam, c, b, lr, cr, br, D = (np.stack([s[j] for s in params]) for j in range(7))
     for k in range(1, n_anchors):
         c[k], b[k] = gauge_to(b[0], c[k], b[k])
@@ -153,14 +168,15 @@ def fit_feedback_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], period
                              linear: StateSpace, *, window: float = 1024.0,
                              discard: int = 1, max_nfev: int = 30,
                              n_anchors: int = 9) -> ScheduledStateSpace:
-    """One model of records at several drive amplitudes: fixed dynamics with their
-    output fed back through a gain linear in the amplitude (module notes).
+    """One model of records at several drive amplitudes: fixed dynamics with a signal
+    of their state fed back to their input through a gain linear in the amplitude
+    (module notes).
 
     Parameters
     ----------
     levels : sequence of iterables of (array_like, array_like)
         Per drive level, its ``(u, y)`` periodic multisine records (at least m per
-        level); at least two levels of different amplitudes.
+        level); at least two levels of different amplitudes, the same lines excited.
     period : int
         Samples per period.
     linear : StateSpace
@@ -227,44 +243,44 @@ def fit_feedback_state_space(levels: Sequence[Iterable[tuple[Any, Any]]], period
         raise InvalidArgumentError("the start has no modal form (repeated poles): fit it "
                                    "at another order")
     layout = _Layout(pairs[0].size, reals[0].size, p, m)
+    lz, where, n_theta = _loop_layout(layout)
+    n0 = layout.edges[-1]
+    kept = where >= 0
     zs = [np.exp(1j * f.omega) for f in frfs]
-    n_theta = _pack(pairs, reals, linear.D).size
-    K0, M0 = _start_feedback([linear.response(f.omega) for f in frfs], [f.G for f in frfs],
-                             deltas)
-    theta0 = np.r_[_pack(pairs, reals, linear.D), K0.ravel(), M0.ravel()]
-
-    def unpack(theta):
-        return (theta[:n_theta], theta[n_theta:n_theta + m * p].reshape(m, p),
-                theta[n_theta + m * p:].reshape(m, m))
+    theta0 = np.r_[_pack(pairs, reals, linear.D), np.zeros(n_theta - n0)]
+    theta0[n0:] = _start_loop(layout, lz, theta0, zs, [f.G for f in frfs], deltas, n0,
+                              where)
 
     def residual(theta):
-        modal, K, M = unpack(theta)
-        e = [(feedback_response(modal_response(layout, modal, z), K, M, d) - f.G).ravel()
-             for z, f, d in zip(zs, frfs, deltas)]
+        e = []
+        for z, f, d in zip(zs, frfs, deltas):
+            Hz = modal_response(lz, _loop_theta(layout, lz, theta, n0), z)
+            e.append((feedback_response(modal_response(layout, theta[:n0], z), Hz, d)
+                      - f.G).ravel())
         e = np.concatenate(e)
         return np.r_[e.real, e.imag]
 
     def jacobian(theta):
-        modal, K, M = unpack(theta)
         blocks = []
+        tz = _loop_theta(layout, lz, theta, n0)
         for z, d in zip(zs, deltas):
-            G0 = modal_response(layout, modal, z)
-            S = np.linalg.inv(np.eye(p) + d * G0 @ K)
-            G = S @ G0 @ (np.eye(m) + d * M)
-            R = np.eye(m) + d * M - d * K @ G
-            J0 = modal_jacobian(layout, modal, z)
-            Jm = np.einsum("kjq,kqin->kjin", S, np.einsum("kqrn,kri->kqin", J0, R))
-            SG0 = S @ G0
-            JK = -d * np.einsum("kja,kbi->kjiab", SG0, G).reshape(z.size, p, m, m * p)
-            JM = d * np.einsum("kja,bi->kjiab", SG0, np.eye(m)).reshape(z.size, p, m, m * m)
-            blocks.append(np.concatenate([Jm, JK, JM], axis=3).reshape(z.size * p * m, -1))
+            G0 = modal_response(layout, theta[:n0], z)
+            S = np.linalg.inv(np.eye(m) + d * modal_response(lz, tz, z))
+            G = G0 @ S
+            J = np.zeros((z.size, p, m, n_theta), complex)
+            # dG = dG_0 S - delta G dH_z S
+            J[..., :n0] = np.einsum("kjan,kai->kjin", modal_jacobian(layout, theta[:n0], z), S)
+            if d != 0:
+                Jz = modal_jacobian(lz, tz, z)[..., kept]
+                J[..., where[kept]] -= d * np.einsum(
+                    "kja,kabn,kbi->kjin", G, Jz, S, optimize=True)
+            blocks.append(J.reshape(z.size * p * m, -1))
         J = np.vstack(blocks)
         return np.vstack([J.real, J.imag])
 
     cost0 = float(np.sum(residual(theta0) ** 2))
     res = least_squares(residual, theta0, jac=jacobian, method="lm", max_nfev=max_nfev)
     theta = res.x if float(np.sum(res.fun ** 2)) < cost0 else theta0
-    modal, K, M = unpack(theta)
-    G0 = real_modal_state_space(*modal_parameters(layout, modal))
-    return feedback_scheduled(G0, K, M, (amps[0], amps[-1]), window, n_anchors)
-
+    G0 = real_modal_state_space(*modal_parameters(layout, theta[:n0]))
+    Cz = real_modal_state_space(*modal_parameters(lz, _loop_theta(layout, lz, theta, n0))).C
+    return feedback_scheduled(G0, Cz, (amps[0], amps[-1]), window, n_anchors)
