@@ -7,14 +7,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pihyst.dynamics import StateSpace, fit_feedback_state_space, fit_state_space
-from pihyst.dynamics._fit_feedback import closed_loop, feedback_response
-from pihyst.exceptions import InvalidArgumentError
+from pihyst.dynamics._fit_feedback import closed_loop, feedback_response, feedback_scheduled
+from pihyst.exceptions import FitError, InvalidArgumentError
 
 PERIOD = 256
 
 
 def random_plant(rng, n=4, p=2, m=2):
-    """A stable system with distinct complex and real poles."""
+    """A random stable system."""
     A = rng.normal(size=(n, n))
     A *= rng.uniform(0.3, 0.9) / np.abs(np.linalg.eigvals(A)).max()
     return StateSpace(A, rng.normal(size=(n, m)), rng.normal(size=(p, n)),
@@ -95,3 +95,35 @@ def test_fit_refuses_one_level_and_equal_levels():
     with pytest.raises(InvalidArgumentError, match="n_anchors"):
         fit_feedback_state_space([low, records(0.3, 1.0, (3, 4))], PERIOD, G_TRUE,
                                  n_anchors=1)
+
+
+def test_the_jacobian_is_the_residuals_derivative(monkeypatch):
+    """The analytic Jacobian of the joint fit against central differences, away from
+    the start."""
+    import scipy.optimize
+
+    seen = {}
+    original = scipy.optimize.least_squares
+
+    def spy(fun, x0, jac=None, **options):
+        seen.update(fun=fun, jac=jac, x0=x0)
+        return original(fun, x0, jac=jac, **options)
+
+    monkeypatch.setattr(scipy.optimize, "least_squares", spy)
+    start = StateSpace(G_TRUE.A * 0.97, G_TRUE.B * 1.03, G_TRUE.C, G_TRUE.D)
+    fit_feedback_state_space([records(0.1, 0.0, (1, 2, 3)), records(0.3, 1.0, (4, 5, 6))],
+                             PERIOD, start, window=PERIOD, max_nfev=1)
+    x = seen["x0"] + 0.01 * np.random.default_rng(0).normal(size=seen["x0"].size)
+    h = 1e-7
+    numeric = np.column_stack([(seen["fun"](x + e) - seen["fun"](x - e)) / (2 * h)
+                               for e in np.eye(x.size) * h])
+    J = seen["jac"](x)
+    assert np.abs(J - numeric).max() < 1e-6 * np.abs(J).max()
+
+
+def test_an_unstable_loop_or_one_whose_modes_change_kind_is_refused():
+    lag = StateSpace([[0.5]], [[1.0]], [[1.0]], [[0.0]])      # A_delta = 0.5 + delta
+    with pytest.raises(FitError, match="unstable at delta 0.500"):
+        feedback_scheduled(lag, [[-1.0]], (0.1, 0.3), window=100)
+    with pytest.raises(FitError, match="change kind"):          # the pair turns real
+        feedback_scheduled(G_TRUE, 30 * CZ_TRUE, (0.1, 0.3), window=100)
