@@ -449,6 +449,13 @@ def fsm_feedback(order=FSM_FEEDBACK_ORDER, linear=None):
         cells = [f"{score(model.predict, tests[lv]):9.3f}" if lv in tests else f"{'-':>9}"
                  for lv in PUBLISHED_ONE_MODEL]
         print(f"    {'feedback loop':<24}" + "".join(cells) + f"   fit {t_lin + t_fb:.0f} s")
+    # where the levels it was not fitted on miss (diagnosis after the judgement)
+    a1, a2 = model.amplitudes[0], model.amplitudes[-1]
+    for lv in (lv for lv in tests if lv not in levels):
+        a = np.mean([np.mean(model.schedule(np.r_[u[-PERIOD:], u])[PERIOD:])
+                     for u, _ in tests[lv]])
+        frf = estimate_bla(fsm_records(root, lv, "train"), PERIOD, discard=0)
+        band_excess(model, root, lv, frf, fractions=(round(float((a - a1) / (a2 - a1)), 3),))
 
 
 def sweep(fs, duration, f0, f1, level, amplitude, envelope=True):
