@@ -9,7 +9,8 @@ linear dynamics (Hammerstein), and the linear-only references (docs/theory/hamme
   then those MIMO dynamics;
 - :func:`fit_scheduled_state_space` / :class:`ScheduledStateSpace`: one model for
   several drive amplitudes, its modes interpolated in the running input amplitude
-  (:func:`running_amplitude`);
+  (:func:`running_amplitude`); :func:`fit_feedback_state_space` the same kind of model
+  with the amplitude dependence a feedback loop around fixed dynamics;
 - :func:`fit_hammerstein` / :class:`HammersteinModel`: classical PI per input, then
   A_j(q) y_j = sum_i B_ji(q) h_i per output (any records, e.g. sweeps);
 - :func:`fit_dynamics`: a given static model (``pihyst.fit``, any family) followed by
@@ -48,6 +49,7 @@ from pihyst.dynamics._compensate_scheduled import (
     ScheduledCompensation,
     compensate_scheduled,
 )
+from pihyst.dynamics._fit_feedback import fit_feedback_state_space
 from pihyst.dynamics._fit_scheduled import fit_scheduled_state_space
 from pihyst.dynamics._fit_state_space import OrderSelection, fit_state_space
 from pihyst.dynamics._hammerstein import (
@@ -72,7 +74,8 @@ __all__ = ["FrequencyResponse", "HammersteinModel", "OrderSelection", "Scheduled
            "StateSpaceHammerstein", "compensate_hammerstein", "compensate_mimo",
            "compensate_scheduled",
            "default_thresholds",
-           "estimate_bla", "fit_dynamics", "fit_hammerstein", "fit_hammerstein_ss", "fit_linear",
+           "estimate_bla", "fit_dynamics", "fit_feedback_state_space", "fit_hammerstein",
+           "fit_hammerstein_ss", "fit_linear",
            "fit_scheduled_state_space", "fit_state_space", "fsid", "load_hammerstein",
            "load_scheduled_state_space",
            "held_mean", "mean_error_share", "periodic_inverse_dynamics", "periodic_weight",

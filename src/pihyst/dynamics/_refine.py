@@ -95,6 +95,46 @@ def change_scales(layout, theta):
                            np.full(p * m, max(float(np.sqrt(np.mean(D ** 2))), tiny))])
 
 
+def modal_response(layout, theta, z):
+    """G(z_k) (L, p, m) of packed modal parameters ``theta`` at the points ``z`` (L,)."""
+    rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
+    lam, _, lr, _ = _poles(rho, phi, sigma)
+    T, Tc, Tr = 1 / (z[:, None] - lam), 1 / (z[:, None] - lam.conj()), 1 / (z[:, None] - lr)
+    out = np.einsum("kq,qj,qi->kji", T, c, b) + np.einsum("kq,qj,qi->kji", Tc, c.conj(),
+                                                            b.conj())
+    return out + np.einsum("kq,qj,qi->kji", Tr, cr, br) + D
+
+
+def modal_jacobian(layout, theta, z):
+    """dG(z_k) / dtheta (L, p, m, n), complex, of :func:`modal_response`."""
+    rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
+    lam, dl, lr, dlr = _poles(rho, phi, sigma)
+    T, Tc, Tr = 1 / (z[:, None] - lam), 1 / (z[:, None] - lam.conj()), 1 / (z[:, None] - lr)
+    P, Rn, p, m = layout.shape
+    L = z.size
+    cols = []
+    # poles: d/dx [c b^T T + conj(c) conj(b)^T Tc] = c b^T T^2 s + conj(..) Tc^2 conj(s)
+    for s in (dl, 1j * lam):                  # d lambda / d rho, d lambda / d phi
+        cols.append(np.einsum("kq,qj,qi->kjiq", T ** 2 * s, c, b)
+                    + np.einsum("kq,qj,qi->kjiq", Tc ** 2 * s.conj(), c.conj(), b.conj()))
+    eye_p, eye_m = np.eye(p), np.eye(m)
+    # c (real, imaginary parts): row j of the term, b^T T +- conj(b)^T Tc
+    for s in (1.0, 1j):
+        cols.append((s * np.einsum("kq,qi,jl->kjiql", T, b, eye_p)
+                     + np.conj(s) * np.einsum("kq,qi,jl->kjiql", Tc, b.conj(), eye_p)
+                     ).reshape(L, p, m, P * p))
+    for s in (1.0, 1j):
+        cols.append((s * np.einsum("kq,qj,il->kjiql", T, c, eye_m)
+                     + np.conj(s) * np.einsum("kq,qj,il->kjiql", Tc, c.conj(), eye_m)
+                     ).reshape(L, p, m, P * m))
+    cols.append(np.einsum("kq,qj,qi->kjiq", Tr ** 2 * dlr, cr, br))
+    cols.append(np.einsum("kq,qi,jl->kjiql", Tr, br, eye_p).reshape(L, p, m, Rn * p))
+    cols.append(np.einsum("kq,qj,il->kjiql", Tr, cr, eye_m).reshape(L, p, m, Rn * m))
+    cols.append(np.broadcast_to(np.einsum("jl,io->jilo", eye_p, eye_m).reshape(
+        1, p, m, p * m), (L, p, m, p * m)))
+    return np.concatenate(cols, axis=3)
+
+
 def fit_modes(model, omega, G, weight=None, max_nfev=50, penalty=0.0):
     """Levenberg-Marquardt on the modal parameters of ``model`` (module notes).
 
@@ -124,53 +164,20 @@ def fit_modes(model, omega, G, weight=None, max_nfev=50, penalty=0.0):
     prior = (np.sqrt(penalty * cost0 / theta0.size) / change_scales(layout, theta0)
              if penalty > 0 else None)
 
-    def response(theta):
-        rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
-        lam, _, lr, _ = _poles(rho, phi, sigma)
-        T, Tc, Tr = 1 / (z[:, None] - lam), 1 / (z[:, None] - lam.conj()), 1 / (z[:, None] - lr)
-        out = np.einsum("kq,qj,qi->kji", T, c, b) + np.einsum("kq,qj,qi->kji", Tc, c.conj(),
-                                                                b.conj())
-        return out + np.einsum("kq,qj,qi->kji", Tr, cr, br) + D
-
     def residual(theta):
-        e = (W * (response(theta) - G)).ravel()
+        e = (W * (modal_response(layout, theta, z) - G)).ravel()
         r = np.r_[e.real, e.imag]
         return r if prior is None else np.r_[r, prior * (theta - theta0)]
 
     def jacobian(theta):
-        rho, phi, c, b, sigma, cr, br, D = layout.split(theta)
-        lam, dl, lr, dlr = _poles(rho, phi, sigma)
-        T, Tc, Tr = 1 / (z[:, None] - lam), 1 / (z[:, None] - lam.conj()), 1 / (z[:, None] - lr)
-        P, Rn = lam.size, lr.size
-        cols = []
-        # poles: d/dx [c b^T T + conj(c) conj(b)^T Tc] = c b^T T^2 s + conj(..) Tc^2 conj(s)
-        for s in (dl, 1j * lam):                  # d lambda / d rho, d lambda / d phi
-            cols.append(np.einsum("kq,qj,qi->kjiq", T ** 2 * s, c, b)
-                        + np.einsum("kq,qj,qi->kjiq", Tc ** 2 * s.conj(), c.conj(), b.conj()))
-        eye_p, eye_m = np.eye(p), np.eye(m)
-        # c (real, imaginary parts): row j of the term, b^T T +- conj(b)^T Tc
-        for s in (1.0, 1j):
-            cols.append((s * np.einsum("kq,qi,jl->kjiql", T, b, eye_p)
-                         + np.conj(s) * np.einsum("kq,qi,jl->kjiql", Tc, b.conj(), eye_p)
-                         ).reshape(L, p, m, P * p))
-        for s in (1.0, 1j):
-            cols.append((s * np.einsum("kq,qj,il->kjiql", T, c, eye_m)
-                         + np.conj(s) * np.einsum("kq,qj,il->kjiql", Tc, c.conj(), eye_m)
-                         ).reshape(L, p, m, P * m))
-        cols.append(np.einsum("kq,qj,qi->kjiq", Tr ** 2 * dlr, cr, br))
-        cols.append(np.einsum("kq,qi,jl->kjiql", Tr, br, eye_p).reshape(L, p, m, Rn * p))
-        cols.append(np.einsum("kq,qj,il->kjiql", Tr, cr, eye_m).reshape(L, p, m, Rn * m))
-        cols.append(np.broadcast_to(np.einsum("jl,io->jilo", eye_p, eye_m).reshape(
-            1, p, m, p * m), (L, p, m, p * m)))
-        J = np.concatenate(cols, axis=3) * W[..., None]
-        J = J.reshape(L * p * m, -1)
+        J = (modal_jacobian(layout, theta, z) * W[..., None]).reshape(L * p * m, -1)
         J = np.vstack([J.real, J.imag])
         return J if prior is None else np.vstack([J, np.diag(prior)])
 
     # cost0, above, is judged against the model itself (its modal form may round
     # differently)
     res = least_squares(residual, theta0, jac=jacobian, method="lm", max_nfev=max_nfev)
-    e = (W * (response(res.x) - G)).ravel()
+    e = (W * (modal_response(layout, res.x, z) - G)).ravel()
     return layout, theta0, res.x, cost0, float(np.sum(np.abs(e) ** 2))
 
 
