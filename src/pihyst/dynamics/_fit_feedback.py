@@ -141,7 +141,7 @@ def feedback_scheduled(linear: StateSpace, Cz, amplitudes, window: float,
         between the anchors.
     """
     a1, a2 = float(amplitudes[0]), float(amplitudes[1])
-    params = []
+    params: list[tuple[np.ndarray, ...]] = []
     for delta in np.linspace(0.0, 1.0, n_anchors):
         ss = closed_loop(linear, Cz, delta)
         radius = np.abs(np.linalg.eigvals(ss.A)).max() if ss.order else 0.0
